@@ -1,0 +1,1 @@
+//! Marching cubes polygonization of 3D scalar fields (to be written).

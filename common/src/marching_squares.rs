@@ -1,0 +1,1 @@
+//! Marching squares contouring of 2D scalar fields (to be written).

@@ -1,0 +1,1 @@
+//! Mesh bvh (to be written).

@@ -1,0 +1,1 @@
+//! Mesh distance (to be written).

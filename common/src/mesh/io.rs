@@ -1,0 +1,1 @@
+//! Mesh io (to be written).

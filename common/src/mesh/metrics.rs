@@ -1,0 +1,1 @@
+//! Mesh metrics (to be written).

@@ -1,0 +1,1 @@
+//! Software preview renderer and contact sheets (to be written).
