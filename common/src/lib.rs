@@ -14,10 +14,13 @@ pub mod grid;
 pub mod marching_cubes;
 pub mod marching_squares;
 pub mod mesh;
+pub mod models;
 pub mod render;
+pub mod shape;
 
 pub use aabb::Aabb;
 pub use field::{Bounded, Field3};
 pub use glam;
 pub use grid::{Grid2, Grid3, GridError};
 pub use mesh::{MeshError, TriMesh};
+pub use shape::{Shape, ShapeError};

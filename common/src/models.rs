@@ -1,0 +1,129 @@
+//! Built-in demo and test models, all inside the box `[-0.5, 0.5]³`, y up.
+//!
+//! The Breen & Whitaker models (ball, "C", mug, chain) are CSG of
+//! superellipsoids, cylinders and tori as in the paper's Figs. 4 and 16; their
+//! exact proportions are not given in the paper, so these are our own.
+
+use crate::shape::Shape;
+use glam::{Quat, Vec3};
+use std::f32::consts::FRAC_PI_2;
+
+/// Names accepted by [`by_name`], in display order.
+pub const NAMES: [&str; 7] = ["sphere", "torus", "ball", "c-shape", "mug", "chain", "cube"];
+
+/// The built-in model called `name` (see [`NAMES`]), or `None`.
+pub fn by_name(name: &str) -> Option<Shape> {
+    Some(match name {
+        "sphere" => sphere(),
+        "torus" => torus(),
+        "ball" => ball(),
+        "c-shape" | "c" => c_shape(),
+        "mug" => mug(),
+        "chain" => chain(),
+        "cube" => cube(),
+        _ => return None,
+    })
+}
+
+/// The reference sphere: radius 0.3 at the origin.
+pub fn sphere() -> Shape {
+    Shape::sphere(0.3)
+}
+
+/// The reference torus: R = 0.3, r = 0.12 around the z axis (in the xy plane).
+pub fn torus() -> Shape {
+    Shape::torus(0.3, 0.12)
+}
+
+/// A rounded cube of half edge 0.3.
+pub fn cube() -> Shape {
+    Shape::rounded_cuboid(Vec3::splat(0.3), 0.04)
+}
+
+/// Breen's ball (Fig. 4): a small sphere lying mostly inside the left half of
+/// the [`c_shape`], protruding from it.
+pub fn ball() -> Shape {
+    Shape::sphere(0.17).translated(Vec3::new(-0.2, 0.0, 0.0))
+}
+
+/// Breen's "C" (Fig. 4): a thick ring open towards +x (a superellipsoid disk
+/// minus a superellipsoid hole and a box), with bulbous superellipsoid
+/// terminals at both ends of the opening, like a typeset C. Standing in the xy
+/// plane, z is its thickness.
+pub fn c_shape() -> Shape {
+    let disk = Shape::superellipsoid(Vec3::new(0.4, 0.4, 0.1), 0.5, 1.0);
+    let hole = Shape::superellipsoid(Vec3::new(0.2, 0.2, 0.3), 0.3, 1.0);
+    let opening = Shape::cuboid(Vec3::new(0.25, 0.12, 0.3)).translated(Vec3::new(0.3, 0.0, 0.0));
+    let ring = disk.subtract(hole).subtract(opening);
+    let terminal = |y: f32| Shape::superellipsoid(Vec3::new(0.1, 0.1, 0.13), 0.6, 1.0).translated(Vec3::new(0.27, y, 0.0));
+    ring.union(terminal(0.2)).union(terminal(-0.2))
+}
+
+/// Breen's mug (Fig. 16): a cylindrical body with a torus handle, hollowed by a
+/// second cylinder; upright along y.
+pub fn mug() -> Shape {
+    let upright = Quat::from_rotation_x(-FRAC_PI_2);
+    let body = Shape::cylinder(0.25, 0.3);
+    let handle = Shape::torus(0.14, 0.045).rotated(Quat::from_rotation_x(FRAC_PI_2)).translated(Vec3::new(0.27, 0.0, 0.0));
+    let cavity = Shape::cylinder(0.2, 0.3).translated(Vec3::new(0.0, 0.0, 0.06));
+    body.union(handle).subtract(cavity).rotated(upright)
+}
+
+/// Breen's chain (Fig. 16): three linked tori along x, the end links in the xy
+/// plane and the middle one in the xz plane, each passing through its
+/// neighbour's hole without touching.
+pub fn chain() -> Shape {
+    let link = |i: i32| {
+        let t = Shape::torus(0.14, 0.035);
+        let t = if i == 0 { t.rotated(Quat::from_rotation_x(FRAC_PI_2)) } else { t };
+        t.translated(Vec3::new(0.19 * i as f32, 0.0, 0.0))
+    };
+    link(-1).union(link(0)).union(link(1))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Aabb;
+
+    #[test]
+    fn every_model_is_valid_and_fits_the_unit_box() {
+        let unit = Aabb::cube(0.5);
+        for name in NAMES {
+            let s = by_name(name).unwrap();
+            s.validate().unwrap();
+            let b = s.aabb();
+            assert!(unit.contains(b.min) && unit.contains(b.max), "{name} bounds {b:?}");
+        }
+        assert!(by_name("teapot").is_none());
+    }
+
+    #[test]
+    fn models_have_their_features() {
+        let c = c_shape();
+        assert!(c.distance(Vec3::ZERO) < 0.0, "the C has a hole");
+        assert!(c.distance(Vec3::new(-0.3, 0.0, 0.0)) > 0.0, "left side is solid");
+        assert!(c.distance(Vec3::new(0.3, 0.0, 0.0)) < 0.0, "open towards +x");
+        assert!(c.distance(Vec3::new(0.27, 0.2, 0.0)) > 0.0, "terminal");
+        let ball = ball();
+        assert!(ball.distance(Vec3::new(-0.3, 0.0, 0.0)) > 0.0, "ball overlaps the C");
+        let mug = mug();
+        assert!(mug.distance(Vec3::new(0.0, 0.1, 0.0)) < 0.0, "hollow");
+        assert!(mug.distance(Vec3::new(0.0, -0.27, 0.0)) > 0.0, "floor");
+        assert!(mug.distance(Vec3::new(0.41, 0.0, 0.0)) > 0.0, "handle");
+        assert!(mug.distance(Vec3::new(0.32, 0.0, 0.0)) < 0.0, "hole of the handle");
+        let chain = chain();
+        assert!(chain.distance(Vec3::new(-0.19, 0.14, 0.0)) > 0.0, "left link");
+        assert!(chain.distance(Vec3::new(0.0, 0.0, 0.14)) > 0.0, "middle link");
+        assert!(chain.distance(Vec3::ZERO) < 0.0);
+        // The links interlock without touching: along the x axis the surface
+        // alternates between the three links with gaps.
+        let links_on_axis = (0..=200)
+            .map(|i| chain.distance(Vec3::new(-0.5 + i as f32 * 0.005, 0.0, 0.0)) > 0.0)
+            .collect::<Vec<_>>()
+            .windows(2)
+            .filter(|w| !w[0] && w[1])
+            .count();
+        assert_eq!(links_on_axis, 6, "six tube crossings of the x axis");
+    }
+}
