@@ -17,6 +17,7 @@ pub mod mesh;
 pub mod models;
 pub mod render;
 pub mod shape;
+pub mod transform;
 
 pub use aabb::Aabb;
 pub use field::{Bounded, Field3};
@@ -24,3 +25,4 @@ pub use glam;
 pub use grid::{Grid2, Grid3, GridError};
 pub use mesh::{MeshError, TriMesh};
 pub use shape::{Shape, ShapeError};
+pub use transform::{AffineParts, AffinePath, TransformError};
