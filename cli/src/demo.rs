@@ -1,0 +1,46 @@
+//! `isomorph demo`: a complete example from built-in shapes, in seconds.
+
+use crate::morph::{Format, Method, MorphArgs, morph, print_summary};
+use clap::Args;
+use std::path::PathBuf;
+
+/// Arguments of `isomorph demo`.
+#[derive(Debug, Args)]
+pub struct DemoArgs {
+    /// Output folder; each morph gets a subfolder.
+    #[arg(long, default_value = "out/demo")]
+    out: PathBuf,
+    /// Grid nodes along the longest edge.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(8..=512))]
+    res: u32,
+    /// Frames per morph.
+    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(2..=200))]
+    frames: u32,
+}
+
+/// Runs every demo morph.
+pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
+    let demos = [(Method::Baseline, "ball", "c-shape", "baseline_ball_to_c")];
+    for (method, source, target, folder) in demos {
+        let morph_args = MorphArgs {
+            method,
+            source: source.into(),
+            target: target.into(),
+            res: args.res,
+            frames: args.frames,
+            out: args.out.join(folder),
+            format: Format::Ply,
+        };
+        let report = morph(&morph_args)?;
+        print_summary(&report, &morph_args);
+        let most = report.max_components();
+        if most > 1 {
+            println!(
+                "  note: up to {most} components in one frame — the distance blend pops pieces of the \
+                 target out of thin air (Breen & Whitaker, Fig. 6)"
+            );
+        }
+    }
+    println!("demo written to {}", args.out.display());
+    Ok(())
+}
