@@ -9,6 +9,8 @@
 //! - Errors are typed per failure domain; nothing panics on user input.
 
 pub mod aabb;
+pub mod alignment;
+pub mod fast_marching;
 pub mod field;
 pub mod grid;
 pub mod marching_cubes;

@@ -1,0 +1,1 @@
+//! Moment-based alignment (to be written).

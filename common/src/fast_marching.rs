@@ -1,0 +1,1 @@
+//! Fast marching and closest-point propagation (to be written).
