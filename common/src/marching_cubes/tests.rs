@@ -214,6 +214,20 @@ proptest! {
     }
 
     #[test]
+    fn single_sphere_volume_is_close_to_the_analytic_one(
+        c in (7.0f32..9.0, 7.0f32..9.0, 7.0f32..9.0),
+        r in 4.0f32..6.0,
+    ) {
+        let g = spheres_grid(17, &[(Vec3::new(c.0, c.1, c.2), r)]);
+        let mesh = marching_cubes(&g, 0.0);
+        let expected = 4.0 / 3.0 * std::f64::consts::PI * (r as f64).powi(3);
+        let vol = signed_volume(&mesh);
+        // Chordal error of a sphere of radius r voxels: O(1/r²) relative.
+        let tol = expected * 0.8 / (r as f64).powi(2);
+        prop_assert!((vol - expected).abs() < tol, "volume {}, expected {}, tolerance {}", vol, expected, tol);
+    }
+
+    #[test]
     fn values_exactly_at_iso_keep_the_mesh_closed(seed in any::<u64>()) {
         let mut rng = Rng(seed);
         let g = grid_from(UVec3::splat(7), |i, j, k| {
