@@ -56,7 +56,7 @@
 //!
 //! Measured (`cargo run --release -p isomorph-common --example mc_timing`):
 //! a 256³ grid of a torus distance (134,688 vertices, 269,376 triangles)
-//! takes about 9 ms on 2 cores, 18 ms on one.
+//! takes about 9 ms on 2 idle cores, 18 ms on one.
 
 mod table;
 
