@@ -1,1 +1,0 @@
-//! Marching cubes polygonization of 3D scalar fields (to be written).
