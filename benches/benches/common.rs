@@ -1,2 +1,49 @@
-//! Benchmarks of the shared core (filled in below).
-fn main() {}
+//! Benchmarks of the shared core: marching cubes, grid fill, mesh parsing.
+//!
+//! `cargo bench -p isomorph-benches --bench common -- marching_cubes/torus/256`
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use glam::{UVec3, Vec3};
+use isomorph_benches::{data_path, torus, torus_grid};
+use isomorph_common::Grid3;
+use isomorph_common::marching_cubes::marching_cubes;
+use isomorph_common::mesh::io::{MeshFormat, read_mesh_from};
+use std::hint::black_box;
+use std::io::Cursor;
+
+fn marching_cubes_torus(c: &mut Criterion) {
+    let mut group = c.benchmark_group("marching_cubes/torus");
+    group.sample_size(20);
+    for n in [128u32, 256] {
+        let grid = torus_grid(n);
+        group.throughput(Throughput::Elements(u64::from(n - 1).pow(3)));
+        group.bench_function(BenchmarkId::from_parameter(n), |b| b.iter(|| marching_cubes(black_box(&grid), 0.0)));
+    }
+    group.finish();
+}
+
+fn grid_fill_torus(c: &mut Criterion) {
+    let mut group = c.benchmark_group("grid_fill/torus");
+    group.sample_size(10);
+    let n = 256u32;
+    let shape = torus();
+    let mut grid = Grid3::new(UVec3::splat(n), Vec3::splat(-0.5), 1.0 / (n - 1) as f32, 0.0f32).unwrap();
+    group.throughput(Throughput::Elements(u64::from(n).pow(3)));
+    group.bench_function(BenchmarkId::from_parameter(n), |b| b.iter(|| grid.fill_from(black_box(&shape))));
+    group.finish();
+}
+
+fn mesh_io_bunny(c: &mut Criterion) {
+    let mut group = c.benchmark_group("mesh_io");
+    for (id, file, format) in
+        [("bunny_ply", "bunny.ply", MeshFormat::PlyBinaryLittleEndian), ("bunny_obj", "bunny.obj", MeshFormat::Obj)]
+    {
+        let bytes = std::fs::read(data_path(file)).expect("bunny in data/");
+        group.throughput(Throughput::Bytes(bytes.len() as u64));
+        group.bench_function(id, |b| b.iter(|| read_mesh_from(Cursor::new(black_box(&bytes)), format).unwrap()));
+    }
+    group.finish();
+}
+
+criterion_group!(benches, marching_cubes_torus, grid_fill_torus, mesh_io_bunny);
+criterion_main!(benches);

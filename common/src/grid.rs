@@ -307,7 +307,7 @@ fn check_geometry(dims: UVec3, origin: Vec3, spacing: f32, min: u32) -> Result<(
     if dims.min_element() < min {
         return Err(GridError::TooSmall { dims, min });
     }
-    if !(spacing.is_finite() && spacing > 0.0) || !origin.is_finite() {
+    if !spacing.is_finite() || spacing <= 0.0 || !origin.is_finite() {
         return Err(GridError::InvalidGeometry { spacing, origin });
     }
     Ok(())
