@@ -129,7 +129,7 @@ impl fmt::Display for MeshFormat {
 pub enum MeshIoError {
     /// Reading or writing the file or stream failed (missing file, no
     /// permission, disk full, ...).
-    #[error("I/O error{}: {source}", .path.as_ref().map(|p| format!(" on {}", p.display())).unwrap_or_default())]
+    #[error("I/O error{}: {source}", on_path(.path.as_deref()))]
     Io {
         /// The file, when the error came from [`read_mesh`] or [`write_mesh`].
         path: Option<PathBuf>,
@@ -208,6 +208,11 @@ impl MeshIoError {
     fn parse(format: &'static str, line: Option<usize>, offset: Option<u64>, message: &str) -> Self {
         MeshIoError::Parse { format, line, offset, message: tidy(message) }
     }
+}
+
+/// `" on PATH"` or nothing, for error messages.
+fn on_path(path: Option<&Path>) -> String {
+    path.map(|p| format!(" on {}", p.display())).unwrap_or_default()
 }
 
 /// `" at line N"`, `" at byte N"` or nothing, for error messages.

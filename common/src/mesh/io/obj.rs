@@ -95,10 +95,10 @@ impl ObjParser {
         self.corners.clear();
         for token in tokens {
             let mut parts = token.split(|&b| b == b'/');
-            let vertex = resolve(parts.next().unwrap_or_default(), self.positions.len(), "vertex")?;
+            let vertex = resolve(parts.next().unwrap_or_default(), self.positions.len(), "vertices")?;
             let _texture = parts.next();
             let normal = match parts.next() {
-                Some(part) if !part.is_empty() => Some(resolve(part, self.normals.len(), "normal")?),
+                Some(part) if !part.is_empty() => Some(resolve(part, self.normals.len(), "normals")?),
                 _ => None,
             };
             self.corners.push((vertex, normal));
@@ -155,19 +155,17 @@ fn vec3<'a>(tokens: &mut impl Iterator<Item = &'a [u8]>, what: &str) -> Result<V
 }
 
 /// Resolves a 1-based or negative (relative) OBJ index against the `count`
-/// items defined so far, to a 0-based index.
-fn resolve(token: &[u8], count: usize, what: &str) -> Result<u32, String> {
+/// `items` (a plural noun) defined so far, to a 0-based index.
+fn resolve(token: &[u8], count: usize, items: &str) -> Result<u32, String> {
     let text = String::from_utf8_lossy(token);
-    let index: i64 = text.parse().map_err(|_| format!("{what} index '{text}' is not an integer"))?;
+    let index: i64 = text.parse().map_err(|_| format!("index '{text}' into {items} is not an integer"))?;
     let resolved = match index {
-        0 => return Err(format!("{what} index 0 (OBJ indices start at 1)")),
+        0 => return Err(format!("index 0 into {items} (OBJ indices start at 1)")),
         i if i > 0 => i - 1,
         i => count as i64 + i,
     };
     if resolved < 0 || resolved >= count as i64 {
-        return Err(format!(
-            "{what} index {index} is out of range: {count} {what}s defined before this line"
-        ));
+        return Err(format!("index {index} is out of range: {count} {items} defined before this line"));
     }
     // `count` never exceeds `u32::MAX`, see `ObjParser::line`.
     Ok(resolved as u32)

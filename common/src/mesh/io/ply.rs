@@ -43,6 +43,9 @@ pub fn read_ply(mut reader: impl Read) -> Result<TriMesh, MeshIoError> {
 
 /// Parses a complete PLY file held in memory.
 fn parse(bytes: &[u8]) -> Result<TriMesh, MeshIoError> {
+    if !bytes.starts_with(b"ply") {
+        return Err(MeshIoError::parse(FORMAT, Some(1), None, "not a PLY file (no 'ply' on the first line)"));
+    }
     let parser = Parser::<Record>::new();
     let mut reader = Reader::new(bytes);
     let header = parser.read_header(&mut reader).map_err(|e| {
