@@ -17,14 +17,15 @@
 //!   normals are dropped (the normals are then `None`), because they can be
 //!   recomputed with [`TriMesh::compute_normals`].
 //! - STL stores a triangle soup; the reader welds bit-identical positions
-//!   (treating `-0.0` as `0.0`) in order of first appearance, so a closed mesh
-//!   written as STL reads back closed with its original vertex count.
+//!   (treating `-0.0` as `0.0`), numbered in order of first appearance, so a
+//!   closed mesh whose vertices have distinct positions reads back closed,
+//!   with its vertex count (renumbered).
 //!   Face normals in STL are ignored on read and recomputed on write.
 //!
 //! # Hostile input
 //! Malformed, truncated or random input gives a [`MeshIoError`] naming the
-//! problem and, where known, the line (text formats) or byte offset (binary
-//! formats); it never panics. Element counts from a header are checked
+//! problem and, where known, the line (OBJ, ASCII PLY), the facet (ASCII
+//! STL) or the byte offset (binary formats); it never panics. Element counts from a header are checked
 //! against the bytes actually present before anything is allocated from
 //! them ([`MeshIoError::TooLarge`]); PLY and STL input is first read into
 //! memory, so allocation follows the real data, never a claim. Every mesh

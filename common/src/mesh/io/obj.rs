@@ -23,9 +23,9 @@ const NO_NORMAL: u32 = u32::MAX;
 /// # Errors
 /// [`MeshIoError::Parse`] with the line number for a bad number, a
 /// non-finite coordinate, a face with fewer than three corners, an index of 0
-/// or one that refers to a vertex or normal not defined before it;
-/// [`MeshIoError::Unsupported`] beyond `u32::MAX` vertices;
-/// [`MeshIoError::Io`] when reading fails.
+/// or one that refers to a vertex or normal not defined before it, or more
+/// vertices or normals than `u32` indices reach; [`MeshIoError::Io`] when
+/// reading fails.
 pub fn read_obj(mut reader: impl BufRead) -> Result<TriMesh, MeshIoError> {
     let mut parser = ObjParser::default();
     let mut line = Vec::new();
