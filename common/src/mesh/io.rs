@@ -1,1 +1,0 @@
-//! Mesh io (to be written).

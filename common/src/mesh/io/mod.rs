@@ -1,0 +1,314 @@
+//! Reading and writing [`TriMesh`] as Wavefront OBJ, PLY (ASCII, binary
+//! little- and big-endian) and STL (ASCII and binary).
+//!
+//! [`read_mesh`] picks the format from the file extension and, for PLY and
+//! STL, the encoding from the content; [`read_mesh_from`] and the per-format
+//! readers [`read_obj`], [`read_ply`] and [`read_stl`] parse any reader (for
+//! example bytes in memory). [`write_mesh`] and [`write_mesh_to`] write every
+//! [`MeshFormat`].
+//!
+//! # What is kept
+//! - Positions exactly (f32). Text formats are written with the shortest
+//!   decimal that round-trips each `f32`, so every format round-trips
+//!   positions bit for bit.
+//! - Triangles; polygons are fan-triangulated (`0,i,i+1`) on read.
+//! - Per-vertex normals in OBJ (`vn`, when every face corner names one and
+//!   each vertex always gets the same one) and PLY (`nx ny nz`). Non-finite
+//!   normals are dropped (the normals are then `None`), because they can be
+//!   recomputed with [`TriMesh::compute_normals`].
+//! - STL stores a triangle soup; the reader welds bit-identical positions
+//!   (treating `-0.0` as `0.0`), numbered in order of first appearance, so a
+//!   closed mesh whose vertices have distinct positions reads back closed,
+//!   with its vertex count (renumbered).
+//!   Face normals in STL are ignored on read and recomputed on write.
+//!
+//! # Hostile input
+//! Malformed, truncated or random input gives a [`MeshIoError`] naming the
+//! problem and, where known, the line (OBJ, ASCII PLY), the facet (ASCII
+//! STL) or the byte offset (binary formats); it never panics. Element counts from a header are checked
+//! against the bytes actually present before anything is allocated from
+//! them ([`MeshIoError::TooLarge`]); PLY and STL input is first read into
+//! memory, so allocation follows the real data, never a claim. Every mesh
+//! returned has passed [`TriMesh::validate`]: indices are in range and
+//! positions are finite.
+//!
+//! # Crates used, and where not
+//! - **PLY**: `ply-rs-bw` parses the header and decodes each element record
+//!   (ASCII and binary, any scalar and list types). The element loop is ours:
+//!   it checks each header count against the remaining bytes first and
+//!   reports the byte offset or line of a broken record. Writing uses its
+//!   `Writer` record by record.
+//! - **STL**: `stl_io` parses ASCII STL and writes binary STL. Binary STL is
+//!   read here (50-byte records, a dozen lines) because `stl_io` decides
+//!   "ASCII" for any file starting with `solid `, which many binary exporters
+//!   put in the 80-byte header, and it does not check the triangle count
+//!   against the file size. ASCII STL is written here (`stl_io` writes binary
+//!   only).
+//! - **OBJ**: read by a small parser here rather than with `tobj`, because
+//!   `tobj` (4.0) renumbers vertices in order of first use and drops
+//!   unreferenced ones (so OBJ and PLY of the same mesh would not give the
+//!   same vertex array), reports errors without a line number, and panics
+//!   with an arithmetic overflow in debug builds on a relative texture index
+//!   such as `f 1/-3 2/1 3/1`. The writer is a few lines here.
+
+mod obj;
+mod ply;
+mod stl;
+
+pub use obj::read_obj;
+pub use ply::read_ply;
+pub use stl::read_stl;
+
+use super::{MeshError, TriMesh};
+use std::fmt;
+use std::fs::File;
+use std::io::{self, BufReader, BufWriter, Read, Write};
+use std::path::{Path, PathBuf};
+
+/// A mesh file format with its encoding.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum MeshFormat {
+    /// Wavefront OBJ (text; `v`, `vn`, `f`).
+    Obj,
+    /// PLY with an ASCII payload.
+    PlyAscii,
+    /// PLY with a binary little-endian payload (the usual one).
+    PlyBinaryLittleEndian,
+    /// PLY with a binary big-endian payload.
+    PlyBinaryBigEndian,
+    /// ASCII STL (`solid` / `facet` / `vertex` text).
+    StlAscii,
+    /// Binary STL (80-byte header, triangle count, 50-byte records).
+    StlBinary,
+}
+
+impl MeshFormat {
+    /// The format for a path's extension (case-insensitive): `.obj` → OBJ,
+    /// `.ply` → binary little-endian PLY, `.stl` → binary STL. `None` for any
+    /// other extension.
+    ///
+    /// Readers detect ASCII versus binary PLY and STL from the content, so the
+    /// encoding chosen here only matters for writing.
+    pub fn from_path(path: &Path) -> Option<MeshFormat> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "obj" => Some(MeshFormat::Obj),
+            "ply" => Some(MeshFormat::PlyBinaryLittleEndian),
+            "stl" => Some(MeshFormat::StlBinary),
+            _ => None,
+        }
+    }
+
+    /// The usual file extension, without the dot (`"obj"`, `"ply"`, `"stl"`).
+    pub fn extension(self) -> &'static str {
+        match self {
+            MeshFormat::Obj => "obj",
+            MeshFormat::PlyAscii | MeshFormat::PlyBinaryLittleEndian | MeshFormat::PlyBinaryBigEndian => {
+                "ply"
+            }
+            MeshFormat::StlAscii | MeshFormat::StlBinary => "stl",
+        }
+    }
+}
+
+impl fmt::Display for MeshFormat {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            MeshFormat::Obj => "OBJ",
+            MeshFormat::PlyAscii => "ASCII PLY",
+            MeshFormat::PlyBinaryLittleEndian => "binary little-endian PLY",
+            MeshFormat::PlyBinaryBigEndian => "binary big-endian PLY",
+            MeshFormat::StlAscii => "ASCII STL",
+            MeshFormat::StlBinary => "binary STL",
+        })
+    }
+}
+
+/// Errors of mesh file reading and writing.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum MeshIoError {
+    /// Reading or writing the file or stream failed (missing file, no
+    /// permission, disk full, ...).
+    #[error("I/O error{}: {source}", on_path(.path.as_deref()))]
+    Io {
+        /// The file, when the error came from [`read_mesh`] or [`write_mesh`].
+        path: Option<PathBuf>,
+        /// The underlying error.
+        #[source]
+        source: io::Error,
+    },
+    /// The path's extension names no supported format.
+    #[error("cannot tell the mesh format of {} from its extension; use .obj, .ply or .stl", .path.display())]
+    UnknownFormat {
+        /// The path given.
+        path: PathBuf,
+    },
+    /// The data is malformed: bad syntax, a bad number, a truncated record.
+    #[error("malformed {format} data{}: {message}", location(*.line, *.offset))]
+    Parse {
+        /// Format family: `"OBJ"`, `"PLY"` or `"STL"`.
+        format: &'static str,
+        /// 1-based line number (text data), when known.
+        line: Option<usize>,
+        /// Byte offset from the start of the data (binary data), when known.
+        offset: Option<u64>,
+        /// What is wrong.
+        message: String,
+    },
+    /// The data is well-formed but uses something this reader does not
+    /// handle, such as a PLY without `x y z` vertex properties or with
+    /// floating-point face indices, or more than `u32::MAX` vertices.
+    #[error("unsupported {format} content: {message}")]
+    Unsupported {
+        /// Format family: `"OBJ"`, `"PLY"` or `"STL"`.
+        format: &'static str,
+        /// What is not supported.
+        message: String,
+    },
+    /// A header claims more records than the data can hold: the file is
+    /// truncated or its header is corrupt. Checked before any allocation.
+    #[error(
+        "{format} header claims {claimed} {what}, but the remaining data holds at most {available} \
+         (truncated file or corrupt header)"
+    )]
+    TooLarge {
+        /// Format family: `"PLY"` or `"STL"`.
+        format: &'static str,
+        /// What was counted, e.g. `"triangles"` or `"'vertex' elements"`.
+        what: String,
+        /// The count the header claims.
+        claimed: u64,
+        /// The most that fit in the bytes actually present.
+        available: u64,
+    },
+    /// The data parsed, but the mesh is invalid (an index out of range, a
+    /// non-finite coordinate); for writing, the mesh given is invalid.
+    #[error("invalid mesh: {0}")]
+    Mesh(#[from] MeshError),
+}
+
+impl From<io::Error> for MeshIoError {
+    fn from(source: io::Error) -> Self {
+        MeshIoError::Io { path: None, source }
+    }
+}
+
+impl MeshIoError {
+    /// Attaches `path` to an I/O error that has none.
+    fn at_path(self, path: &Path) -> Self {
+        match self {
+            MeshIoError::Io { path: None, source } => {
+                MeshIoError::Io { path: Some(path.to_path_buf()), source }
+            }
+            other => other,
+        }
+    }
+
+    /// A [`MeshIoError::Parse`] with a tidied message.
+    fn parse(format: &'static str, line: Option<usize>, offset: Option<u64>, message: &str) -> Self {
+        MeshIoError::Parse { format, line, offset, message: tidy(message) }
+    }
+}
+
+/// `" on PATH"` or nothing, for error messages.
+fn on_path(path: Option<&Path>) -> String {
+    path.map(|p| format!(" on {}", p.display())).unwrap_or_default()
+}
+
+/// `" at line N"`, `" at byte N"` or nothing, for error messages.
+fn location(line: Option<usize>, offset: Option<u64>) -> String {
+    match (line, offset) {
+        (Some(line), _) => format!(" at line {line}"),
+        (None, Some(offset)) => format!(" at byte {offset}"),
+        (None, None) => String::new(),
+    }
+}
+
+/// Puts a message from a parser crate on one line and bounds its length (a
+/// hostile line quoted in a message could be megabytes long).
+fn tidy(message: &str) -> String {
+    const MAX_CHARS: usize = 300;
+    let mut out: String = message.split_whitespace().collect::<Vec<_>>().join(" ");
+    if let Some((cut, _)) = out.char_indices().nth(MAX_CHARS) {
+        out.truncate(cut);
+        out.push('…');
+    }
+    out
+}
+
+/// Reads a mesh file; the format comes from the extension (see
+/// [`MeshFormat::from_path`]) and, for PLY and STL, the encoding from the
+/// content.
+///
+/// # Errors
+/// [`MeshIoError::UnknownFormat`] for an unknown extension,
+/// [`MeshIoError::Io`] (with the path) when the file cannot be read, and the
+/// errors of [`read_mesh_from`].
+pub fn read_mesh(path: impl AsRef<Path>) -> Result<TriMesh, MeshIoError> {
+    let path = path.as_ref();
+    let format =
+        MeshFormat::from_path(path).ok_or_else(|| MeshIoError::UnknownFormat { path: path.to_path_buf() })?;
+    let file = File::open(path).map_err(|e| MeshIoError::from(e).at_path(path))?;
+    read_mesh_from(file, format).map_err(|e| e.at_path(path))
+}
+
+/// Reads a mesh in the family of `format` (OBJ, PLY or STL) from any reader,
+/// for example a byte slice in memory. For PLY and STL the encoding (ASCII or
+/// binary, and the PLY byte order) is detected from the content, so any PLY or
+/// STL variant of `format` will do.
+///
+/// # Errors
+/// [`MeshIoError::Io`] when reading fails, [`MeshIoError::Parse`] for
+/// malformed or truncated data, [`MeshIoError::TooLarge`] when a header claims
+/// more than the data holds, [`MeshIoError::Unsupported`] for content this
+/// reader does not handle and [`MeshIoError::Mesh`] for an index out of range
+/// or a non-finite coordinate.
+pub fn read_mesh_from(reader: impl Read, format: MeshFormat) -> Result<TriMesh, MeshIoError> {
+    match format {
+        MeshFormat::Obj => read_obj(BufReader::new(reader)),
+        MeshFormat::PlyAscii | MeshFormat::PlyBinaryLittleEndian | MeshFormat::PlyBinaryBigEndian => {
+            read_ply(reader)
+        }
+        MeshFormat::StlAscii | MeshFormat::StlBinary => read_stl(reader),
+    }
+}
+
+/// Writes `mesh` to the file `path` (created or truncated) in `format`.
+///
+/// # Errors
+/// [`MeshIoError::Mesh`] when the mesh does not pass [`TriMesh::validate`]
+/// (nothing is written then), [`MeshIoError::Io`] (with the path) when the
+/// file cannot be written, and the errors of [`write_mesh_to`].
+pub fn write_mesh(mesh: &TriMesh, path: impl AsRef<Path>, format: MeshFormat) -> Result<(), MeshIoError> {
+    let path = path.as_ref();
+    mesh.validate()?;
+    let file = File::create(path).map_err(|e| MeshIoError::from(e).at_path(path))?;
+    write_mesh_to(mesh, file, format).map_err(|e| e.at_path(path))
+}
+
+/// Writes `mesh` in `format` to any writer (buffered internally).
+///
+/// Normals, when present, are written to OBJ (`vn`, one per vertex) and PLY
+/// (`nx ny nz`); STL gets each triangle's unit normal (zero when degenerate).
+///
+/// # Errors
+/// [`MeshIoError::Mesh`] when the mesh does not pass [`TriMesh::validate`]
+/// (nothing is written then), [`MeshIoError::Unsupported`] for binary STL with
+/// more than `u32::MAX` triangles, [`MeshIoError::Io`] when writing fails.
+pub fn write_mesh_to(mesh: &TriMesh, writer: impl Write, format: MeshFormat) -> Result<(), MeshIoError> {
+    mesh.validate()?;
+    let mut out = BufWriter::new(writer);
+    match format {
+        MeshFormat::Obj => obj::write_obj(mesh, &mut out)?,
+        MeshFormat::PlyAscii | MeshFormat::PlyBinaryLittleEndian | MeshFormat::PlyBinaryBigEndian => {
+            ply::write_ply(mesh, &mut out, format)?
+        }
+        MeshFormat::StlAscii | MeshFormat::StlBinary => stl::write_stl(mesh, &mut out, format)?,
+    }
+    out.flush()?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests;
