@@ -1,0 +1,439 @@
+//! Visibility: near clipping, projection and z-buffered triangle
+//! rasterization into a buffer of [`Fragment`]s (which triangle is nearest
+//! at each sample, and where on it).
+//!
+//! Coverage uses edge functions over each triangle's bounding box with the
+//! top-left fill rule, sampled at pixel centres. Every edge is evaluated in
+//! one canonical vertex order whichever triangle it belongs to, so the two
+//! triangles sharing an edge see exactly opposite values: no sample on a
+//! shared edge is drawn twice or missed. The depth test keeps the largest
+//! `1 / depth` and breaks exact ties by triangle order, so the result does
+//! not depend on the thread count.
+
+use super::camera::{Camera, ViewBasis};
+use crate::TriMesh;
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+
+/// Image rows per band; bands are rasterized in parallel.
+const BAND_ROWS: usize = 16;
+
+/// The nearest surface at one sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Fragment {
+    /// `1 / depth` (0 where nothing was drawn; larger is nearer).
+    pub(super) inv_depth: f32,
+    /// Index of the mesh triangle seen here (`u32::MAX` for none).
+    pub(super) triangle: u32,
+    /// Barycentric weights of the triangle's second and third corner (the
+    /// first has `1 − x − y`), perspective-correct.
+    pub(super) weights: Vec2,
+}
+
+impl Fragment {
+    /// A sample where nothing is drawn.
+    pub(super) const EMPTY: Fragment = Fragment { inv_depth: 0.0, triangle: u32::MAX, weights: Vec2::ZERO };
+
+    /// True when a triangle covers this sample.
+    pub(super) fn is_covered(&self) -> bool {
+        self.triangle != u32::MAX
+    }
+}
+
+/// World → view → pixel mapping of a camera for one image size.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Projection {
+    eye: Vec3,
+    basis: ViewBasis,
+    /// Pixels per unit of `lateral / depth`.
+    focal: f32,
+    /// Image centre in pixels.
+    center: Vec2,
+    /// Depth of the near clipping plane.
+    near: f32,
+}
+
+impl Projection {
+    /// The projection of `camera` onto a `width × height` pixel grid.
+    pub(super) fn new(camera: &Camera, width: u32, height: u32) -> Self {
+        let basis = ViewBasis::new(camera.target - camera.eye, camera.up);
+        let fov = if camera.fov.is_finite() { camera.fov.clamp(0.01, 3.0) } else { Camera::DEFAULT_FOV };
+        let short_side = width.min(height) as f32;
+        let distance = camera.eye.distance(camera.target);
+        let near = if distance.is_finite() && distance > 0.0 { 1e-3 * distance } else { 1e-6 };
+        Self {
+            eye: camera.eye,
+            basis,
+            focal: 0.5 * short_side / (0.5 * fov).tan(),
+            center: 0.5 * Vec2::new(width as f32, height as f32),
+            near,
+        }
+    }
+
+    /// The eye position.
+    pub(super) fn eye(&self) -> Vec3 {
+        self.eye
+    }
+
+    /// The camera axes.
+    pub(super) fn basis(&self) -> ViewBasis {
+        self.basis
+    }
+
+    /// View coordinates of a world point: right, up, depth in front of the eye.
+    fn to_view(&self, p: Vec3) -> Vec3 {
+        let d = p - self.eye;
+        Vec3::new(d.dot(self.basis.right), d.dot(self.basis.up), d.dot(self.basis.forward))
+    }
+
+    /// Pixel position (x right, y down) of a view point in front of the eye.
+    fn to_pixel(&self, v: Vec3) -> Vec2 {
+        self.center + self.focal / v.z * Vec2::new(v.x, -v.y)
+    }
+}
+
+/// A corner of a clipped triangle: view position and barycentric position in
+/// the mesh triangle it was cut from.
+#[derive(Debug, Clone, Copy)]
+struct ClipVertex {
+    view: Vec3,
+    bary: Vec3,
+}
+
+impl ClipVertex {
+    fn lerp(self, other: Self, t: f32) -> Self {
+        Self { view: self.view.lerp(other.view, t), bary: self.bary.lerp(other.bary, t) }
+    }
+}
+
+/// A projected triangle, counter-clockwise on screen (positive area with y
+/// down), ready to rasterize.
+#[derive(Debug, Clone, Copy)]
+struct ScreenTriangle {
+    pixel: [Vec2; 3],
+    inv_depth: [f32; 3],
+    bary: [Vec3; 3],
+    triangle: u32,
+}
+
+/// Rasterizes `mesh` seen through `projection` into a `width × height`
+/// buffer of fragments (row-major from the top-left). Triangles with an
+/// out-of-range index or a non-finite corner are skipped, as are triangles
+/// behind the near plane (partly visible ones are clipped) and those of zero
+/// projected area.
+pub(super) fn rasterize(mesh: &TriMesh, projection: &Projection, width: u32, height: u32) -> Vec<Fragment> {
+    let (width, height) = (width as usize, height as usize);
+    let mut fragments = vec![Fragment::EMPTY; width * height];
+    if fragments.is_empty() {
+        return fragments;
+    }
+    let view: Vec<Vec3> = mesh.positions.par_iter().map(|&p| projection.to_view(p)).collect();
+    let triangles: Vec<ScreenTriangle> = mesh
+        .triangles
+        .par_iter()
+        .enumerate()
+        .flat_map_iter(|(t, tri)| setup(&view, t, tri, projection, width, height).into_iter().flatten())
+        .collect();
+
+    let band_count = height.div_ceil(BAND_ROWS);
+    let mut bands: Vec<Vec<u32>> = vec![Vec::new(); band_count];
+    for (i, tri) in triangles.iter().enumerate() {
+        let (lo, hi) = row_range(tri, height);
+        if lo <= hi {
+            for band in &mut bands[lo / BAND_ROWS..=hi / BAND_ROWS] {
+                band.push(i as u32);
+            }
+        }
+    }
+
+    fragments.par_chunks_mut(width * BAND_ROWS).zip(bands.par_iter()).enumerate().for_each(
+        |(b, (rows, band))| {
+            let first_row = b * BAND_ROWS;
+            let last_row = first_row + rows.len() / width - 1;
+            for &i in band {
+                draw(&triangles[i as usize], rows, width, first_row, last_row);
+            }
+        },
+    );
+    fragments
+}
+
+/// Clips mesh triangle `t` against the near plane and projects it: zero, one
+/// or two screen triangles.
+fn setup(
+    view: &[Vec3],
+    t: usize,
+    tri: &[u32; 3],
+    projection: &Projection,
+    width: usize,
+    height: usize,
+) -> [Option<ScreenTriangle>; 2] {
+    let corners = [0, 1, 2].map(|k| view.get(tri[k] as usize).copied());
+    let [Some(a), Some(b), Some(c)] = corners else { return [None, None] };
+    if !(a.is_finite() && b.is_finite() && c.is_finite()) {
+        return [None, None];
+    }
+    let near = projection.near;
+    let input = [(a, Vec3::X), (b, Vec3::Y), (c, Vec3::Z)].map(|(view, bary)| ClipVertex { view, bary });
+    // Sutherland–Hodgman against depth ≥ near: a triangle becomes at most a quad.
+    let mut clipped = [input[0]; 4];
+    let mut n = 0;
+    for k in 0..3 {
+        let (p, q) = (input[k], input[(k + 1) % 3]);
+        let (p_in, q_in) = (p.view.z >= near, q.view.z >= near);
+        if p_in {
+            clipped[n] = p;
+            n += 1;
+        }
+        if p_in != q_in {
+            clipped[n] = p.lerp(q, (near - p.view.z) / (q.view.z - p.view.z));
+            n += 1;
+        }
+    }
+    let project = |k: [usize; 3]| screen_triangle(k.map(|i| clipped[i]), t as u32, projection, width, height);
+    match n {
+        3 => [project([0, 1, 2]), None],
+        4 => [project([0, 1, 2]), project([0, 2, 3])],
+        _ => [None, None],
+    }
+}
+
+/// Projects a clipped triangle; `None` when it has no area or misses the image.
+fn screen_triangle(
+    corners: [ClipVertex; 3],
+    triangle: u32,
+    projection: &Projection,
+    width: usize,
+    height: usize,
+) -> Option<ScreenTriangle> {
+    let mut tri = ScreenTriangle {
+        pixel: corners.map(|c| projection.to_pixel(c.view)),
+        inv_depth: corners.map(|c| 1.0 / c.view.z),
+        bary: corners.map(|c| c.bary),
+        triangle,
+    };
+    let [p0, p1, p2] = tri.pixel;
+    let area = (p1 - p0).perp_dot(p2 - p0);
+    if !area.is_finite() || area == 0.0 {
+        return None;
+    }
+    if area < 0.0 {
+        tri.pixel.swap(1, 2);
+        tri.inv_depth.swap(1, 2);
+        tri.bary.swap(1, 2);
+    }
+    let (min, max) = bounding_box(&tri);
+    let on_image =
+        max.x >= 0.0 && max.y >= 0.0 && min.x <= width as f32 && min.y <= height as f32 && min.is_finite();
+    on_image.then_some(tri)
+}
+
+fn bounding_box(tri: &ScreenTriangle) -> (Vec2, Vec2) {
+    let [a, b, c] = tri.pixel;
+    (a.min(b).min(c), a.max(b).max(c))
+}
+
+/// First and last pixel row whose centre may lie in the triangle, clamped to
+/// the image (first > last when none).
+fn row_range(tri: &ScreenTriangle, height: usize) -> (usize, usize) {
+    let (min, max) = bounding_box(tri);
+    pixel_range(min.y, max.y, height)
+}
+
+/// Pixels `i` with centre `i + 0.5` in `[lo, hi]`, clamped to `0..len`.
+fn pixel_range(lo: f32, hi: f32, len: usize) -> (usize, usize) {
+    let first = (lo - 0.5).ceil().max(0.0) as usize;
+    let last = ((hi - 0.5).floor().min(len as f32 - 1.0)).max(0.0) as usize;
+    (first, last)
+}
+
+/// One triangle edge, evaluated in a canonical vertex order so that the
+/// triangle on its other side sees exactly the negated value.
+#[derive(Debug, Clone, Copy)]
+struct Edge {
+    from: Vec2,
+    to: Vec2,
+    /// +1 or −1: the triangle's edge runs `to → from`.
+    sign: f32,
+    /// Samples exactly on the edge belong to the triangle (top-left rule).
+    owns_boundary: bool,
+}
+
+impl Edge {
+    /// The edge `a → b` of a triangle that lies on its positive side.
+    fn new(a: Vec2, b: Vec2) -> Self {
+        let d = b - a;
+        // With y down and the interior on the positive side, a top edge is
+        // horizontal running right, a left edge runs up.
+        let owns_boundary = d.y < 0.0 || (d.y == 0.0 && d.x > 0.0);
+        if (a.x, a.y) <= (b.x, b.y) {
+            Self { from: a, to: b, sign: 1.0, owns_boundary }
+        } else {
+            Self { from: b, to: a, sign: -1.0, owns_boundary }
+        }
+    }
+
+    /// Twice the signed area of the triangle (edge, p): positive inside.
+    #[inline]
+    fn eval(&self, p: Vec2) -> f32 {
+        self.sign * (self.to - self.from).perp_dot(p - self.from)
+    }
+
+    #[inline]
+    fn covers(&self, value: f32) -> bool {
+        value > 0.0 || (value == 0.0 && self.owns_boundary)
+    }
+}
+
+/// Rasterizes one triangle into the band `rows` (image rows `first_row ..=
+/// last_row`), keeping the nearest fragment per sample.
+fn draw(tri: &ScreenTriangle, rows: &mut [Fragment], width: usize, first_row: usize, last_row: usize) {
+    let [p0, p1, p2] = tri.pixel;
+    // Edge k is opposite corner k; its value is that corner's weight.
+    let edges = [Edge::new(p1, p2), Edge::new(p2, p0), Edge::new(p0, p1)];
+    let (min, max) = bounding_box(tri);
+    let (x0, x1) = pixel_range(min.x, max.x, width);
+    let (y0, y1) = pixel_range(min.y, max.y, last_row + 1);
+    let inv_depth = Vec3::from(tri.inv_depth);
+    for y in y0.max(first_row)..=y1 {
+        let row = &mut rows[(y - first_row) * width..][..width];
+        for x in x0..=x1 {
+            let p = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+            let e = edges.map(|edge| edge.eval(p));
+            if !(edges[0].covers(e[0]) && edges[1].covers(e[1]) && edges[2].covers(e[2])) {
+                continue;
+            }
+            let sum = e[0] + e[1] + e[2];
+            if sum <= 0.0 {
+                continue;
+            }
+            let screen = Vec3::from(e) / sum;
+            let depth = screen.dot(inv_depth);
+            let fragment = &mut row[x];
+            if depth > fragment.inv_depth {
+                let w = screen * inv_depth / depth;
+                let bary = w.x * tri.bary[0] + w.y * tri.bary[1] + w.z * tri.bary[2];
+                *fragment = Fragment { inv_depth: depth, triangle: tri.triangle, weights: Vec2::new(bary.y, bary.z) };
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A camera on +z looking at the origin, 2 units away, whose image spans
+    /// `[-1, 1]²` at depth 2 on a `size²` pixel image.
+    fn front_projection(size: u32) -> Projection {
+        let camera = Camera {
+            eye: Vec3::new(0.0, 0.0, 2.0),
+            target: Vec3::ZERO,
+            up: Vec3::Y,
+            fov: 2.0 * 0.5f32.atan(),
+        };
+        Projection::new(&camera, size, size)
+    }
+
+    fn covered(fragments: &[Fragment]) -> usize {
+        fragments.iter().filter(|f| f.is_covered()).count()
+    }
+
+    #[test]
+    fn shared_edges_are_drawn_exactly_once() {
+        // A fan of triangles around an off-grid centre tiles a polygon: the
+        // per-triangle sample counts must add up to the count of the union.
+        let size = 64;
+        let projection = front_projection(size);
+        let center = Vec3::new(0.013, -0.021, 0.0);
+        let ring: Vec<Vec3> = (0..7)
+            .map(|i| {
+                let a = i as f32 * std::f32::consts::TAU / 7.0 + 0.1;
+                center + 0.83 * Vec3::new(a.cos(), a.sin(), 0.0)
+            })
+            .collect();
+        let mut positions = vec![center];
+        positions.extend(&ring);
+        let triangles: Vec<[u32; 3]> = (0..7).map(|i| [0, 1 + i, 1 + (i + 1) % 7]).collect();
+        let fan = TriMesh::new(positions.clone(), triangles.clone()).unwrap();
+        let union = covered(&rasterize(&fan, &projection, size, size));
+        let separate: usize = triangles
+            .iter()
+            .map(|&t| covered(&rasterize(&TriMesh::new(positions.clone(), vec![t]).unwrap(), &projection, size, size)))
+            .sum();
+        assert_eq!(separate, union);
+        assert!(union > 1000, "polygon too small: {union} samples");
+    }
+
+    #[test]
+    fn axis_aligned_squares_tile_without_gaps_or_overlap() {
+        // Two rectangles sharing a vertical edge through a column of pixel
+        // centres (x = 1/64 maps to 32.5), with their top edges on a row of
+        // centres (y = 0.265625 maps to 23.5). World units map to 32 pixels.
+        let size = 64;
+        let projection = front_projection(size);
+        let (shared, top, bottom) = (1.0 / 64.0, 0.265625, -0.5);
+        let quad = |x0: f32, x1: f32| {
+            TriMesh::new(
+                vec![
+                    Vec3::new(x0, bottom, 0.0),
+                    Vec3::new(x1, bottom, 0.0),
+                    Vec3::new(x1, top, 0.0),
+                    Vec3::new(x0, top, 0.0),
+                ],
+                vec![[0, 1, 2], [0, 2, 3]],
+            )
+            .unwrap()
+        };
+        let (left, right) = (quad(-0.5, shared), quad(shared, 0.5));
+        let mut both = left.clone();
+        both.append(&right);
+        let count = |m: &TriMesh| covered(&rasterize(m, &projection, size, size));
+        // Columns 16..=31 and 32..=47 (the shared centre column belongs to the
+        // right one, whose edge there is a left edge), rows 23..=47 (the top
+        // edge owns its row of centres).
+        assert_eq!(count(&left), 16 * 25);
+        assert_eq!(count(&right), 16 * 25);
+        assert_eq!(count(&both), 2 * 16 * 25);
+    }
+
+    #[test]
+    fn triangles_crossing_the_eye_plane_are_clipped_not_dropped() {
+        // A long floor strip running from behind the camera to far ahead.
+        let size = 32;
+        let projection = front_projection(size);
+        let floor = TriMesh::new(
+            vec![
+                Vec3::new(-1.0, -0.5, 5.0),
+                Vec3::new(1.0, -0.5, 5.0),
+                Vec3::new(1.0, -0.5, -50.0),
+                Vec3::new(-1.0, -0.5, -50.0),
+            ],
+            vec![[0, 1, 2], [0, 2, 3]],
+        )
+        .unwrap();
+        let fragments = rasterize(&floor, &projection, size, size);
+        // The bottom rows see the floor right below the eye, the top half never.
+        let rows = |range: std::ops::Range<usize>| covered(&fragments[range.start * 32..range.end * 32]);
+        assert_eq!(rows(28..32), 4 * 32);
+        assert_eq!(rows(0..16), 0);
+        for f in fragments.iter().filter(|f| f.is_covered()) {
+            let w = f.weights;
+            assert!(w.min_element() >= -1e-4 && w.x + w.y <= 1.0 + 1e-4, "weights outside: {w}");
+        }
+    }
+
+    #[test]
+    fn bad_triangles_are_skipped() {
+        let projection = front_projection(16);
+        let mesh = TriMesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::NAN, Vec3::INFINITY],
+            triangles: vec![[0, 1, 9], [0, 1, 3], [0, 4, 2], [0, 0, 1], [0, 1, 2]],
+            normals: None,
+        };
+        let fragments = rasterize(&mesh, &projection, 16, 16);
+        assert!(fragments.iter().filter(|f| f.is_covered()).all(|f| f.triangle == 4));
+        assert!(covered(&fragments) > 0);
+        assert!(rasterize(&mesh, &projection, 0, 16).is_empty());
+    }
+}
