@@ -1,7 +1,7 @@
 //! [`Camera`]: a perspective pinhole camera and automatic framing.
 
 use crate::Aabb;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
 /// A perspective pinhole camera in world space.
 ///
@@ -67,8 +67,8 @@ impl Camera {
             .corners()
             .iter()
             .map(|&c| {
-                let (lateral, z) = basis.to_view(c - center);
-                z + lateral.abs().max_element() / tan_half
+                let v = basis.coordinates(c - center);
+                -v.z + v.x.abs().max(v.y.abs()) / tan_half
             })
             .fold(0.0, f32::max);
         Self { eye: center + back * distance, target: center, up: Vec3::Y, fov: Self::DEFAULT_FOV }
@@ -98,22 +98,23 @@ impl ViewBasis {
         Self { right, up: right.cross(forward), forward }
     }
 
-    /// Lateral offset (right, up) and depth along `-forward` of a vector.
-    fn to_view(self, v: Vec3) -> (Vec2, f32) {
-        (Vec2::new(v.dot(self.right), v.dot(self.up)), -v.dot(self.forward))
+    /// Components of `v` along `right`, `up` and `forward`.
+    pub(super) fn coordinates(self, v: Vec3) -> Vec3 {
+        Vec3::new(v.dot(self.right), v.dot(self.up), v.dot(self.forward))
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec2;
 
     /// Projects `p` with `camera` to normalized image coordinates in
     /// `[-1, 1]` across the shorter side.
     fn project(camera: &Camera, p: Vec3) -> Vec2 {
         let basis = ViewBasis::new(camera.target - camera.eye, camera.up);
-        let (lateral, z) = basis.to_view(p - camera.eye);
-        lateral / (-z * (0.5 * camera.fov).tan())
+        let v = basis.coordinates(p - camera.eye);
+        v.truncate() / (v.z * (0.5 * camera.fov).tan())
     }
 
     #[test]

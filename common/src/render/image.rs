@@ -176,10 +176,7 @@ mod tests {
         let mut image = Image::new(4, 3, [0; 3]);
         image.fill_rect(-2, 1, 4, 10, [9; 3]);
         let filled: Vec<bool> = image.pixels().iter().map(|p| p[0] == 9).collect();
-        assert_eq!(
-            filled,
-            [false, false, false, false, true, true, false, false, true, true, false, false]
-        );
+        assert_eq!(filled, [false, false, false, false, true, true, false, false, true, true, false, false]);
         let patch = Image::new(2, 2, [5; 3]);
         image.blit(&patch, 3, 2);
         assert_eq!(image.get(3, 2), Some([5; 3]));

@@ -45,9 +45,9 @@ pub use image::Image;
 pub use sheet::{ContactSheet, contact_sheet, contact_sheet_titled};
 
 use crate::{Aabb, TriMesh};
-use glam::Vec3;
-use rayon::prelude::*;
+use glam::{Vec2, Vec3};
 use raster::{Projection, rasterize};
+use rayon::prelude::*;
 use shade::{Shader, linear_to_srgb, srgb_to_linear};
 
 /// Errors of image output.
@@ -123,13 +123,13 @@ impl Default for RenderSettings {
     }
 }
 
-/// Most samples rendered per image (16 bytes each); supersampling is lowered
+/// Most samples rendered per image (8 bytes each); supersampling is lowered
 /// to stay under it.
 const MAX_SAMPLES: u64 = 1 << 25;
 
 /// Renders `mesh` into a new `width × height` image (see the module docs).
 ///
-/// Allocates the image plus 16 bytes per sample, i.e. per pixel times
+/// Allocates the image plus 8 bytes per sample, i.e. per pixel times
 /// `supersampling²`.
 pub fn render(mesh: &TriMesh, settings: &RenderSettings) -> Image {
     let (width, height) = (settings.width, settings.height);
@@ -154,10 +154,11 @@ pub fn render(mesh: &TriMesh, settings: &RenderSettings) -> Image {
             let mut sum = Vec3::ZERO;
             let mut covered = false;
             for sy in y * ss..(y + 1) * ss {
-                for fragment in &fragments[sy * sample_width + x * ss..][..ss] {
+                for (sx, fragment) in (x * ss..).zip(&fragments[sy * sample_width + x * ss..][..ss]) {
                     if fragment.is_covered() {
                         covered = true;
-                        sum += shader.shade(fragment).min(Vec3::ONE);
+                        let sample = Vec2::new(sx as f32 + 0.5, sy as f32 + 0.5);
+                        sum += shader.shade(fragment, sample).min(Vec3::ONE);
                     } else {
                         sum += background;
                     }
@@ -231,7 +232,10 @@ mod tests {
         assert!((0.2..0.6).contains(&fraction), "covered fraction {fraction}");
         let centroid = pixels.iter().fold((0.0, 0.0), |(sx, sy), &(x, y)| (sx + x as f32, sy + y as f32));
         let centroid = (centroid.0 / pixels.len() as f32, centroid.1 / pixels.len() as f32);
-        assert!((centroid.0 - 159.5).abs() < 8.0 && (centroid.1 - 159.5).abs() < 8.0, "centroid {centroid:?}");
+        assert!(
+            (centroid.0 - 159.5).abs() < 8.0 && (centroid.1 - 159.5).abs() < 8.0,
+            "centroid {centroid:?}"
+        );
     }
 
     #[test]

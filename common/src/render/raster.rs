@@ -1,6 +1,6 @@
 //! Visibility: near clipping, projection and z-buffered triangle
 //! rasterization into a buffer of [`Fragment`]s (which triangle is nearest
-//! at each sample, and where on it).
+//! at each sample, and how far away).
 //!
 //! Coverage uses edge functions over each triangle's bounding box with the
 //! top-left fill rule, sampled at pixel centres. Every edge is evaluated in
@@ -17,6 +17,8 @@ use rayon::prelude::*;
 
 /// Image rows per band; bands are rasterized in parallel.
 const BAND_ROWS: usize = 16;
+/// Mesh triangles per parallel task of clipping and projection.
+const SETUP_CHUNK: usize = 8192;
 
 /// The nearest surface at one sample.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -25,14 +27,11 @@ pub(super) struct Fragment {
     pub(super) inv_depth: f32,
     /// Index of the mesh triangle seen here (`u32::MAX` for none).
     pub(super) triangle: u32,
-    /// Barycentric weights of the triangle's second and third corner (the
-    /// first has `1 − x − y`), perspective-correct.
-    pub(super) weights: Vec2,
 }
 
 impl Fragment {
     /// A sample where nothing is drawn.
-    pub(super) const EMPTY: Fragment = Fragment { inv_depth: 0.0, triangle: u32::MAX, weights: Vec2::ZERO };
+    pub(super) const EMPTY: Fragment = Fragment { inv_depth: 0.0, triangle: u32::MAX };
 
     /// True when a triangle covers this sample.
     pub(super) fn is_covered(&self) -> bool {
@@ -80,30 +79,45 @@ impl Projection {
         self.basis
     }
 
+    /// The world point at `1 / inv_depth` in front of the eye on the ray
+    /// through `pixel` (fractional pixel coordinates, x right, y down).
+    pub(super) fn unproject(&self, pixel: Vec2, inv_depth: f32) -> Vec3 {
+        let d = (pixel - self.center) / self.focal;
+        self.eye + (self.basis.forward + d.x * self.basis.right - d.y * self.basis.up) / inv_depth
+    }
+
     /// View coordinates of a world point: right, up, depth in front of the eye.
-    fn to_view(&self, p: Vec3) -> Vec3 {
-        let d = p - self.eye;
-        Vec3::new(d.dot(self.basis.right), d.dot(self.basis.up), d.dot(self.basis.forward))
+    fn world_to_view(&self, p: Vec3) -> Vec3 {
+        self.basis.coordinates(p - self.eye)
+    }
+
+    /// Coefficients `(a, b, c)` with `1 / depth = a·x + b·y + c` at pixel
+    /// `(x, y)` on the plane through the view points `p`, `q`, `r`; `None`
+    /// when the plane is degenerate or passes through the eye (seen edge-on).
+    fn depth_plane(&self, p: Vec3, q: Vec3, r: Vec3) -> Option<Vec3> {
+        // On the plane n·v = d, the ray v = t·((x − cx)/f, −(y − cy)/f, 1)
+        // has 1/t = n·(…)/d; computed in f64 to keep the offset exact.
+        let (p, q, r) = (p.as_dvec3(), q.as_dvec3(), r.as_dvec3());
+        let n = (q - p).cross(r - p);
+        let d = n.dot(p);
+        let (f, c) = (f64::from(self.focal), self.center.as_dvec2());
+        let (a, b) = (n.x / (f * d), -n.y / (f * d));
+        let plane = glam::DVec3::new(a, b, n.z / d - a * c.x - b * c.y).as_vec3();
+        (d != 0.0 && plane.is_finite()).then_some(plane)
     }
 
     /// Pixel position (x right, y down) of a view point in front of the eye.
-    fn to_pixel(&self, v: Vec3) -> Vec2 {
+    fn view_to_pixel(&self, v: Vec3) -> Vec2 {
         self.center + self.focal / v.z * Vec2::new(v.x, -v.y)
     }
 }
 
-/// A corner of a clipped triangle: view position and barycentric position in
-/// the mesh triangle it was cut from.
+/// A mesh vertex in view coordinates and in pixels (the latter meaningful
+/// only in front of the eye).
 #[derive(Debug, Clone, Copy)]
-struct ClipVertex {
+struct Vertex {
     view: Vec3,
-    bary: Vec3,
-}
-
-impl ClipVertex {
-    fn lerp(self, other: Self, t: f32) -> Self {
-        Self { view: self.view.lerp(other.view, t), bary: self.bary.lerp(other.bary, t) }
-    }
+    pixel: Vec2,
 }
 
 /// A projected triangle, counter-clockwise on screen (positive area with y
@@ -111,8 +125,10 @@ impl ClipVertex {
 #[derive(Debug, Clone, Copy)]
 struct ScreenTriangle {
     pixel: [Vec2; 3],
-    inv_depth: [f32; 3],
-    bary: [Vec3; 3],
+    /// `1 / depth` at pixel `(x, y)` is `depth_plane · (x, y, 1)`: it is
+    /// affine in screen space, and taken from the whole mesh triangle's plane
+    /// so that clipping costs no precision.
+    depth_plane: Vec3,
     triangle: u32,
 }
 
@@ -127,13 +143,28 @@ pub(super) fn rasterize(mesh: &TriMesh, projection: &Projection, width: u32, hei
     if fragments.is_empty() {
         return fragments;
     }
-    let view: Vec<Vec3> = mesh.positions.par_iter().map(|&p| projection.to_view(p)).collect();
-    let triangles: Vec<ScreenTriangle> = mesh
-        .triangles
+    let vertices: Vec<Vertex> = mesh
+        .positions
         .par_iter()
-        .enumerate()
-        .flat_map_iter(|(t, tri)| setup(&view, t, tri, projection, width, height).into_iter().flatten())
+        .map(|&p| {
+            let view = projection.world_to_view(p);
+            Vertex { view, pixel: projection.view_to_pixel(view) }
+        })
         .collect();
+    let triangles = mesh
+        .triangles
+        .par_chunks(SETUP_CHUNK)
+        .enumerate()
+        .map(|(c, chunk)| {
+            let mut out = Vec::with_capacity(chunk.len());
+            for (i, tri) in chunk.iter().enumerate() {
+                let t = (c * SETUP_CHUNK + i) as u32;
+                out.extend(setup(&vertices, t, tri, projection, width, height).into_iter().flatten());
+            }
+            out
+        })
+        .collect::<Vec<Vec<ScreenTriangle>>>()
+        .concat();
 
     let band_count = height.div_ceil(BAND_ROWS);
     let mut bands: Vec<Vec<u32>> = vec![Vec::new(); band_count];
@@ -161,36 +192,44 @@ pub(super) fn rasterize(mesh: &TriMesh, projection: &Projection, width: u32, hei
 /// Clips mesh triangle `t` against the near plane and projects it: zero, one
 /// or two screen triangles.
 fn setup(
-    view: &[Vec3],
-    t: usize,
+    vertices: &[Vertex],
+    t: u32,
     tri: &[u32; 3],
     projection: &Projection,
     width: usize,
     height: usize,
 ) -> [Option<ScreenTriangle>; 2] {
-    let corners = [0, 1, 2].map(|k| view.get(tri[k] as usize).copied());
-    let [Some(a), Some(b), Some(c)] = corners else { return [None, None] };
+    let corners = [0, 1, 2].map(|k| vertices.get(tri[k] as usize).copied());
+    let [Some(u), Some(v), Some(w)] = corners else { return [None, None] };
+    let (a, b, c) = (u.view, v.view, w.view);
     if !(a.is_finite() && b.is_finite() && c.is_finite()) {
         return [None, None];
     }
+    let Some(depth_plane) = projection.depth_plane(a, b, c) else { return [None, None] };
     let near = projection.near;
-    let input = [(a, Vec3::X), (b, Vec3::Y), (c, Vec3::Z)].map(|(view, bary)| ClipVertex { view, bary });
+    if a.z >= near && b.z >= near && c.z >= near {
+        return [screen_triangle([u.pixel, v.pixel, w.pixel], depth_plane, t, width, height), None];
+    }
+    let input = [a, b, c];
     // Sutherland–Hodgman against depth ≥ near: a triangle becomes at most a quad.
-    let mut clipped = [input[0]; 4];
+    let mut clipped = [a; 4];
     let mut n = 0;
     for k in 0..3 {
         let (p, q) = (input[k], input[(k + 1) % 3]);
-        let (p_in, q_in) = (p.view.z >= near, q.view.z >= near);
+        let (p_in, q_in) = (p.z >= near, q.z >= near);
         if p_in {
             clipped[n] = p;
             n += 1;
         }
         if p_in != q_in {
-            clipped[n] = p.lerp(q, (near - p.view.z) / (q.view.z - p.view.z));
+            clipped[n] = p.lerp(q, (near - p.z) / (q.z - p.z));
             n += 1;
         }
     }
-    let project = |k: [usize; 3]| screen_triangle(k.map(|i| clipped[i]), t as u32, projection, width, height);
+    let project = |k: [usize; 3]| {
+        let corners = k.map(|i| projection.view_to_pixel(clipped[i]));
+        screen_triangle(corners, depth_plane, t, width, height)
+    };
     match n {
         3 => [project([0, 1, 2]), None],
         4 => [project([0, 1, 2]), project([0, 2, 3])],
@@ -198,20 +237,16 @@ fn setup(
     }
 }
 
-/// Projects a clipped triangle; `None` when it has no area or misses the image.
+/// A projected triangle with its corners in pixels; `None` when it has no
+/// area or misses the image.
 fn screen_triangle(
-    corners: [ClipVertex; 3],
+    pixel: [Vec2; 3],
+    depth_plane: Vec3,
     triangle: u32,
-    projection: &Projection,
     width: usize,
     height: usize,
 ) -> Option<ScreenTriangle> {
-    let mut tri = ScreenTriangle {
-        pixel: corners.map(|c| projection.to_pixel(c.view)),
-        inv_depth: corners.map(|c| 1.0 / c.view.z),
-        bary: corners.map(|c| c.bary),
-        triangle,
-    };
+    let mut tri = ScreenTriangle { pixel, depth_plane, triangle };
     let [p0, p1, p2] = tri.pixel;
     let area = (p1 - p0).perp_dot(p2 - p0);
     if !area.is_finite() || area == 0.0 {
@@ -219,8 +254,6 @@ fn screen_triangle(
     }
     if area < 0.0 {
         tri.pixel.swap(1, 2);
-        tri.inv_depth.swap(1, 2);
-        tri.bary.swap(1, 2);
     }
     let (min, max) = bounding_box(&tri);
     let on_image =
@@ -289,31 +322,21 @@ impl Edge {
 /// last_row`), keeping the nearest fragment per sample.
 fn draw(tri: &ScreenTriangle, rows: &mut [Fragment], width: usize, first_row: usize, last_row: usize) {
     let [p0, p1, p2] = tri.pixel;
-    // Edge k is opposite corner k; its value is that corner's weight.
     let edges = [Edge::new(p1, p2), Edge::new(p2, p0), Edge::new(p0, p1)];
     let (min, max) = bounding_box(tri);
     let (x0, x1) = pixel_range(min.x, max.x, width);
     let (y0, y1) = pixel_range(min.y, max.y, last_row + 1);
-    let inv_depth = Vec3::from(tri.inv_depth);
     for y in y0.max(first_row)..=y1 {
         let row = &mut rows[(y - first_row) * width..][..width];
-        for x in x0..=x1 {
+        for (x, fragment) in (x0..).zip(row.iter_mut().take(x1 + 1).skip(x0)) {
             let p = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
             let e = edges.map(|edge| edge.eval(p));
             if !(edges[0].covers(e[0]) && edges[1].covers(e[1]) && edges[2].covers(e[2])) {
                 continue;
             }
-            let sum = e[0] + e[1] + e[2];
-            if sum <= 0.0 {
-                continue;
-            }
-            let screen = Vec3::from(e) / sum;
-            let depth = screen.dot(inv_depth);
-            let fragment = &mut row[x];
+            let depth = tri.depth_plane.dot(p.extend(1.0));
             if depth > fragment.inv_depth {
-                let w = screen * inv_depth / depth;
-                let bary = w.x * tri.bary[0] + w.y * tri.bary[1] + w.z * tri.bary[2];
-                *fragment = Fragment { inv_depth: depth, triangle: tri.triangle, weights: Vec2::new(bary.y, bary.z) };
+                *fragment = Fragment { inv_depth: depth, triangle: tri.triangle };
             }
         }
     }
@@ -359,7 +382,14 @@ mod tests {
         let union = covered(&rasterize(&fan, &projection, size, size));
         let separate: usize = triangles
             .iter()
-            .map(|&t| covered(&rasterize(&TriMesh::new(positions.clone(), vec![t]).unwrap(), &projection, size, size)))
+            .map(|&t| {
+                covered(&rasterize(
+                    &TriMesh::new(positions.clone(), vec![t]).unwrap(),
+                    &projection,
+                    size,
+                    size,
+                ))
+            })
             .sum();
         assert_eq!(separate, union);
         assert!(union > 1000, "polygon too small: {union} samples");
@@ -417,9 +447,12 @@ mod tests {
         let rows = |range: std::ops::Range<usize>| covered(&fragments[range.start * 32..range.end * 32]);
         assert_eq!(rows(28..32), 4 * 32);
         assert_eq!(rows(0..16), 0);
-        for f in fragments.iter().filter(|f| f.is_covered()) {
-            let w = f.weights;
-            assert!(w.min_element() >= -1e-4 && w.x + w.y <= 1.0 + 1e-4, "weights outside: {w}");
+        // Every seen point lies on the floor, in front of the eye.
+        for (i, f) in fragments.iter().enumerate().filter(|(_, f)| f.is_covered()) {
+            let pixel = Vec2::new((i % 32) as f32 + 0.5, (i / 32) as f32 + 0.5);
+            let p = projection.unproject(pixel, f.inv_depth);
+            let depth = 1.0 / f.inv_depth;
+            assert!((p.y + 0.5).abs() < 1e-5 * depth && p.z < 2.0, "seen point {p} is not on the floor");
         }
     }
 

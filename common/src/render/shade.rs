@@ -6,14 +6,14 @@
 use super::raster::{Fragment, Projection};
 use super::{RenderSettings, Shading};
 use crate::TriMesh;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 /// Light reaching every surface regardless of orientation.
-const AMBIENT: f32 = 0.1;
+const AMBIENT: f32 = 0.12;
 /// Strength of the key light.
 const KEY: f32 = 0.85;
 /// Strength of the fill light.
-const FILL: f32 = 0.25;
+const FILL: f32 = 0.3;
 /// Strength of the highlight of the key light.
 const SPECULAR: f32 = 0.25;
 /// Blinn–Phong exponent (larger: smaller, sharper highlight).
@@ -24,7 +24,7 @@ pub(super) struct Shader<'a> {
     mesh: &'a TriMesh,
     /// Unit vertex normals for smooth shading; `None` for flat shading.
     normals: Option<Vec<Vec3>>,
-    eye: Vec3,
+    projection: Projection,
     /// Unit directions towards the key and the fill light.
     key: Vec3,
     fill: Vec3,
@@ -45,7 +45,7 @@ impl<'a> Shader<'a> {
         Self {
             mesh,
             normals,
-            eye: projection.eye(),
+            projection: *projection,
             key: world(-0.45, 0.75, 0.55),
             fill: world(0.8, -0.1, 0.5),
             front: srgb_to_linear(settings.color),
@@ -53,14 +53,14 @@ impl<'a> Shader<'a> {
         }
     }
 
-    /// Linear RGB radiance of a covered fragment.
-    pub(super) fn shade(&self, fragment: &Fragment) -> Vec3 {
+    /// Linear RGB radiance of a covered fragment seen at `sample` (in
+    /// fractional pixels of the sample grid).
+    pub(super) fn shade(&self, fragment: &Fragment, sample: Vec2) -> Vec3 {
         let tri = self.mesh.triangles[fragment.triangle as usize];
         let [a, b, c] = tri.map(|i| self.mesh.positions[i as usize]);
-        let w = fragment.weights;
-        let weights = Vec3::new(1.0 - w.x - w.y, w.x, w.y);
-        let point = weights.x * a + weights.y * b + weights.z * c;
-        let to_eye = (self.eye - point).normalize_or(Vec3::Z);
+        let point = self.projection.unproject(sample, fragment.inv_depth);
+        let weights = barycentric(point, a, b, c);
+        let to_eye = (self.projection.eye() - point).normalize_or(Vec3::Z);
         let mut face = (b - a).cross(c - a).normalize_or(to_eye);
         let mut normal = self
             .normals
@@ -91,6 +91,21 @@ impl<'a> Shader<'a> {
         let highlight = if is_front { SPECULAR * normal.dot(half).max(0.0).powf(SHININESS) } else { 0.0 };
         albedo * diffuse + Vec3::splat(highlight)
     }
+}
+
+/// Barycentric weights of `p` (projected onto the plane of triangle `abc`),
+/// clamped into the triangle: samples on an edge may fall a rounding error
+/// outside.
+fn barycentric(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d00, d01, d11) = (ab.dot(ab), ab.dot(ac), ac.dot(ac));
+    let (d20, d21) = (ap.dot(ab), ap.dot(ac));
+    let denom = d00 * d11 - d01 * d01;
+    let v = (d11 * d20 - d01 * d21) / denom;
+    let w = (d00 * d21 - d01 * d20) / denom;
+    let weights = Vec3::new(1.0 - v - w, v, w).max(Vec3::ZERO);
+    let sum = weights.element_sum();
+    if sum.is_finite() && sum > 0.0 { weights / sum } else { Vec3::splat(1.0 / 3.0) }
 }
 
 /// Unit vertex normals for smooth shading: the mesh's own when it has one per
@@ -124,6 +139,19 @@ pub(super) fn linear_to_srgb(color: Vec3) -> [u8; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn barycentric_weights_reproduce_the_point() {
+        let (a, b, c) = (Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 2.0, 0.0), Vec3::new(0.0, 0.0, 3.0));
+        let w = Vec3::new(0.2, 0.3, 0.5);
+        let p = w.x * a + w.y * b + w.z * c;
+        assert!(barycentric(p, a, b, c).abs_diff_eq(w, 1e-6));
+        // Off the plane: projected; outside: clamped; degenerate: centroid.
+        let normal = (b - a).cross(c - a).normalize();
+        assert!(barycentric(p + 0.1 * normal, a, b, c).abs_diff_eq(w, 1e-5));
+        assert_eq!(barycentric(2.0 * a, a, b, c), Vec3::X);
+        assert_eq!(barycentric(a, a, a, a), Vec3::splat(1.0 / 3.0));
+    }
 
     #[test]
     fn srgb_round_trip_is_exact_on_every_byte() {

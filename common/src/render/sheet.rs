@@ -67,9 +67,13 @@ impl ContactSheet {
         let title_scale = scale + 1;
         let title = self.title.as_deref().filter(|t| !t.is_empty());
         let (title_width, title_height) = title.map_or((0, 0), |t| text_size(t, title_scale));
-        let title_band = if title.is_some() { title_height + gap } else { 0 };
+        // Space the title takes: below it and on either side of it.
+        let (title_band, title_span) = match title {
+            Some(_) => (title_height + gap, title_width + 2 * gap),
+            None => (0, 0),
+        };
 
-        let width = (gap + used_columns * (cell_width + gap)).max(title_width + 2 * gap);
+        let width = (gap + used_columns * (cell_width + gap)).max(title_span);
         let height = gap + title_band + rows * row_height;
         let mut sheet = Image::new(width, height, self.background);
         if let Some(t) = title {
