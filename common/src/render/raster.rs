@@ -345,6 +345,7 @@ fn draw(tri: &ScreenTriangle, rows: &mut [Fragment], width: usize, first_row: us
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
 
     /// A camera on +z looking at the origin, 2 units away, whose image spans
     /// `[-1, 1]²` at depth 2 on a `size²` pixel image.
@@ -362,37 +363,66 @@ mod tests {
         fragments.iter().filter(|f| f.is_covered()).count()
     }
 
-    #[test]
-    fn shared_edges_are_drawn_exactly_once() {
-        // A fan of triangles around an off-grid centre tiles a polygon: the
-        // per-triangle sample counts must add up to the count of the union.
-        let size = 64;
-        let projection = front_projection(size);
-        let center = Vec3::new(0.013, -0.021, 0.0);
-        let ring: Vec<Vec3> = (0..7)
-            .map(|i| {
-                let a = i as f32 * std::f32::consts::TAU / 7.0 + 0.1;
-                center + 0.83 * Vec3::new(a.cos(), a.sin(), 0.0)
-            })
-            .collect();
-        let mut positions = vec![center];
-        positions.extend(&ring);
-        let triangles: Vec<[u32; 3]> = (0..7).map(|i| [0, 1 + i, 1 + (i + 1) % 7]).collect();
-        let fan = TriMesh::new(positions.clone(), triangles.clone()).unwrap();
-        let union = covered(&rasterize(&fan, &projection, size, size));
-        let separate: usize = triangles
-            .iter()
-            .map(|&t| {
-                covered(&rasterize(
-                    &TriMesh::new(positions.clone(), vec![t]).unwrap(),
-                    &projection,
-                    size,
-                    size,
-                ))
-            })
-            .sum();
-        assert_eq!(separate, union);
-        assert!(union > 1000, "polygon too small: {union} samples");
+    /// Twice the signed area of (a, b, p) in exact f64 arithmetic (inputs
+    /// are multiples of 1/2 pixel), positive when p is left of a → b with y up.
+    fn cross(a: Vec2, b: Vec2, p: Vec2) -> f64 {
+        let (a, b, p) = (a.as_dvec2(), b.as_dvec2(), p.as_dvec2());
+        (b - a).perp_dot(p - a)
+    }
+
+    proptest! {
+        /// A fan of triangles around a centre tiles a star-shaped polygon:
+        /// every sample strictly inside is drawn exactly once, none outside.
+        /// Corners snap to half pixels, so edges and corners run through
+        /// sample points and the fill rule decides.
+        #[test]
+        fn fans_are_drawn_watertight(
+            center in (-20i32..20, -20i32..20),
+            radii in proptest::collection::vec(12i32..56, 3..10),
+            phase in 0.0f32..std::f32::consts::TAU,
+        ) {
+            let size = 64;
+            let projection = front_projection(size);
+            // World (x, y) at depth 2 maps to pixel (32 + 32x, 32 − 32y):
+            // multiples of 1/64 land on half pixels exactly.
+            let snap = |v: f32| (v * 64.0).round() / 64.0;
+            let c = Vec2::new(center.0 as f32, center.1 as f32) / 64.0;
+            let n = radii.len();
+            let mut positions = vec![c.extend(0.0)];
+            for (i, &r) in radii.iter().enumerate() {
+                let a = phase + i as f32 * std::f32::consts::TAU / n as f32;
+                let p = c + r as f32 / 64.0 * Vec2::new(a.cos(), a.sin());
+                positions.push(Vec3::new(snap(p.x), snap(p.y), 0.0));
+            }
+            let triangles: Vec<[u32; 3]> = (0..n as u32).map(|i| [0, 1 + i, 1 + (i + 1) % n as u32]).collect();
+            let fan = TriMesh::new(positions.clone(), triangles.clone()).unwrap();
+            let fragments = rasterize(&fan, &projection, size, size);
+            let separate: usize = triangles
+                .iter()
+                .map(|&t| covered(&rasterize(&TriMesh::new(positions.clone(), vec![t]).unwrap(), &projection, size, size)))
+                .sum();
+            prop_assert_eq!(separate, covered(&fragments), "a sample was drawn by two triangles");
+
+            let pixel: Vec<Vec2> = positions.iter().map(|p| 32.0 + 32.0 * Vec2::new(p.x, -p.y)).collect();
+            for (i, f) in fragments.iter().enumerate() {
+                let s = Vec2::new((i % 64) as f32 + 0.5, (i / 64) as f32 + 0.5);
+                // Screen y runs down, so counter-clockwise triangles have
+                // negative `cross`; inside means all three ≤ 0.
+                let in_closed = triangles.iter().any(|t| {
+                    let [a, b, c] = t.map(|k| pixel[k as usize]);
+                    cross(a, b, s) <= 0.0 && cross(b, c, s) <= 0.0 && cross(c, a, s) <= 0.0
+                });
+                let on_outline = (1..=n).any(|k| {
+                    let (a, b) = (pixel[k], pixel[1 + k % n]);
+                    cross(a, b, s) == 0.0 && s.cmpge(a.min(b)).all() && s.cmple(a.max(b)).all()
+                });
+                if in_closed && !on_outline {
+                    prop_assert!(f.is_covered(), "gap at interior sample {}", s);
+                } else if !in_closed {
+                    prop_assert!(!f.is_covered(), "sample {} outside the polygon drawn", s);
+                }
+            }
+        }
     }
 
     #[test]
