@@ -1,1 +1,0 @@
-//! Mesh bvh (to be written).

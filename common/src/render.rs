@@ -1,1 +1,0 @@
-//! Software preview renderer and contact sheets (to be written).
