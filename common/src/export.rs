@@ -296,7 +296,7 @@ fn write_contact_sheet(
     if render_settings.camera.is_none() {
         let bounds = frames.iter().fold(crate::Aabb::EMPTY, |b, (_, m)| b.union(&m.bounds()));
         if !bounds.is_empty() {
-            render_settings.camera = Some(crate::render::Camera::fit(&bounds, crate::render::DEFAULT_VIEW));
+            render_settings.camera = Some(crate::render::Camera::fit(&bounds, crate::render::Camera::DEFAULT_VIEW_DIR));
         }
     }
     let tiles: Vec<(Image, String)> =

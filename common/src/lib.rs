@@ -10,6 +10,7 @@
 
 pub mod aabb;
 pub mod alignment;
+pub mod export;
 pub mod fast_marching;
 pub mod field;
 pub mod grid;
@@ -19,6 +20,7 @@ pub mod mesh;
 pub mod models;
 pub mod morph;
 pub mod render;
+pub mod sdf;
 pub mod shape;
 pub mod transform;
 
