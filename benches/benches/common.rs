@@ -17,7 +17,9 @@ fn marching_cubes_torus(c: &mut Criterion) {
     for n in [128u32, 256] {
         let grid = torus_grid(n);
         group.throughput(Throughput::Elements(u64::from(n - 1).pow(3)));
-        group.bench_function(BenchmarkId::from_parameter(n), |b| b.iter(|| marching_cubes(black_box(&grid), 0.0)));
+        group.bench_function(BenchmarkId::from_parameter(n), |b| {
+            b.iter(|| marching_cubes(black_box(&grid), 0.0))
+        });
     }
     group.finish();
 }
@@ -35,12 +37,15 @@ fn grid_fill_torus(c: &mut Criterion) {
 
 fn mesh_io_bunny(c: &mut Criterion) {
     let mut group = c.benchmark_group("mesh_io");
-    for (id, file, format) in
-        [("bunny_ply", "bunny.ply", MeshFormat::PlyBinaryLittleEndian), ("bunny_obj", "bunny.obj", MeshFormat::Obj)]
-    {
+    for (id, file, format) in [
+        ("bunny_ply", "bunny.ply", MeshFormat::PlyBinaryLittleEndian),
+        ("bunny_obj", "bunny.obj", MeshFormat::Obj),
+    ] {
         let bytes = std::fs::read(data_path(file)).expect("bunny in data/");
         group.throughput(Throughput::Bytes(bytes.len() as u64));
-        group.bench_function(id, |b| b.iter(|| read_mesh_from(Cursor::new(black_box(&bytes)), format).unwrap()));
+        group.bench_function(id, |b| {
+            b.iter(|| read_mesh_from(Cursor::new(black_box(&bytes)), format).unwrap())
+        });
     }
     group.finish();
 }

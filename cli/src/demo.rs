@@ -30,6 +30,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
             frames: args.frames,
             out: args.out.join(folder),
             format: Format::Ply,
+            keep_scale: false,
         };
         let report = morph(&morph_args)?;
         print_summary(&report, &morph_args);

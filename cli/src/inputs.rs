@@ -2,47 +2,68 @@
 //! distance fields (positive inside) and reference surfaces.
 
 use anyhow::{Context, bail};
+use isomorph_common::glam::{Affine3A, Quat, Vec3};
 use isomorph_common::mesh::io::read_mesh;
 use isomorph_common::sdf::MeshSdf;
 use isomorph_common::{Aabb, Field3, Shape, TriMesh, marching_cubes::polygonize, models};
 use std::path::Path;
 
+/// Longest box side of a mesh input after fitting (world units).
+pub const FIT_SIZE: f32 = 0.9;
+
 /// A shape to morph: analytic or a mesh.
 pub enum Input {
     /// A built-in model (see `isomorph_common::models::NAMES`).
-    Builtin(String, Shape),
+    Builtin(Shape),
     /// A closed triangle mesh read from a file.
-    Mesh(String, TriMesh, MeshSdf),
+    Mesh(TriMesh, MeshSdf),
 }
 
 impl Input {
     /// A built-in shape name, or else a mesh file path.
-    pub fn parse(spec: &str) -> anyhow::Result<Self> {
+    ///
+    /// With `fit`, a mesh is centred and uniformly scaled so that the longest
+    /// side of its box is [`FIT_SIZE`], matching the built-in shapes, which all
+    /// live in `[-0.5, 0.5]³`; without it, the mesh keeps its own coordinates.
+    pub fn parse(spec: &str, fit: bool) -> anyhow::Result<Self> {
         if let Some(shape) = models::by_name(spec) {
-            return Ok(Input::Builtin(spec.to_string(), shape));
+            return Ok(Input::Builtin(shape));
         }
         let path = Path::new(spec);
         if !path.exists() {
-            bail!("'{spec}' is neither a built-in shape ({}) nor an existing mesh file", models::NAMES.join(", "));
+            bail!(
+                "'{spec}' is neither a built-in shape ({}) nor an existing mesh file",
+                models::NAMES.join(", ")
+            );
         }
-        let mesh = read_mesh(path).with_context(|| format!("cannot read {spec}"))?;
-        let sdf = MeshSdf::new(&mesh).with_context(|| format!("cannot build the distance field of {spec}"))?;
-        Ok(Input::Mesh(spec.to_string(), mesh, sdf))
+        let mut mesh = read_mesh(path).with_context(|| format!("cannot read {spec}"))?;
+        if fit {
+            let b = mesh.bounds();
+            let scale = FIT_SIZE / b.size().max_element().max(f32::MIN_POSITIVE);
+            mesh.transform(&Affine3A::from_scale_rotation_translation(
+                Vec3::splat(scale),
+                Quat::IDENTITY,
+                -scale * b.center(),
+            ));
+        }
+        let sdf =
+            MeshSdf::new(&mesh).with_context(|| format!("cannot build the distance field of {spec}"))?;
+        Ok(Input::Mesh(mesh, sdf))
     }
 
     /// The signed distance field (positive inside).
     pub fn field(&self) -> &dyn Field3 {
         match self {
-            Input::Builtin(_, s) => s,
-            Input::Mesh(_, _, sdf) => sdf,
+            Input::Builtin(s) => s,
+            Input::Mesh(_, sdf) => sdf,
         }
     }
 
     /// A box containing the shape.
     pub fn bounds(&self) -> Aabb {
         match self {
-            Input::Builtin(_, s) => s.aabb(),
-            Input::Mesh(_, m, _) => m.bounds(),
+            Input::Builtin(s) => s.aabb(),
+            Input::Mesh(m, _) => m.bounds(),
         }
     }
 
@@ -50,16 +71,9 @@ impl Input {
     /// shape polygonized at `res` nodes along the longest edge.
     pub fn reference(&self, res: u32) -> anyhow::Result<TriMesh> {
         Ok(match self {
-            Input::Builtin(_, s) => polygonize(s, &s.aabb().padded(0.05), res, 0.0)?,
-            Input::Mesh(_, m, _) => m.clone(),
+            Input::Builtin(s) => polygonize(s, &s.aabb().padded(0.05), res, 0.0)?,
+            Input::Mesh(m, _) => m.clone(),
         })
-    }
-
-    /// The name given on the command line.
-    pub fn name(&self) -> &str {
-        match self {
-            Input::Builtin(n, _) | Input::Mesh(n, ..) => n,
-        }
     }
 }
 

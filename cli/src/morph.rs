@@ -54,6 +54,10 @@ pub struct MorphArgs {
     /// Number of frames written (t = 0 .. 1 evenly).
     #[arg(long, default_value_t = 9, value_parser = clap::value_parser!(u32).range(2..=1000))]
     pub frames: u32,
+    /// Keep mesh inputs in their own coordinates instead of fitting each into
+    /// the built-in shapes' box (centred, longest side 0.9).
+    #[arg(long)]
+    pub keep_scale: bool,
     /// Output folder for frames, contact_sheet.png and report.json.
     #[arg(long, default_value = "out/morph")]
     pub out: PathBuf,
@@ -71,8 +75,8 @@ pub fn run(args: &MorphArgs) -> anyhow::Result<()> {
 
 /// Builds the inputs, runs the morph and exports it; returns the report.
 pub fn morph(args: &MorphArgs) -> anyhow::Result<Report> {
-    let source = Input::parse(&args.source)?;
-    let target = Input::parse(&args.target)?;
+    let source = Input::parse(&args.source, !args.keep_scale)?;
+    let target = Input::parse(&args.target, !args.keep_scale)?;
     let bounds = morph_bounds(&source, &target);
     let reference_res = (2 * args.res).min(256);
     let settings = ExportSettings {

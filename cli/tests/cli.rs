@@ -26,7 +26,8 @@ fn demo_writes_frames_sheet_and_report() {
     for f in ["frame_000.ply", "frame_003.ply", "contact_sheet.png", "report.json"] {
         assert!(dir.join(f).is_file(), "missing {f}");
     }
-    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
     assert_eq!(report["method"], "baseline");
     assert_eq!(report["resolution"], 32);
     let frames = report["frames"].as_array().unwrap();
@@ -65,8 +66,21 @@ fn info_prints_bunny_metrics_as_json() {
 fn morph_of_a_mesh_into_a_builtin_shape() {
     let out = scratch("morph");
     let o = isomorph(&[
-        "morph", "--method", "baseline", "--source", &bunny(), "--target", "sphere", "--res", "24", "--frames", "3",
-        "--format", "obj", "--out", out.to_str().unwrap(),
+        "morph",
+        "--method",
+        "baseline",
+        "--source",
+        &bunny(),
+        "--target",
+        "sphere",
+        "--res",
+        "24",
+        "--frames",
+        "3",
+        "--format",
+        "obj",
+        "--out",
+        out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(out.join("frame_002.obj").is_file());

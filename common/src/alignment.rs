@@ -90,14 +90,18 @@ pub enum AlignError {
     NonFinite,
     /// The covariance is (nearly) singular: the solid is flat or a line, so
     /// its principal axes and scales are not defined. Values ascending, length².
-    #[error("the shape is flat: covariance eigenvalues {eigenvalues:?} (smallest ≤ {FLAT_RATIO:e} × largest)")]
+    #[error(
+        "the shape is flat: covariance eigenvalues {eigenvalues:?} (smallest ≤ {FLAT_RATIO:e} × largest)"
+    )]
     Degenerate {
         /// The covariance eigenvalues, ascending.
         eigenvalues: [f64; 3],
     },
     /// The mesh is not closed: its triangle area vectors do not sum to zero,
     /// so it bounds no solid (relative imbalance given).
-    #[error("the mesh is not closed (area-vector imbalance {imbalance:e} > {OPEN_TOLERANCE:e}); close its holes")]
+    #[error(
+        "the mesh is not closed (area-vector imbalance {imbalance:e} > {OPEN_TOLERANCE:e}); close its holes"
+    )]
     OpenMesh {
         /// `|Σ area vectors| / Σ |area vectors|`.
         imbalance: f64,
@@ -181,7 +185,11 @@ impl RawMoments {
                 for k in 0..3 {
                     let cubes = a[i] * a[j] * a[k] + b[i] * b[j] * b[k] + c[i] * c[j] * c[k];
                     self.m3[i][j][k] += v / 120.0
-                        * (s[i] * s[j] * s[k] + s[i] * q(j, k) + s[j] * q(i, k) + s[k] * q(i, j) + 2.0 * cubes);
+                        * (s[i] * s[j] * s[k]
+                            + s[i] * q(j, k)
+                            + s[j] * q(i, k)
+                            + s[k] * q(i, j)
+                            + 2.0 * cubes);
                 }
             }
         }
@@ -228,8 +236,7 @@ impl RawMoments {
                 })
             })
         });
-        let moments =
-            Moments { volume: v, centroid: reference + DVec3::from_array(c), covariance, third };
+        let moments = Moments { volume: v, centroid: reference + DVec3::from_array(c), covariance, third };
         let finite = v.is_finite()
             && moments.centroid.is_finite()
             && moments.covariance.is_finite()
@@ -276,10 +283,10 @@ impl Moments {
                 (raw, area_vector, area)
             })
             .collect();
-        let (mut raw, area_vector, area) = chunks.iter().fold(
-            (RawMoments::ZERO, DVec3::ZERO, 0.0),
-            |(r, av, a), (cr, cav, ca)| (r.add(cr), av + *cav, a + ca),
-        );
+        let (mut raw, area_vector, area) =
+            chunks.iter().fold((RawMoments::ZERO, DVec3::ZERO, 0.0), |(r, av, a), (cr, cav, ca)| {
+                (r.add(cr), av + *cav, a + ca)
+            });
         if area <= 0.0 {
             return Err(AlignError::Empty);
         }
@@ -450,11 +457,13 @@ fn partial_volume(grid: &Grid3<f32>, i: u32, j: u32, k: u32) -> f64 {
     let inside = v > 0.0;
     let n = [i, j, k];
     let near_surface = (0..3).any(|axis| {
-        [n[axis].checked_sub(1), Some(n[axis] + 1).filter(|&m| m < dims[axis])].into_iter().flatten().any(|m| {
-            let mut q = n;
-            q[axis] = m;
-            (data[grid.index(q[0], q[1], q[2])] > 0.0) != inside
-        })
+        [n[axis].checked_sub(1), Some(n[axis] + 1).filter(|&m| m < dims[axis])].into_iter().flatten().any(
+            |m| {
+                let mut q = n;
+                q[axis] = m;
+                (data[grid.index(q[0], q[1], q[2])] > 0.0) != inside
+            },
+        )
     });
     let step = if inside { 1.0 } else { 0.0 };
     if !near_surface {
@@ -533,7 +542,9 @@ pub fn align(source: &Moments, target: &Moments, mode: AlignMode) -> Result<Alig
     let a = source.principal_frame()?;
     let b = target.principal_frame()?;
     let scale = match mode {
-        AlignMode::Affine => DVec3::from_array(std::array::from_fn(|i| (b.variances[i] / a.variances[i]).sqrt())),
+        AlignMode::Affine => {
+            DVec3::from_array(std::array::from_fn(|i| (b.variances[i] / a.variances[i]).sqrt()))
+        }
         AlignMode::Similarity => DVec3::splat((b.volume / a.volume).cbrt()),
         AlignMode::Rigid => DVec3::ONE,
     };

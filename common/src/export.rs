@@ -18,11 +18,11 @@
 //! `genus` is `null` for frames that are not closed 2-manifolds; an endpoint is
 //! `null` when no reference mesh was given.
 
+use crate::TriMesh;
 use crate::mesh::distance::{SurfaceDistance, surface_distance};
 use crate::mesh::io::{MeshFormat, write_mesh};
 use crate::morph::Morph;
 use crate::render::{Image, RenderSettings, contact_sheet, render};
-use crate::TriMesh;
 use rayon::prelude::*;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -159,7 +159,12 @@ pub struct EndpointDistance {
 
 impl EndpointDistance {
     fn new(d: SurfaceDistance, voxel: f32) -> Self {
-        Self { mean: d.mean, hausdorff: d.hausdorff, mean_voxels: d.mean / voxel, hausdorff_voxels: d.hausdorff / voxel }
+        Self {
+            mean: d.mean,
+            hausdorff: d.hausdorff,
+            mean_voxels: d.mean / voxel,
+            hausdorff_voxels: d.hausdorff / voxel,
+        }
     }
 }
 
@@ -215,7 +220,10 @@ pub fn export_sequence<M: Morph + ?Sized>(
         return Err(ExportError::Settings(format!("need at least 2 frames, got {}", settings.frames)));
     }
     if settings.resolution < 2 {
-        return Err(ExportError::Settings(format!("resolution must be at least 2, got {}", settings.resolution)));
+        return Err(ExportError::Settings(format!(
+            "resolution must be at least 2, got {}",
+            settings.resolution
+        )));
     }
     let dir = &settings.out_dir;
     std::fs::create_dir_all(dir).map_err(|source| ExportError::Io { path: dir.clone(), source })?;
@@ -296,7 +304,8 @@ fn write_contact_sheet(
     if render_settings.camera.is_none() {
         let bounds = frames.iter().fold(crate::Aabb::EMPTY, |b, (_, m)| b.union(&m.bounds()));
         if !bounds.is_empty() {
-            render_settings.camera = Some(crate::render::Camera::fit(&bounds, crate::render::Camera::DEFAULT_VIEW_DIR));
+            render_settings.camera =
+                Some(crate::render::Camera::fit(&bounds, crate::render::Camera::DEFAULT_VIEW_DIR));
         }
     }
     let tiles: Vec<(Image, String)> =

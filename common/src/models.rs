@@ -55,7 +55,9 @@ pub fn c_shape() -> Shape {
     let hole = Shape::superellipsoid(Vec3::new(0.2, 0.2, 0.3), 0.3, 1.0);
     let opening = Shape::cuboid(Vec3::new(0.25, 0.12, 0.3)).translated(Vec3::new(0.3, 0.0, 0.0));
     let ring = disk.subtract(hole).subtract(opening);
-    let terminal = |y: f32| Shape::superellipsoid(Vec3::new(0.1, 0.1, 0.13), 0.6, 1.0).translated(Vec3::new(0.27, y, 0.0));
+    let terminal = |y: f32| {
+        Shape::superellipsoid(Vec3::new(0.1, 0.1, 0.13), 0.6, 1.0).translated(Vec3::new(0.27, y, 0.0))
+    };
     ring.union(terminal(0.2)).union(terminal(-0.2))
 }
 
@@ -64,7 +66,9 @@ pub fn c_shape() -> Shape {
 pub fn mug() -> Shape {
     let upright = Quat::from_rotation_x(-FRAC_PI_2);
     let body = Shape::cylinder(0.25, 0.3);
-    let handle = Shape::torus(0.14, 0.045).rotated(Quat::from_rotation_x(FRAC_PI_2)).translated(Vec3::new(0.27, 0.0, 0.0));
+    let handle = Shape::torus(0.14, 0.045)
+        .rotated(Quat::from_rotation_x(FRAC_PI_2))
+        .translated(Vec3::new(0.27, 0.0, 0.0));
     let cavity = Shape::cylinder(0.2, 0.3).translated(Vec3::new(0.0, 0.0, 0.06));
     body.union(handle).subtract(cavity).rotated(upright)
 }

@@ -52,13 +52,17 @@ impl MeshSdf {
         }
         let mut face_normals = Vec::with_capacity(mesh.triangles.len());
         let mut vertex_normals = vec![Vec3::ZERO; mesh.positions.len()];
-        let mut edge_normals: HashMap<(u32, u32), Vec3> = HashMap::with_capacity(mesh.triangles.len() * 3 / 2);
+        let mut edge_normals: HashMap<(u32, u32), Vec3> =
+            HashMap::with_capacity(mesh.triangles.len() * 3 / 2);
         for (t, tri) in mesh.triangles.iter().enumerate() {
             let p = mesh.corners(t);
             let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
             face_normals.push(n);
             for c in 0..3 {
-                let (a, b) = ((p[(c + 1) % 3] - p[c]).normalize_or_zero(), (p[(c + 2) % 3] - p[c]).normalize_or_zero());
+                let (a, b) = (
+                    (p[(c + 1) % 3] - p[c]).normalize_or_zero(),
+                    (p[(c + 2) % 3] - p[c]).normalize_or_zero(),
+                );
                 let angle = a.dot(b).clamp(-1.0, 1.0).acos();
                 vertex_normals[tri[c] as usize] += angle * n;
                 let (u, v) = (tri[c], tri[(c + 1) % 3]);
@@ -125,7 +129,9 @@ mod tests {
 
     /// An axis-aligned cube `[-1, 1]³` as 12 outward triangles.
     fn cube() -> TriMesh {
-        let p: Vec<Vec3> = (0..8).map(|i| Vec3::new([-1.0, 1.0][i & 1], [-1.0, 1.0][(i >> 1) & 1], [-1.0, 1.0][i >> 2])).collect();
+        let p: Vec<Vec3> = (0..8)
+            .map(|i| Vec3::new([-1.0, 1.0][i & 1], [-1.0, 1.0][(i >> 1) & 1], [-1.0, 1.0][i >> 2]))
+            .collect();
         let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
         let tris = quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect();
         TriMesh::new(p, tris).unwrap()

@@ -219,7 +219,11 @@ impl Shape {
             Shape::Cuboid { half_extents, rounding } => {
                 positive("half_extents", half_extents.min_element())?;
                 if !(rounding.is_finite() && *rounding >= 0.0 && *rounding <= half_extents.min_element()) {
-                    return Err(ShapeError::BadParameter { path: path.into(), name: "rounding", value: *rounding });
+                    return Err(ShapeError::BadParameter {
+                        path: path.into(),
+                        name: "rounding",
+                        value: *rounding,
+                    });
                 }
                 Ok(())
             }

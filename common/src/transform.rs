@@ -64,7 +64,9 @@ impl AffineParts {
         }
         let rot = u * v_t;
         let stretch = v_t.transpose() * nalgebra::Matrix3::from_diagonal(&svd.singular_values) * v_t;
-        let to_glam = |a: &nalgebra::Matrix3<f64>| Mat3::from_cols_array(&std::array::from_fn(|i| a[(i % 3, i / 3)] as f32));
+        let to_glam = |a: &nalgebra::Matrix3<f64>| {
+            Mat3::from_cols_array(&std::array::from_fn(|i| a[(i % 3, i / 3)] as f32))
+        };
         let rotation = Quat::from_mat3(&to_glam(&rot)).normalize();
         let s = to_glam(&stretch);
         // Symmetrize away rounding.

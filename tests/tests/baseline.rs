@@ -44,16 +44,12 @@ fn exporter_writes_what_the_report_says() {
         ..ExportSettings::default()
     };
     let calls = AtomicUsize::new(0);
-    let report = export_sequence(
-        &morph,
-        &settings,
-        &|p| {
-            if matches!(p, ExportProgress::Frame { .. }) {
-                calls.fetch_add(1, Ordering::Relaxed);
-            }
-            true
-        },
-    )
+    let report = export_sequence(&morph, &settings, &|p| {
+        if matches!(p, ExportProgress::Frame { .. }) {
+            calls.fetch_add(1, Ordering::Relaxed);
+        }
+        true
+    })
     .unwrap();
     assert_eq!(calls.load(Ordering::Relaxed), 5);
     assert_eq!(report.frames.len(), 5);

@@ -52,8 +52,8 @@ pub enum DistanceError {
 /// use isomorph_common::{Shape, marching_cubes::polygonize};
 /// use isomorph_common::mesh::distance::surface_distance;
 /// let box_ = isomorph_common::Aabb::cube(0.5);
-/// let small = polygonize(&Shape::sphere(glam::Vec3::ZERO, 0.30), &box_, 48, 0.0).unwrap();
-/// let large = polygonize(&Shape::sphere(glam::Vec3::ZERO, 0.35), &box_, 48, 0.0).unwrap();
+/// let small = polygonize(&Shape::sphere(0.30), &box_, 48, 0.0).unwrap();
+/// let large = polygonize(&Shape::sphere(0.35), &box_, 48, 0.0).unwrap();
 /// let d = surface_distance(&small, &large, 2000).unwrap();
 /// assert!((d.mean - 0.05).abs() < 0.005 && (d.hausdorff - 0.05).abs() < 0.01);
 /// ```
@@ -126,7 +126,7 @@ mod tests {
     use crate::{Aabb, Shape};
 
     fn sphere(r: f32, res: u32) -> TriMesh {
-        polygonize(&Shape::sphere(Vec3::ZERO, r), &Aabb::cube(0.5), res, 0.0).unwrap()
+        polygonize(&Shape::sphere(r), &Aabb::cube(0.5), res, 0.0).unwrap()
     }
 
     #[test]
@@ -183,6 +183,9 @@ mod tests {
         let flat = TriMesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::X * 2.0], vec![[0, 1, 2]]).unwrap();
         let m = sphere(0.3, 16);
         assert_eq!(surface_distance(&m, &flat, 10), Err(DistanceError::EmptySurface { which: "second" }));
-        assert_eq!(surface_distance(&TriMesh::default(), &m, 10), Err(DistanceError::EmptySurface { which: "first" }));
+        assert_eq!(
+            surface_distance(&TriMesh::default(), &m, 10),
+            Err(DistanceError::EmptySurface { which: "first" })
+        );
     }
 }

@@ -325,9 +325,8 @@ pub(crate) mod test_meshes {
 
     /// The cube `[-h, h]³`, two outward triangles per face.
     pub(crate) fn cube(h: f32) -> TriMesh {
-        let positions = (0..8)
-            .map(|i| Vec3::new([-h, h][i & 1], [-h, h][(i >> 1) & 1], [-h, h][(i >> 2) & 1]))
-            .collect();
+        let positions =
+            (0..8).map(|i| Vec3::new([-h, h][i & 1], [-h, h][(i >> 1) & 1], [-h, h][(i >> 2) & 1])).collect();
         let quads = [[0, 4, 6, 2], [1, 3, 7, 5], [0, 1, 5, 4], [2, 6, 7, 3], [0, 2, 3, 1], [4, 5, 7, 6]];
         let triangles = quads.iter().flat_map(|&[a, b, c, d]| [[a, b, c], [a, c, d]]).collect();
         TriMesh::new(positions, triangles).unwrap()

@@ -84,7 +84,8 @@ impl Tri {
         let grad_w = (n.cross(ab) / n2).as_vec3();
         // A triangle whose gradients do not fit in f32 is treated as its edges.
         let flat = !(n2 > 0.0 && grad_v.is_finite() && grad_w.is_finite());
-        let inverse = |len2: f64| if len2 > 0.0 && (1.0 / len2) < f32::MAX as f64 { (1.0 / len2) as f32 } else { 0.0 };
+        let inverse =
+            |len2: f64| if len2 > 0.0 && (1.0 / len2) < f32::MAX as f64 { (1.0 / len2) as f32 } else { 0.0 };
         Self {
             a,
             ab: ab.as_vec3(),
@@ -351,8 +352,11 @@ impl Builder {
             })
             .collect();
         let n = corners.len();
-        let mut builder =
-            Self { boxes, order: (0..n as u32).collect(), nodes: Vec::with_capacity(2 * n.div_ceil(MAX_LEAF)) };
+        let mut builder = Self {
+            boxes,
+            order: (0..n as u32).collect(),
+            nodes: Vec::with_capacity(2 * n.div_ceil(MAX_LEAF)),
+        };
         builder.nodes.push(builder.leaf(0, n));
         builder.split(0, 0);
         builder
@@ -493,9 +497,7 @@ mod tests {
     /// The nearest triangle by testing all of them: `(distance², index)`.
     fn brute_force(mesh: &TriMesh, p: Vec3) -> Option<(f32, u32)> {
         (0..mesh.triangles.len())
-            .map(|t| {
-                (closest_on_triangle(p, &Tri::new(mesh.corners(t))).d2, t as u32)
-            })
+            .map(|t| (closest_on_triangle(p, &Tri::new(mesh.corners(t))).d2, t as u32))
             .min_by(|x, y| x.0.total_cmp(&y.0))
     }
 
@@ -511,7 +513,11 @@ mod tests {
         let (want, _) = brute_force(mesh, p).expect("non-empty mesh");
         let got = got.expect("a finite query on a non-empty mesh has an answer");
         let diff = (got.distance_squared - want).abs();
-        assert!(diff <= 1e-6 * want + 1e-12, "at {p}: expected d² {want}, got {}, difference {diff}", got.distance_squared);
+        assert!(
+            diff <= 1e-6 * want + 1e-12,
+            "at {p}: expected d² {want}, got {}, difference {diff}",
+            got.distance_squared
+        );
         let [a, b, c] = mesh.corners(got.triangle as usize);
         let w = got.barycentric;
         assert!(w.min_element() >= 0.0 && (w.element_sum() - 1.0).abs() < 1e-5, "barycentric {w}");
@@ -529,7 +535,11 @@ mod tests {
         let [p, a, b, c] = [p, a, b, c].map(|x| x.as_dvec3());
         let segment = |s: glam::DVec3, e: glam::DVec3| {
             let d = e - s;
-            let t = if d.length_squared() > 0.0 { ((p - s).dot(d) / d.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
+            let t = if d.length_squared() > 0.0 {
+                ((p - s).dot(d) / d.length_squared()).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
             (p - s - t * d).length_squared()
         };
         let edges = segment(a, b).min(segment(a, c)).min(segment(b, c));
@@ -693,7 +703,9 @@ mod tests {
             // A deterministic scatter of points over the padded box.
             let points: Vec<Vec3> = (0..2000u32)
                 .map(|i| {
-                    let f = |k: u32| ((i.wrapping_mul(2654435761).wrapping_add(k * 40503)) % 1009) as f32 / 1008.0;
+                    let f = |k: u32| {
+                        ((i.wrapping_mul(2654435761).wrapping_add(k * 40503)) % 1009) as f32 / 1008.0
+                    };
                     bounds.min + bounds.size() * Vec3::new(f(1), f(2), f(3))
                 })
                 .collect();
@@ -725,7 +737,8 @@ mod tests {
         let start = std::time::Instant::now();
         bvh.closest_many(&points, &mut out);
         let query = start.elapsed();
-        let mean = out.iter().map(|o| o.unwrap().distance_squared.sqrt() as f64).sum::<f64>() / out.len() as f64;
+        let mean =
+            out.iter().map(|o| o.unwrap().distance_squared.sqrt() as f64).sum::<f64>() / out.len() as f64;
         println!(
             "bunny BVH: {} nodes, depth {}, build {build:?}; {} queries in {query:?} ({} threads), mean distance {mean:.4}",
             bvh.nodes.len(),
