@@ -16,7 +16,7 @@ pub enum Input {
     /// A built-in model (see `isomorph_common::models::NAMES`).
     Builtin(Shape),
     /// A closed triangle mesh read from a file.
-    Mesh(TriMesh, MeshSdf),
+    Mesh(TriMesh, Box<MeshSdf>),
 }
 
 impl Input {
@@ -48,14 +48,14 @@ impl Input {
         }
         let sdf =
             MeshSdf::new(&mesh).with_context(|| format!("cannot build the distance field of {spec}"))?;
-        Ok(Input::Mesh(mesh, sdf))
+        Ok(Input::Mesh(mesh, Box::new(sdf)))
     }
 
     /// The signed distance field (positive inside).
     pub fn field(&self) -> &dyn Field3 {
         match self {
             Input::Builtin(s) => s,
-            Input::Mesh(_, sdf) => sdf,
+            Input::Mesh(_, sdf) => sdf.as_ref(),
         }
     }
 

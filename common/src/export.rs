@@ -300,7 +300,7 @@ fn write_contact_sheet(
     settings: &ExportSettings,
     path: &Path,
 ) -> Result<(), ExportError> {
-    let mut render_settings = settings.render.clone();
+    let mut render_settings = settings.render;
     if render_settings.camera.is_none() {
         let bounds = frames.iter().fold(crate::Aabb::EMPTY, |b, (_, m)| b.union(&m.bounds()));
         if !bounds.is_empty() {

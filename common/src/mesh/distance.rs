@@ -98,7 +98,7 @@ pub fn surface_samples(mesh: &TriMesh, count: usize) -> Option<Vec<Vec3>> {
         total += 0.5 * f64::from((q - p).cross(r - p).length());
         cumulative.push(total);
     }
-    if !(total > 0.0) {
+    if total <= 0.0 || total.is_nan() {
         return None;
     }
     // R2 sequence constants (Roberts 2018): 1/g and 1/g² for the plastic number g.

@@ -242,7 +242,8 @@ impl TriangleBvh {
             return Best::bound(-1.0);
         }
         let Some(root) = self.nodes.first() else { return best };
-        if !(root.distance_squared(p) <= best.d2) {
+        let d2 = root.distance_squared(p);
+        if d2.is_nan() || d2 > best.d2 {
             return best;
         }
         let mut stack = [(0u32, 0f32); STACK];
@@ -418,7 +419,7 @@ impl Builder {
         let extent = cmax - cmin;
         let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, last bin on the left)
         for axis in 0..3 {
-            if !(extent[axis] > 0.0) {
+            if extent[axis] <= 0.0 || extent[axis].is_nan() {
                 continue;
             }
             let scale = BINS as f32 / extent[axis];
@@ -620,7 +621,7 @@ mod tests {
             let [a, b, off, p] = [(); 4].map(|_| Vec3::new(rnd(), rnd(), rnd()));
             let p = 3.0 * p;
             for k in 0..16 {
-                let eps = if k == 15 { 0.0 } else { 10f32.powi(-(k as i32 / 2)) };
+                let eps = if k == 15 { 0.0 } else { 10f32.powi(-(k / 2)) };
                 // Even k: a sliver (c near the line ab); odd k: a needle (c near a).
                 let c = if k % 2 == 0 { a + rnd().abs() * (b - a) + eps * off } else { a + eps * off };
                 for corners in [[a, b, c], [b, c, a], [c, a, b]] {
