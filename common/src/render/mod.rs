@@ -180,33 +180,7 @@ fn finite_bounds(mesh: &TriMesh) -> Aabb {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A UV sphere of `radius` around `center`, outward oriented.
-    fn uv_sphere(center: Vec3, radius: f32, rings: u32, segments: u32) -> TriMesh {
-        let mut positions = vec![center + radius * Vec3::Y];
-        for r in 1..rings {
-            let polar = std::f32::consts::PI * r as f32 / rings as f32;
-            for s in 0..segments {
-                let azimuth = std::f32::consts::TAU * s as f32 / segments as f32;
-                let dir = Vec3::new(polar.sin() * azimuth.cos(), polar.cos(), -polar.sin() * azimuth.sin());
-                positions.push(center + radius * dir);
-            }
-        }
-        positions.push(center - radius * Vec3::Y);
-        let south = positions.len() as u32 - 1;
-        let ring = |r: u32, s: u32| 1 + (r - 1) * segments + s % segments;
-        let mut triangles = Vec::new();
-        for s in 0..segments {
-            triangles.push([0, ring(1, s), ring(1, s + 1)]);
-            triangles.push([south, ring(rings - 1, s + 1), ring(rings - 1, s)]);
-            for r in 1..rings - 1 {
-                let (a, b, c, d) = (ring(r, s), ring(r, s + 1), ring(r + 1, s), ring(r + 1, s + 1));
-                triangles.push([a, c, d]);
-                triangles.push([a, d, b]);
-            }
-        }
-        TriMesh::new(positions, triangles).unwrap()
-    }
+    use crate::mesh::metrics::test_meshes::uv_sphere;
 
     fn drawn(image: &Image, background: [u8; 3]) -> Vec<(u32, u32)> {
         (0..image.height())
@@ -222,7 +196,7 @@ mod tests {
     #[test]
     fn sphere_is_centred_and_fills_a_plausible_fraction() {
         let sphere = uv_sphere(Vec3::new(3.0, -1.0, 2.0), 0.5, 24, 48);
-        assert!(sphere.vertex_normals()[0].dot(Vec3::Y) > 0.99, "test sphere is outward");
+        assert!(sphere.vertex_normals()[0].dot(Vec3::Z) > 0.99, "test sphere is outward");
         let settings = RenderSettings::default();
         let image = render(&sphere, &settings);
         let pixels = drawn(&image, settings.background);
