@@ -163,6 +163,18 @@ fn sdf_writes_npy_and_sidecar() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
+/// Runs `isomorph align ARGS`, expecting success, and parses its JSON.
+fn align_json(args: &[&str]) -> serde_json::Value {
+    let o = isomorph(&[&["align"], args].concat());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+/// A JSON array of numbers as f32.
+fn floats(v: &serde_json::Value) -> Vec<f32> {
+    v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap() as f32).collect()
+}
+
 #[test]
 fn align_puts_a_moved_mesh_back() {
     use isomorph_common::glam::{Affine3A, Mat4, Quat, Vec3};
@@ -179,8 +191,7 @@ fn align_puts_a_moved_mesh_back() {
     let moved = out.join("moved.ply");
     write_mesh(&bunny_mesh.transformed(&motion), &moved, MeshFormat::PlyBinaryLittleEndian).unwrap();
     let back = out.join("back.obj");
-    let o = isomorph(&[
-        "align",
+    let v = align_json(&[
         moved.to_str().unwrap(),
         &bunny(),
         "--mode",
@@ -188,24 +199,14 @@ fn align_puts_a_moved_mesh_back() {
         "--out",
         back.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["mode"], "similarity");
-    let f = |v: &serde_json::Value| v.as_f64().unwrap() as f32;
-    let rows: Vec<Vec<f32>> = v["matrix"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|r| r.as_array().unwrap().iter().map(f).collect())
-        .collect();
-    let matrix = Mat4::from_cols_array_2d(&std::array::from_fn(|c| std::array::from_fn(|r| rows[r][c])));
     // The printed map undoes the motion.
+    let matrix = Mat4::from_cols_array_2d(&std::array::from_fn(|c| {
+        std::array::from_fn(|r| floats(&v["matrix"][r])[c])
+    }));
     assert!((matrix * Mat4::from(motion)).abs_diff_eq(Mat4::IDENTITY, 1e-4), "{matrix}");
-    for s in v["scale"].as_array().unwrap() {
-        assert!((f(s) - 2.0).abs() < 1e-4);
-    }
-    let q: Vec<f32> = v["rotation"].as_array().unwrap().iter().map(f).collect();
-    let q = Quat::from_xyzw(q[0], q[1], q[2], q[3]);
+    assert!(floats(&v["scale"]).iter().all(|s| (s - 2.0).abs() < 1e-4), "{}", v["scale"]);
+    let q = Quat::from_slice(&floats(&v["rotation"]));
     let undo = motion.to_scale_rotation_translation().1.inverse();
     assert!(q.is_normalized(), "{q}");
     assert!(q.abs_diff_eq(undo, 1e-4) || q.abs_diff_eq(-undo, 1e-4), "{q} vs {undo}");
@@ -213,22 +214,12 @@ fn align_puts_a_moved_mesh_back() {
     let d = surface_distance(&read_mesh(&back).unwrap(), &bunny_mesh, 2000).unwrap();
     assert!(d.hausdorff < 1e-3, "{d:?}");
 
-    // A built-in source is polygonized; rigid maps keep volumes.
+    // A built-in source is polygonized; a rigid map has unit scale.
     let mesh = out.join("ball.ply");
-    let o = isomorph(&[
-        "align",
-        "ball",
-        "c-shape",
-        "--mode",
-        "rigid",
-        "--res",
-        "24",
-        "--out",
-        mesh.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let v =
+        align_json(&["ball", "c-shape", "--mode", "rigid", "--res", "24", "--out", mesh.to_str().unwrap()]);
     assert_eq!(v["scale"], serde_json::json!([1.0, 1.0, 1.0]));
+    assert!((Quat::from_slice(&floats(&v["rotation"])).length() - 1.0).abs() < 1e-6);
     assert!(!read_mesh(&mesh).unwrap().is_empty());
 
     // Errors: an open mesh has no volume to measure, an unknown extension.

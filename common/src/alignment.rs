@@ -724,15 +724,6 @@ mod tests {
         mesh.positions.iter().map(|&p| map.transform_point3(p).distance(p)).fold(0.0, f32::max)
     }
 
-    fn signed_volume(mesh: &TriMesh) -> f64 {
-        (0..mesh.triangles.len())
-            .map(|t| {
-                let [a, b, c] = mesh.corners(t).map(|p| p.as_dvec3());
-                a.dot(b.cross(c)) / 6.0
-            })
-            .sum()
-    }
-
     #[test]
     fn tetrahedron_moments_are_exact() {
         // ∫ x^a y^b z^c over the corner tetrahedron is a! b! c! / (a + b + c + 3)!.
@@ -876,7 +867,7 @@ mod tests {
         assert_eq!(rigid.scale, DVec3::ONE);
         assert!((rigid.map.matrix3.determinant() - 1.0).abs() < 1e-5);
         let rigid_back = moved.transformed(&rigid.map);
-        assert!((signed_volume(&rigid_back) / signed_volume(&moved) - 1.0).abs() < 1e-5);
+        assert!((rigid_back.signed_volume() / moved.signed_volume() - 1.0).abs() < 1e-5);
         // The rigid map puts the centroid and axes in place; the size stays.
         let back_frame = Moments::from_mesh(&rigid_back).unwrap().principal_frame().unwrap();
         assert!(back_frame.centroid.distance(moments.centroid) < 1e-4);
