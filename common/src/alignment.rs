@@ -109,9 +109,11 @@ pub const FLAT_RATIO: f64 = 1e-8;
 
 /// Relative eigenvalue gap `(λ_{i+1} − λ_i) / λ_{i+1}` at or below which two
 /// principal axes count as equal and are replaced by the world-axis fallback
-/// (see the module docs). Grid moments of a solid of revolution agree to
-/// about 1e-4 at 48 nodes per edge, well inside this.
-pub const EQUAL_EIGENVALUES: f64 = 1e-3;
+/// (see the module docs). Grid moments ([`Moments::from_field`]) of a
+/// cylinder or torus in a general orientation show gaps of about 3e-3 at 24
+/// nodes along the longest edge and 3e-4 at 64 (the sharp rims cut the
+/// lattice unevenly; a sphere's stay below 1e-7), so this leaves a margin.
+pub const EQUAL_EIGENVALUES: f64 = 1e-2;
 
 /// Largest `|Σ area vectors| / Σ |area vectors|` of a mesh accepted as closed.
 pub const OPEN_TOLERANCE: f64 = 1e-6;
@@ -377,9 +379,11 @@ impl Moments {
     /// up to rounding) is measured the same on either side of zero. A cut
     /// voxel's mass is placed at the centre of the slab of depth `w·h` on the
     /// inward side (along `∇φ`) with that slab's spread, and a whole voxel's
-    /// spread (`h²/12` per axis) is included, so a box with faces parallel to
-    /// the grid gets its exact moments, and curved or slanted surfaces errors
-    /// of second order in `h`.
+    /// spread (`h²/12` per axis) is included, so a face parallel to the grid
+    /// is measured exactly, and edges, curved or slanted surfaces give errors
+    /// of second order in `h` (measured: about `0.2 h²` in the variances of a
+    /// box, and relative errors of 3e-3 at 32 nodes and 8e-4 at 64 in the
+    /// volume and variances of an ellipsoid).
     ///
     /// The solid should lie inside the grid (a positive value on the grid's
     /// boundary counts, but the solid is then cut there). Infinite values are
@@ -957,6 +961,28 @@ mod tests {
         );
         assert!(m.abs_diff_eq(glam::Mat3A::IDENTITY, 3e-3), "{:?}", a.map);
         assert!(Vec3::from(a.map.translation).abs_diff_eq(Vec3::new(-0.2, 0.0, -0.1), 2e-3));
+
+        // Tilted in a general direction: the pair's gap is sampling noise, the
+        // axis is put upright, and the twist about it is a symmetry.
+        let tilt = Affine3A::from_rotation_translation(
+            glam::Quat::from_euler(glam::EulerRot::XYZ, 0.3, 0.7, -0.4),
+            Vec3::new(0.05, -0.1, 0.0),
+        );
+        let tilted = cylinder.clone().transformed(tilt);
+        let a = align(
+            &Moments::from_field(&tilted, &tilted.aabb(), 32).unwrap(),
+            &Moments::from_field(&cylinder, &cylinder.aabb(), 32).unwrap(),
+            AlignMode::Rigid,
+        )
+        .unwrap();
+        assert!(a.source.min_relative_gap() <= EQUAL_EIGENVALUES, "{}", a.source.variances);
+        let axis = a.map.transform_vector3(tilt.transform_vector3(Vec3::Z));
+        assert!(axis.abs_diff_eq(Vec3::Z, 1e-3) || axis.abs_diff_eq(-Vec3::Z, 1e-3), "{axis}");
+        let h = cylinder.aabb().size().max_element() / 31.0;
+        let back = polygonize(&tilted, &tilted.aabb().padded(0.05), 32, 0.0).unwrap().transformed(&a.map);
+        let original = polygonize(&cylinder, &cylinder.aabb().padded(0.05), 32, 0.0).unwrap();
+        let d = surface_distance(&back, &original, 2000).unwrap();
+        assert!(d.mean < 0.1 * h, "{d:?}, voxel {h}");
     }
 
     #[test]
