@@ -6,8 +6,9 @@ use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_m
 use glam::{UVec3, Vec3};
 use isomorph_benches::{data_path, torus, torus_grid};
 use isomorph_common::Grid3;
+use isomorph_common::alignment::Moments;
 use isomorph_common::marching_cubes::marching_cubes;
-use isomorph_common::mesh::io::{MeshFormat, read_mesh_from};
+use isomorph_common::mesh::io::{MeshFormat, read_mesh, read_mesh_from};
 use std::hint::black_box;
 use std::io::Cursor;
 
@@ -50,5 +51,17 @@ fn mesh_io_bunny(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, marching_cubes_torus, grid_fill_torus, mesh_io_bunny);
+fn moments(c: &mut Criterion) {
+    let mut group = c.benchmark_group("moments");
+    group.sample_size(10);
+    let grid = torus_grid(128);
+    group.throughput(Throughput::Elements(grid.len() as u64));
+    group.bench_function("grid/torus/128", |b| b.iter(|| Moments::from_grid(black_box(&grid)).unwrap()));
+    let bunny = read_mesh(data_path("bunny.ply")).expect("bunny in data/");
+    group.throughput(Throughput::Elements(bunny.triangles.len() as u64));
+    group.bench_function("mesh/bunny", |b| b.iter(|| Moments::from_mesh(black_box(&bunny)).unwrap()));
+    group.finish();
+}
+
+criterion_group!(benches, marching_cubes_torus, grid_fill_torus, mesh_io_bunny, moments);
 criterion_main!(benches);

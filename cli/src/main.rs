@@ -1,11 +1,14 @@
 //! The `isomorph` command line tool: run the demo, morph shapes and meshes,
-//! and inspect meshes. `isomorph --help` lists the commands.
+//! inspect meshes, write distance volumes and align shapes. `isomorph --help`
+//! lists the commands.
 
+mod align;
 mod demo;
 mod info;
 mod inputs;
 mod morph;
 mod progress;
+mod sdf;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -26,6 +29,12 @@ enum Command {
     Morph(morph::MorphArgs),
     /// Print metrics of a mesh file (OBJ, PLY or STL).
     Info(info::InfoArgs),
+    /// Write the signed distance volume of a shape or mesh as NumPy .npy
+    /// (f32, shape (nz, ny, nx), x fastest) plus a JSON sidecar.
+    Sdf(sdf::SdfArgs),
+    /// Align a source onto a target by their moments: print the map as JSON
+    /// and write the aligned source mesh.
+    Align(align::AlignArgs),
 }
 
 fn main() -> ExitCode {
@@ -34,6 +43,8 @@ fn main() -> ExitCode {
         Command::Demo(args) => demo::run(&args),
         Command::Morph(args) => morph::run(&args),
         Command::Info(args) => info::run(&args),
+        Command::Sdf(args) => sdf::run(&args),
+        Command::Align(args) => align::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -106,3 +106,129 @@ fn bad_input_is_one_clear_line_and_nonzero_exit() {
     let o = isomorph(&["morph", "--source", "sphere", "--target", "torus", "--res", "2"]);
     assert!(!o.status.success(), "resolution below the minimum is rejected");
 }
+
+/// Splits `.npy` bytes into the header text and the f32 values.
+fn read_npy(path: &Path) -> (String, Vec<f32>) {
+    let bytes = std::fs::read(path).unwrap();
+    assert_eq!(&bytes[..8], b"\x93NUMPY\x01\x00");
+    let len = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
+    assert_eq!((10 + len) % 64, 0, "data is 64-byte aligned");
+    let header = String::from_utf8(bytes[10..10 + len].to_vec()).unwrap();
+    let values =
+        bytes[10 + len..].chunks_exact(4).map(|c| f32::from_le_bytes(c.try_into().unwrap())).collect();
+    (header, values)
+}
+
+#[test]
+fn sdf_writes_npy_and_sidecar() {
+    let out = scratch("sdf");
+    std::fs::create_dir_all(&out).unwrap();
+    let npy = out.join("sphere.npy");
+    let o = isomorph(&["sdf", "sphere", "--res", "24", "--pad", "0.1", "--out", npy.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("24 x 24 x 24 nodes"));
+    let meta: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("sphere.json")).unwrap()).unwrap();
+    assert_eq!(meta["sign"], "positive inside");
+    assert_eq!(meta["axis_order"], "zyx");
+    assert_eq!(meta["dims"], serde_json::json!([24, 24, 24]));
+    let h = meta["spacing"].as_f64().unwrap() as f32;
+    let origin: Vec<f32> =
+        meta["origin"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap() as f32).collect();
+    // The sphere of radius 0.3 padded by 10 % per side.
+    assert!((h - 0.72 / 23.0).abs() < 1e-6 && (origin[0] + 0.36).abs() < 1e-6, "{meta}");
+    let (header, values) = read_npy(&npy);
+    assert!(header.contains("'descr': '<f4'") && header.contains("'shape': (24, 24, 24)"), "{header}");
+    assert_eq!(values.len(), 24 * 24 * 24);
+    // x fastest: value number i + 24 (j + 24 k) is node (i, j, k).
+    for (n, v) in values.iter().enumerate() {
+        let (i, j, k) = (n % 24, (n / 24) % 24, n / 576);
+        let p = [i, j, k].map(|c| c as f32 * h);
+        let r = (0..3).map(|a| (origin[a] + p[a]).powi(2)).sum::<f32>().sqrt();
+        assert!((v - (0.3 - r)).abs() < 1e-5, "node ({i}, {j}, {k}): {v} vs {}", 0.3 - r);
+    }
+
+    // A mesh keeps its own coordinates; the box is its bounds padded 10 %.
+    let npy = out.join("bunny.npy");
+    let o = isomorph(&["sdf", &bunny(), "--res", "16", "--out", npy.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let meta: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("bunny.json")).unwrap()).unwrap();
+    let dims: Vec<u64> = meta["dims"].as_array().unwrap().iter().map(|v| v.as_u64().unwrap()).collect();
+    assert_eq!(dims[0], 16, "x is the bunny's longest side");
+    let (header, values) = read_npy(&npy);
+    assert!(header.contains(&format!("'shape': ({}, {}, 16)", dims[2], dims[1])), "{header}");
+    assert!(values[0] < -1.0, "the box corner is outside");
+    assert!(values.iter().any(|&v| v > 1.0), "the bunny has an inside");
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// Runs `isomorph align ARGS`, expecting success, and parses its JSON.
+fn align_json(args: &[&str]) -> serde_json::Value {
+    let o = isomorph(&[&["align"], args].concat());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+/// A JSON array of numbers as f32.
+fn floats(v: &serde_json::Value) -> Vec<f32> {
+    v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap() as f32).collect()
+}
+
+#[test]
+fn align_puts_a_moved_mesh_back() {
+    use isomorph_common::glam::{Affine3A, Mat4, Quat, Vec3};
+    use isomorph_common::mesh::distance::surface_distance;
+    use isomorph_common::mesh::io::{MeshFormat, read_mesh, write_mesh};
+    let out = scratch("align");
+    std::fs::create_dir_all(&out).unwrap();
+    let bunny_mesh = read_mesh(bunny()).unwrap();
+    let motion = Affine3A::from_scale_rotation_translation(
+        Vec3::splat(0.5),
+        Quat::from_euler(isomorph_common::glam::EulerRot::XYZ, 0.4, -1.1, 2.5),
+        Vec3::new(3.0, -2.0, 1.0),
+    );
+    let moved = out.join("moved.ply");
+    write_mesh(&bunny_mesh.transformed(&motion), &moved, MeshFormat::PlyBinaryLittleEndian).unwrap();
+    let back = out.join("back.obj");
+    let v = align_json(&[
+        moved.to_str().unwrap(),
+        &bunny(),
+        "--mode",
+        "similarity",
+        "--out",
+        back.to_str().unwrap(),
+    ]);
+    assert_eq!(v["mode"], "similarity");
+    // The printed map undoes the motion.
+    let matrix = Mat4::from_cols_array_2d(&std::array::from_fn(|c| {
+        std::array::from_fn(|r| floats(&v["matrix"][r])[c])
+    }));
+    assert!((matrix * Mat4::from(motion)).abs_diff_eq(Mat4::IDENTITY, 1e-4), "{matrix}");
+    assert!(floats(&v["scale"]).iter().all(|s| (s - 2.0).abs() < 1e-4), "{}", v["scale"]);
+    let q = Quat::from_slice(&floats(&v["rotation"]));
+    let undo = motion.to_scale_rotation_translation().1.inverse();
+    assert!(q.is_normalized(), "{q}");
+    assert!(q.abs_diff_eq(undo, 1e-4) || q.abs_diff_eq(-undo, 1e-4), "{q} vs {undo}");
+    // The written mesh lies on the original bunny.
+    let d = surface_distance(&read_mesh(&back).unwrap(), &bunny_mesh, 2000).unwrap();
+    assert!(d.hausdorff < 1e-3, "{d:?}");
+
+    // A built-in source is polygonized; a rigid map has unit scale.
+    let mesh = out.join("ball.ply");
+    let v =
+        align_json(&["ball", "c-shape", "--mode", "rigid", "--res", "24", "--out", mesh.to_str().unwrap()]);
+    assert_eq!(v["scale"], serde_json::json!([1.0, 1.0, 1.0]));
+    assert!((Quat::from_slice(&floats(&v["rotation"])).length() - 1.0).abs() < 1e-6);
+    assert!(!read_mesh(&mesh).unwrap().is_empty());
+
+    // Errors: an open mesh has no volume to measure, an unknown extension.
+    let teapot = Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/teapot.ply");
+    let o = isomorph(&["align", teapot.to_str().unwrap(), "sphere", "--out", mesh.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.starts_with("error: ") && err.contains("not closed"), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    let o = isomorph(&["align", "sphere", "torus", "--out", out.join("x.vtk").to_str().unwrap()]);
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains(".ply, .obj or .stl"));
+    let _ = std::fs::remove_dir_all(&out);
+}

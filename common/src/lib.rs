@@ -19,6 +19,7 @@ pub mod marching_squares;
 pub mod mesh;
 pub mod models;
 pub mod morph;
+pub mod npy;
 pub mod render;
 pub mod sdf;
 pub mod shape;
