@@ -1,0 +1,111 @@
+//! Frame storage proportional to the surface: the values of the nodes next
+//! to the zero set, and the sign of every other node run-length encoded.
+//!
+//! Marching cubes reads values only along edges whose ends differ in sign,
+//! and both ends of such an edge are band nodes here, so a frame rebuilt
+//! from a [`BandFrame`] polygonizes to exactly the surface of the grid it
+//! was captured from.
+
+use crate::stencil::Lattice;
+use rayon::prelude::*;
+
+/// Value (voxel units) given to nodes away from the zero set when a frame is
+/// rebuilt; its sign is the stored one.
+const FAR: f32 = 1.5;
+
+/// One saved frame of an evolution, in `O(surface)` memory.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BandFrame {
+    /// `(node, value)` for every node with a face neighbour of the other
+    /// sign; values in voxel units, positive inside.
+    band: Vec<(u32, f32)>,
+    /// Linear node indices at which the inside/outside state flips.
+    flips: Vec<u32>,
+    /// Whether node 0 is inside (`value > 0`).
+    first_inside: bool,
+    /// Solver iterations done when the frame was captured.
+    pub iteration: usize,
+    /// Evolution time when the frame was captured (the `t` of eq. 17).
+    pub time: f64,
+}
+
+impl BandFrame {
+    /// Captures the frame of the embedding `u` (voxel units).
+    pub(crate) fn capture(u: &[f32], lattice: &Lattice, iteration: usize, time: f64) -> Self {
+        let plane = lattice.dims()[0] * lattice.dims()[1];
+        let band: Vec<(u32, f32)> = u
+            .par_chunks(plane)
+            .enumerate()
+            .flat_map_iter(|(k, slab)| {
+                let offset = k * plane;
+                slab.iter().enumerate().filter_map(move |(i, &v)| {
+                    let n = offset + i;
+                    lattice.on_zero_set(u, n).then_some((n as u32, v))
+                })
+            })
+            .collect();
+        let first_inside = u.first().is_some_and(|&v| v > 0.0);
+        let mut flips = Vec::new();
+        let mut state = first_inside;
+        for (n, &v) in u.iter().enumerate() {
+            if (v > 0.0) != state {
+                state = !state;
+                flips.push(n as u32);
+            }
+        }
+        Self { band, flips, first_inside, iteration, time }
+    }
+
+    /// Rebuilds the embedding (voxel units) of `len` nodes: band values
+    /// exact, other nodes `±1.5` with their stored sign.
+    pub(crate) fn rebuild(&self, len: usize) -> Vec<f32> {
+        let mut u = vec![0.0f32; len];
+        let mut inside = self.first_inside;
+        let mut start = 0usize;
+        for end in self.flips.iter().map(|&f| f as usize).chain(std::iter::once(len)) {
+            u[start..end].fill(if inside { FAR } else { -FAR });
+            inside = !inside;
+            start = end;
+        }
+        for &(n, v) in &self.band {
+            u[n as usize] = v;
+        }
+        u
+    }
+
+    /// Number of band nodes stored.
+    pub fn band_len(&self) -> usize {
+        self.band.len()
+    }
+
+    /// Heap bytes held by the frame.
+    pub fn stored_bytes(&self) -> usize {
+        self.band.len() * std::mem::size_of::<(u32, f32)>() + self.flips.len() * 4
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use isomorph_common::glam::UVec3;
+
+    #[test]
+    fn rebuild_keeps_band_values_and_all_signs() {
+        let lattice = Lattice::new(UVec3::new(9, 8, 7));
+        let u: Vec<f32> = (0..lattice.len())
+            .map(|n| {
+                let [x, y, z] = lattice.coords(n).map(|c| c as f32);
+                2.6 - ((x - 4.0).powi(2) + (y - 3.5).powi(2) + (z - 3.0).powi(2)).sqrt()
+            })
+            .collect();
+        let frame = BandFrame::capture(&u, &lattice, 3, 0.5);
+        let back = frame.rebuild(u.len());
+        assert!(frame.band_len() > 20 && frame.band_len() < u.len() / 2);
+        for n in 0..u.len() {
+            assert_eq!(back[n] > 0.0, u[n] > 0.0, "sign of node {n}");
+            if lattice.on_zero_set(&u, n) {
+                assert_eq!(back[n], u[n]);
+            }
+        }
+    }
+}

@@ -1,0 +1,324 @@
+//! Whitaker's sparse-field solver (Breen & Whitaker §5.2.2; Whitaker 1998)
+//! with the first-order modification: the speed is sampled at the nearest
+//! zero crossing, between grid points.
+//!
+//! # Layers
+//! The active set `L0` holds the grid points next to the zero set, with
+//! values in `[−½, ½]`. Around it lie the layers `L±1` and `L±2` (positive
+//! inside), whose values are kept exactly one unit from the next inner
+//! layer, so the embedding is a city-block distance near the surface. All
+//! other nodes are *far*, at `±2.5` (the paper's `±(N + ½)` with `N = 2`).
+//!
+//! # One iteration, in the paper's order
+//! 1. For each active point: a Newton step along the central-difference
+//!    gradient finds the nearest zero crossing `x' = x − u ∇u / |∇u|²`; the
+//!    speed is trilinearly interpolated there; the up-wind change (eq. 23)
+//!    is computed.
+//! 2. The changes are applied with one time step (eq. 24, and at most half a
+//!    voxel of change); active points leaving `[−½, ½]` go on the status
+//!    lists `S±1`. An active point does not leave upwards while a neighbour
+//!    leaves downwards in the same iteration (and vice versa), which keeps the
+//!    active set a boundary between inside and outside. The opposite-layer
+//!    neighbours of a leaving point, which become active, get the value one
+//!    unit from its new value (the one closest to zero if several).
+//! 3. The status lists are processed outwards: a point moving from `L0` to
+//!    `L±1` pulls its `L∓1` neighbours into `L0`, those pull their `L∓2`
+//!    neighbours into `L∓1`, and those pull far points into `L∓2`.
+//! 4. The layers are visited in the order `±1, ±2`; each point takes the
+//!    value of its closest inner-layer neighbour plus (inside) or minus
+//!    (outside) one unit, or, with no inner neighbour, is demoted one layer
+//!    outwards (from `L±2` to far).
+//!
+//! Each iteration visits only the layer lists and their neighbours: the cost
+//! grows with the surface area, not the volume.
+
+use crate::solver::{Solver, StepStats};
+use crate::stencil::{Lattice, trilinear, upwind_norm};
+use crate::{LevelSetError, SpeedGrid};
+use isomorph_common::Grid3;
+use isomorph_common::glam::Vec3;
+use rayon::prelude::*;
+
+/// Number of layers on each side of the active set.
+const LAYERS: i8 = 2;
+/// Status of far inside / outside points.
+const FAR_IN: i8 = LAYERS + 1;
+const FAR_OUT: i8 = -LAYERS - 1;
+/// Value of far points (voxel units).
+const FAR_VALUE: f32 = LAYERS as f32 + 0.5;
+/// Status of an active point leaving upwards / downwards this iteration.
+const ACTIVE_UP: i8 = 10;
+const ACTIVE_DOWN: i8 = -10;
+/// Status of a point on a status list, about to change layer.
+const CHANGING: i8 = 20;
+/// Bounds of the active range.
+const ACTIVE_MAX: f32 = 0.5;
+
+/// The sparse-field level-set solver.
+#[derive(Debug, Clone)]
+pub struct SparseFieldSolver {
+    lattice: Lattice,
+    u: Vec<f32>,
+    status: Vec<i8>,
+    /// Layer lists `L−2 … L+2` at index `ℓ + 2`; entries whose status no
+    /// longer matches are dropped at the end of each iteration.
+    layers: [Vec<u32>; 5],
+    /// Per active point: `(change rate, sampled speed)` of the current step.
+    rates: Vec<(f32, f32)>,
+}
+
+fn slot(layer: i8) -> usize {
+    (layer + LAYERS) as usize
+}
+
+impl SparseFieldSolver {
+    /// Builds the active set and layers from the source's signed distance
+    /// grid (world units, positive inside).
+    ///
+    /// The active set is, for every grid edge the zero set crosses, the end
+    /// closer to it (and every node within half a voxel of it); values are
+    /// clamped to `[−½, ½]`, and the layers are then filled as in step 4.
+    ///
+    /// # Errors
+    /// [`LevelSetError::NonFinite`], [`LevelSetError::GridTooSmall`],
+    /// [`LevelSetError::NoSurface`] for a source without a sign change.
+    pub fn new(source: &Grid3<f32>) -> Result<Self, LevelSetError> {
+        let (lattice, mut u) = crate::initial_embedding(source)?;
+        let active: Vec<u32> = (0..u.len())
+            .into_par_iter()
+            .filter(|&n| {
+                let inside = u[n] > 0.0;
+                lattice.neighbours(n).iter().flatten().any(|&m| {
+                    (u[m] > 0.0) != inside && (u[n].abs() <= u[m].abs() || u[n].abs() <= ACTIVE_MAX)
+                })
+            })
+            .map(|n| n as u32)
+            .collect();
+        let mut status: Vec<i8> = u.iter().map(|&v| if v > 0.0 { FAR_IN } else { FAR_OUT }).collect();
+        for &n in &active {
+            status[n as usize] = 0;
+            u[n as usize] = u[n as usize].clamp(-ACTIVE_MAX, ACTIVE_MAX);
+        }
+        let mut solver = Self { lattice, u, status, layers: Default::default(), rates: Vec::new() };
+        solver.layers[slot(0)] = active;
+        // Grow the layers outwards from the active set.
+        for layer in 1..=LAYERS {
+            for side in [1i8, -1] {
+                let inner = side * (layer - 1);
+                let far = if side > 0 { FAR_IN } else { FAR_OUT };
+                let mut grown = Vec::new();
+                for &n in &solver.layers[slot(inner)] {
+                    for m in solver.lattice.neighbours(n as usize).into_iter().flatten() {
+                        if solver.status[m] == far {
+                            solver.status[m] = side * layer;
+                            grown.push(m as u32);
+                        }
+                    }
+                }
+                solver.layers[slot(side * layer)] = grown;
+            }
+        }
+        for u in solver.u.iter_mut().zip(&solver.status) {
+            match *u.1 {
+                FAR_IN => *u.0 = FAR_VALUE,
+                FAR_OUT => *u.0 = -FAR_VALUE,
+                _ => {}
+            }
+        }
+        solver.propagate_layer_values();
+        Ok(solver)
+    }
+
+    /// Number of points in the active set `L0`.
+    pub fn active_len(&self) -> usize {
+        self.layers[slot(0)].len()
+    }
+
+    /// Number of points in layer `ℓ ∈ [−2, 2]`.
+    pub fn layer_len(&self, layer: i8) -> usize {
+        self.layers[slot(layer.clamp(-LAYERS, LAYERS))].len()
+    }
+
+    /// Step 1: change rate of every active point, with the speed sampled at
+    /// its nearest zero crossing.
+    fn compute_rates(&mut self, speed: &SpeedGrid) {
+        let (lattice, u, v) = (&self.lattice, &self.u, speed.values());
+        let speed_lattice = speed.lattice();
+        self.layers[slot(0)]
+            .par_iter()
+            .map(|&n| {
+                let n = n as usize;
+                let grad = lattice.central_gradient(u, n);
+                let [i, j, k] = lattice.coords(n);
+                let mut x = Vec3::new(i as f32, j as f32, k as f32);
+                let g2 = grad.length_squared();
+                if g2 > 1e-12 {
+                    x -= u[n] * grad / g2;
+                }
+                let gamma = trilinear(speed_lattice, v, x);
+                let (minus, plus) = lattice.one_sided(u, n);
+                (gamma * upwind_norm(minus, plus, gamma), gamma)
+            })
+            .collect_into_vec(&mut self.rates);
+    }
+
+    /// Step 2: applies the changes; returns the two status lists `S+1`, `S−1`
+    /// and the RMS statistics.
+    fn apply_rates(&mut self, dt: f32) -> (Vec<u32>, Vec<u32>, StepStats) {
+        let (mut up, mut down) = (Vec::new(), Vec::new());
+        let (mut sum_change, mut sum_dist) = (0.0f64, 0.0f64);
+        let active = std::mem::take(&mut self.layers[slot(0)]);
+        for (&n, &(rate, gamma)) in active.iter().zip(&self.rates) {
+            let n = n as usize;
+            let new = self.u[n] + dt * rate;
+            sum_dist += f64::from(gamma * gamma);
+            let direction: i8 = if new > ACTIVE_MAX {
+                1
+            } else if new < -ACTIVE_MAX {
+                -1
+            } else {
+                0
+            };
+            if direction != 0 {
+                let (opposite_move, opposite_layer, mine) =
+                    if direction > 0 { (ACTIVE_DOWN, -1, ACTIVE_UP) } else { (ACTIVE_UP, 1, ACTIVE_DOWN) };
+                let neighbours = self.lattice.neighbours(n);
+                if neighbours.iter().flatten().any(|&m| self.status[m] == opposite_move) {
+                    continue;
+                }
+                let handed = new - f32::from(direction);
+                for m in neighbours.into_iter().flatten() {
+                    if self.status[m] == opposite_layer
+                        && (self.u[m].abs() > ACTIVE_MAX || handed.abs() < self.u[m].abs())
+                    {
+                        self.u[m] = handed;
+                    }
+                }
+                self.status[n] = mine;
+                if direction > 0 { up.push(n as u32) } else { down.push(n as u32) }
+            }
+            sum_change += f64::from((new - self.u[n]).powi(2));
+            self.u[n] = new;
+        }
+        self.layers[slot(0)] = active;
+        let count = self.rates.len().max(1) as f64;
+        let stats = StepStats {
+            dt,
+            rms_change: (sum_change / count).sqrt() as f32,
+            rms_distance: (sum_dist / count).sqrt() as f32,
+            surface_nodes: self.rates.len(),
+        };
+        (up, down, stats)
+    }
+
+    /// Moves every point of `input` to `to`, and puts its neighbours of
+    /// status `search` on the returned list (the paper's step 4).
+    fn process_status_list(&mut self, input: &[u32], to: i8, search: i8) -> Vec<u32> {
+        let mut output = Vec::new();
+        for &n in input {
+            let n = n as usize;
+            self.status[n] = to;
+            self.layers[slot(to)].push(n as u32);
+            for m in self.lattice.neighbours(n).into_iter().flatten() {
+                if self.status[m] == search {
+                    self.status[m] = CHANGING;
+                    output.push(m as u32);
+                }
+            }
+        }
+        output
+    }
+
+    /// Step 3: the status lists, outwards from the active set.
+    fn process_status_lists(&mut self, up: &[u32], down: &[u32]) {
+        // Upwards: L0 → L+1 pulls L−1 → L0, which pulls L−2 → L−1, which pulls far → L−2.
+        let mut up = self.process_status_list(up, 1, -1);
+        let mut down = self.process_status_list(down, -1, 1);
+        for layer in 0..LAYERS {
+            let (up_to, down_to) = (-layer, layer);
+            let (up_search, down_search) =
+                if layer + 1 == LAYERS { (FAR_OUT, FAR_IN) } else { (-layer - 2, layer + 2) };
+            up = self.process_status_list(&up, up_to, up_search);
+            down = self.process_status_list(&down, down_to, down_search);
+        }
+        for &n in &up {
+            self.status[n as usize] = -LAYERS;
+            self.layers[slot(-LAYERS)].push(n);
+        }
+        for &n in &down {
+            self.status[n as usize] = LAYERS;
+            self.layers[slot(LAYERS)].push(n);
+        }
+    }
+
+    /// Step 4: values of `L±1` then `L±2` from their inner neighbours;
+    /// points without one are demoted outwards.
+    fn propagate_layer_values(&mut self) {
+        for layer in 1..=LAYERS {
+            for side in [1i8, -1] {
+                let (this, inner) = (side * layer, side * (layer - 1));
+                let list = std::mem::take(&mut self.layers[slot(this)]);
+                for &n in &list {
+                    let n = n as usize;
+                    if self.status[n] != this {
+                        continue;
+                    }
+                    let mut best: Option<f32> = None;
+                    for m in self.lattice.neighbours(n).into_iter().flatten() {
+                        if self.status[m] == inner {
+                            let v = self.u[m];
+                            best = Some(best.map_or(v, |b| if side > 0 { b.min(v) } else { b.max(v) }));
+                        }
+                    }
+                    match best {
+                        Some(v) => self.u[n] = v + f32::from(side),
+                        None if layer == LAYERS => {
+                            self.status[n] = if side > 0 { FAR_IN } else { FAR_OUT };
+                            self.u[n] = f32::from(side) * FAR_VALUE;
+                        }
+                        None => {
+                            self.status[n] = side * (layer + 1);
+                            self.layers[slot(side * (layer + 1))].push(n as u32);
+                        }
+                    }
+                }
+                // Keep the list (stale entries are dropped in `compact`).
+                let mut kept = list;
+                kept.append(&mut self.layers[slot(this)]);
+                self.layers[slot(this)] = kept;
+            }
+        }
+    }
+
+    /// Drops list entries whose status moved on.
+    fn compact(&mut self) {
+        for layer in -LAYERS..=LAYERS {
+            let status = &self.status;
+            self.layers[slot(layer)].retain(|&n| status[n as usize] == layer);
+        }
+    }
+}
+
+impl Solver for SparseFieldSolver {
+    fn step(&mut self, speed: &SpeedGrid, max_dt: f32) -> StepStats {
+        self.compute_rates(speed);
+        let max_gamma = self.rates.iter().fold(0.0f32, |m, r| m.max(r.1.abs()));
+        let max_rate = self.rates.iter().fold(0.0f32, |m, r| m.max(r.0.abs()));
+        let mut dt = max_dt;
+        if max_gamma > 0.0 {
+            dt = dt.min(1.0 / (3.0 * max_gamma));
+        }
+        if max_rate > 0.0 {
+            dt = dt.min(ACTIVE_MAX / max_rate);
+        }
+        let (up, down, stats) = self.apply_rates(dt);
+        self.process_status_lists(&up, &down);
+        self.propagate_layer_values();
+        self.compact();
+        stats
+    }
+
+    fn embedding(&self) -> &[f32] {
+        &self.u
+    }
+}

@@ -1,0 +1,139 @@
+//! End-to-end behaviour of the level-set morph on the paper's cases.
+
+use isomorph_common::morph::{DistanceBlend, Morph};
+use isomorph_common::{Aabb, Field3, Grid3, Shape, TriMesh, models};
+use isomorph_levelset::{
+    EvolveSettings, FrameSchedule, LevelSetError, LevelSetMorph, Response, SolverKind, SpeedGrid, evolve,
+};
+
+/// Sphere r = 0.3 → torus R = 0.3, r = 0.12 in [-0.5, 0.5]³ (the reference case).
+fn sphere_torus(res: u32, solver: SolverKind) -> (LevelSetMorph, Grid3<f32>, Shape) {
+    let source = Grid3::sample_box(&Shape::sphere(0.3), &Aabb::cube(0.5), res).unwrap();
+    let torus = Shape::torus(0.3, 0.12);
+    let speed = SpeedGrid::sample(&source, &torus, |x| x, Response::Identity).unwrap();
+    let settings = EvolveSettings { solver, ..EvolveSettings::default() };
+    let morph = evolve(&source, &speed, None, &settings, &|_| {}).unwrap();
+    (morph, source, torus)
+}
+
+/// Mean and max distance (voxels) of the mesh's vertices to the zero set of
+/// an exact distance field.
+fn vertex_error(mesh: &TriMesh, exact: &dyn Field3, h: f32) -> (f32, f32) {
+    let d: Vec<f32> = mesh.positions.iter().map(|&p| exact.value(p).abs() / h).collect();
+    (d.iter().sum::<f32>() / d.len() as f32, d.iter().fold(0.0f32, |a, &b| a.max(b)))
+}
+
+#[test]
+fn sphere_becomes_the_torus_with_the_sparse_field() {
+    let (morph, source, torus) = sphere_torus(48, SolverKind::SparseField);
+    let h = source.spacing();
+    assert!(morph.converged(), "iterations {}", morph.stats().len());
+    let first = morph.frame_mesh(0.0, 0).unwrap();
+    let (mean0, max0) = vertex_error(&first, &Shape::sphere(0.3), h);
+    assert!(mean0 < 0.05 && max0 < 0.2, "first frame off the sphere: mean {mean0}, max {max0}");
+    let last = morph.frame_mesh(1.0, 0).unwrap();
+    let (mean, max) = vertex_error(&last, &torus, h);
+    eprintln!("sparse 48³: {} iterations, mean {mean:.4} max {max:.4} voxels", morph.stats().len());
+    assert!(mean < 0.1 && max < 0.5, "last frame off the torus: mean {mean}, max {max} voxels");
+    assert_eq!(last.genus(), Some(1));
+    assert_eq!(last.connected_components(), 1);
+}
+
+#[test]
+fn dense_and_sparse_solvers_agree() {
+    let res = 32;
+    let source = Grid3::sample_box(&Shape::sphere(0.3), &Aabb::cube(0.5), res).unwrap();
+    let speed = SpeedGrid::sample(&source, &Shape::torus(0.3, 0.12), |x| x, Response::Identity).unwrap();
+    let run = |solver| {
+        let settings = EvolveSettings {
+            solver,
+            max_time_step: 1.0 / (3.0 * speed.max_abs()),
+            frames: FrameSchedule::EveryIterations(15),
+            max_iterations: 150,
+            rms_change: 0.0,
+            rms_distance: 0.0,
+        };
+        evolve(&source, &speed, None, &settings, &|_| {}).unwrap()
+    };
+    let (sparse, dense) = (run(SolverKind::SparseField), run(SolverKind::Dense));
+    assert_eq!(sparse.len(), dense.len());
+    let h = source.spacing();
+    for n in 0..sparse.len() {
+        assert_eq!(sparse.frames()[n].iteration, dense.frames()[n].iteration);
+        let t = n as f32 / (sparse.len() - 1) as f32;
+        let a = sparse.frame_mesh(t, 0).unwrap();
+        let b = dense.frame_mesh(t, 0).unwrap();
+        let d = isomorph_common::mesh::distance::surface_distance(&a, &b, 4000).unwrap();
+        assert!(d.hausdorff / h < 1.0, "frame {n}: Hausdorff {} voxels", d.hausdorff / h);
+    }
+}
+
+#[test]
+fn ball_to_c_never_pops_pieces_but_the_blend_does() {
+    let (ball, c) = (models::by_name("ball").unwrap(), models::by_name("c-shape").unwrap());
+    let bounds = Aabb::cube(0.5);
+    let res = 40;
+    let source = Grid3::sample_box(&ball, &bounds, res).unwrap();
+    let target = Grid3::sample_box(&c, &bounds, res).unwrap();
+    let speed = SpeedGrid::from_grid(&target, Response::Identity).unwrap();
+    let settings = EvolveSettings { frames: FrameSchedule::EveryIterations(5), ..EvolveSettings::default() };
+    let morph = evolve(&source, &speed, None, &settings, &|_| {}).unwrap();
+    let most = (0..morph.len())
+        .map(|n| morph.frame_mesh(n as f32 / (morph.len() - 1) as f32, 0).unwrap().connected_components())
+        .max()
+        .unwrap();
+    assert_eq!(most, 1, "the level-set morph split into {most} pieces");
+    let blend = DistanceBlend::new(source, target).unwrap();
+    let blend_most =
+        (0..=20).map(|i| blend.frame_mesh(i as f32 / 20.0, 0).unwrap().connected_components()).max();
+    assert!(blend_most.unwrap() > 1, "the baseline blend was expected to pop pieces (Breen Fig. 6)");
+    let last = morph.frame_mesh(1.0, 0).unwrap();
+    let reference = isomorph_common::marching_cubes::marching_cubes(&speed_grid_world(&c, &bounds, res), 0.0);
+    let d = isomorph_common::mesh::distance::surface_distance(&last, &reference, 4000).unwrap();
+    let h = 1.0 / (res - 1) as f32;
+    assert!(
+        d.mean / h < 0.5 && d.hausdorff / h < 1.5,
+        "mean {} Hausdorff {} voxels",
+        d.mean / h,
+        d.hausdorff / h
+    );
+}
+
+fn speed_grid_world(shape: &Shape, bounds: &Aabb, res: u32) -> Grid3<f32> {
+    Grid3::sample_box(shape, bounds, res).unwrap()
+}
+
+#[test]
+fn bad_inputs_are_typed_errors() {
+    let bounds = Aabb::cube(0.5);
+    let source =
+        Grid3::sample_box(&Shape::sphere(0.1).translated(glam::Vec3::new(-0.3, 0.0, 0.0)), &bounds, 24)
+            .unwrap();
+    let far = Shape::sphere(0.1).translated(glam::Vec3::new(0.3, 0.0, 0.0));
+    let speed = SpeedGrid::sample(&source, &far, |x| x, Response::Identity).unwrap();
+    let settings = EvolveSettings::default();
+    let none = |_: &_| {};
+    assert!(matches!(
+        evolve(&source, &speed, None, &settings, &none),
+        Err(LevelSetError::NoOverlap { components: 1, total: 1 })
+    ));
+    let empty = source.map(|_| -1.0f32).unwrap();
+    assert!(matches!(
+        evolve(&empty, &speed, None, &settings, &none),
+        Err(LevelSetError::NoSurface("source"))
+    ));
+    assert!(matches!(
+        SpeedGrid::from_grid(&empty, Response::Identity),
+        Err(LevelSetError::NoSurface("target"))
+    ));
+    let mut nan = source.clone();
+    nan.data_mut()[7] = f32::NAN;
+    assert!(matches!(
+        evolve(&nan, &speed, None, &settings, &none),
+        Err(LevelSetError::NonFinite { what: "source", node: 7 })
+    ));
+    let other = Grid3::sample_box(&Shape::sphere(0.3), &bounds, 20).unwrap();
+    assert!(matches!(evolve(&other, &speed, None, &settings, &none), Err(LevelSetError::Grid(_))));
+    let zero = EvolveSettings { max_iterations: 0, ..settings };
+    assert!(matches!(evolve(&source, &speed, None, &zero, &none), Err(LevelSetError::BadSetting { .. })));
+}
