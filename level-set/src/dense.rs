@@ -3,7 +3,7 @@
 //! field solver; its cost grows with the volume.
 
 use crate::solver::{Solver, StepStats};
-use crate::stencil::{Lattice, upwind_norm};
+use crate::stencil::{Lattice, speed_at_zero_crossing, upwind_norm};
 use crate::{LevelSetError, SpeedGrid};
 use isomorph_common::Grid3;
 use rayon::prelude::*;
@@ -40,13 +40,18 @@ impl Solver for DenseSolver {
         });
         // Step 5: eq. 24.
         let dt = if speed.max_abs() > 0.0 { (1.0 / (3.0 * speed.max_abs())).min(max_dt) } else { max_dt };
-        // Step 6: update, and the stopping statistics at the surface nodes.
+        // Step 6: update, and the stopping statistics at the surface nodes
+        // (target distance sampled at the subvoxel zero crossing, as the
+        // sparse field does, so both solvers stop by the same measure).
         self.u.par_iter_mut().zip(self.change.par_iter()).for_each(|(un, &c)| *un += dt * c);
         let (u, change) = (&self.u, &self.change);
         let (sum_change, sum_dist, count) = (0..u.len())
             .into_par_iter()
             .filter(|&n| lattice.on_zero_set(u, n))
-            .map(|n| ((dt * change[n]).powi(2), v[n] * v[n], 1usize))
+            .map(|n| {
+                let gamma = speed_at_zero_crossing(lattice, u, v, n);
+                ((dt * change[n]).powi(2), gamma * gamma, 1usize)
+            })
             .reduce(|| (0.0, 0.0, 0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2));
         let denom = count.max(1) as f32;
         StepStats {

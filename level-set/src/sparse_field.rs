@@ -33,10 +33,9 @@
 //! grows with the surface area, not the volume.
 
 use crate::solver::{Solver, StepStats};
-use crate::stencil::{Lattice, trilinear, upwind_norm};
+use crate::stencil::{Lattice, speed_at_zero_crossing, upwind_norm};
 use crate::{LevelSetError, SpeedGrid};
 use isomorph_common::Grid3;
-use isomorph_common::glam::Vec3;
 use rayon::prelude::*;
 
 /// Number of layers on each side of the active set.
@@ -143,19 +142,11 @@ impl SparseFieldSolver {
     /// its nearest zero crossing.
     fn compute_rates(&mut self, speed: &SpeedGrid) {
         let (lattice, u, v) = (&self.lattice, &self.u, speed.values());
-        let speed_lattice = speed.lattice();
         self.layers[slot(0)]
             .par_iter()
             .map(|&n| {
                 let n = n as usize;
-                let grad = lattice.central_gradient(u, n);
-                let [i, j, k] = lattice.coords(n);
-                let mut x = Vec3::new(i as f32, j as f32, k as f32);
-                let g2 = grad.length_squared();
-                if g2 > 1e-12 {
-                    x -= u[n] * grad / g2;
-                }
-                let gamma = trilinear(speed_lattice, v, x);
+                let gamma = speed_at_zero_crossing(lattice, u, v, n);
                 let (minus, plus) = lattice.one_sided(u, n);
                 (gamma * upwind_norm(minus, plus, gamma), gamma)
             })

@@ -114,6 +114,21 @@ pub(crate) fn upwind_norm(minus: [f32; 3], plus: [f32; 3], speed: f32) -> f32 {
     sum.sqrt()
 }
 
+/// The speed at the zero crossing nearest to node `n` (the sparse field's
+/// first-order modification): one Newton step along the central-difference
+/// gradient, `x' = x − u ∇u / |∇u|²`, then trilinear interpolation of the
+/// node speeds `speed` (same lattice).
+pub(crate) fn speed_at_zero_crossing(lattice: &Lattice, u: &[f32], speed: &[f32], n: usize) -> f32 {
+    let grad = lattice.central_gradient(u, n);
+    let [i, j, k] = lattice.coords(n);
+    let mut x = Vec3::new(i as f32, j as f32, k as f32);
+    let g2 = grad.length_squared();
+    if g2 > 1e-12 {
+        x -= u[n] * grad / g2;
+    }
+    trilinear(lattice, speed, x)
+}
+
 /// Trilinear interpolation of `values` on `lattice` at voxel coordinates `g`
 /// (clamped to the grid).
 pub(crate) fn trilinear(lattice: &Lattice, values: &[f32], g: Vec3) -> f32 {

@@ -52,6 +52,7 @@ fn dense_and_sparse_solvers_agree() {
             max_iterations: 150,
             rms_change: 0.0,
             rms_distance: 0.0,
+            end_time: f64::INFINITY,
         };
         evolve(&source, &speed, None, &settings, &|_| {}).unwrap()
     };
