@@ -4,7 +4,7 @@
 use crate::inputs::Input;
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
-use isomorph_common::alignment::{AlignMode, Alignment, Moments, PrincipalFrame, align};
+use isomorph_common::alignment::{AlignMode, Alignment, PrincipalFrame, align};
 use isomorph_common::glam::Mat4;
 use isomorph_common::mesh::io::{MeshFormat, write_mesh};
 use serde_json::{Value, json};
@@ -60,8 +60,8 @@ pub fn run(args: &AlignArgs) -> anyhow::Result<()> {
     let source = Input::parse(&args.source, false)?;
     let target = Input::parse(&args.target, false)?;
     let alignment = align(
-        &moments(&source, args.res).with_context(|| format!("cannot measure {}", args.source))?,
-        &moments(&target, args.res).with_context(|| format!("cannot measure {}", args.target))?,
+        &source.moments(args.res).with_context(|| format!("cannot measure {}", args.source))?,
+        &target.moments(args.res).with_context(|| format!("cannot measure {}", args.target))?,
         args.mode.into(),
     )
     .context("cannot align the two shapes")?;
@@ -71,14 +71,6 @@ pub fn run(args: &AlignArgs) -> anyhow::Result<()> {
     report["output"] = json!(args.out.display().to_string());
     println!("{}", serde_json::to_string_pretty(&report)?);
     Ok(())
-}
-
-/// Exact moments of a mesh; grid moments of a built-in shape over its box.
-fn moments(input: &Input, res: u32) -> anyhow::Result<Moments> {
-    Ok(match input {
-        Input::Mesh(mesh, _) => Moments::from_mesh(mesh)?,
-        Input::Builtin(shape) => Moments::from_field(shape, &shape.aabb(), res)?,
-    })
 }
 
 /// The map as JSON: `matrix` (4×4, row-major, acting on column vectors

@@ -2,6 +2,7 @@
 //! distance fields (positive inside) and reference surfaces.
 
 use anyhow::{Context, bail};
+use isomorph_common::alignment::Moments;
 use isomorph_common::glam::{Affine3A, Quat, Vec3};
 use isomorph_common::mesh::io::read_mesh;
 use isomorph_common::sdf::MeshSdf;
@@ -65,6 +66,18 @@ impl Input {
             Input::Builtin(s) => s.aabb(),
             Input::Mesh(m, _) => m.bounds(),
         }
+    }
+
+    /// Exact moments of a mesh; grid moments (`res` nodes along the longest
+    /// edge) of a built-in shape over its box.
+    ///
+    /// # Errors
+    /// Degenerate or empty shapes, see [`Moments`].
+    pub fn moments(&self, res: u32) -> anyhow::Result<Moments> {
+        Ok(match self {
+            Input::Mesh(mesh, _) => Moments::from_mesh(mesh)?,
+            Input::Builtin(shape) => Moments::from_field(shape, &shape.aabb(), res)?,
+        })
     }
 
     /// The surface to compare frames with: the mesh itself, or the built-in

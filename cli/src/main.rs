@@ -6,6 +6,7 @@ mod align;
 mod demo;
 mod info;
 mod inputs;
+mod level_set;
 mod morph;
 mod progress;
 mod sdf;

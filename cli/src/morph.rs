@@ -1,12 +1,13 @@
 //! `isomorph morph`: morph a source into a target with a chosen method.
 
 use crate::inputs::{Input, morph_bounds};
+use crate::level_set::{self, Align, Solver};
 use crate::progress::FrameBar;
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 use isomorph_common::export::{ExportSettings, Report, export_sequence};
 use isomorph_common::mesh::io::MeshFormat;
-use isomorph_common::morph::DistanceBlend;
+use isomorph_common::morph::{DistanceBlend, Morph};
 use std::path::PathBuf;
 
 /// Morphing methods available to the command line.
@@ -15,6 +16,9 @@ pub enum Method {
     /// Linear interpolation of the two signed distance volumes (the naive
     /// baseline every method should beat).
     Baseline,
+    /// Breen & Whitaker's level-set morph: the source surface moves along
+    /// its normals with the target's signed distance as speed.
+    LevelSet,
 }
 
 /// Mesh formats for the frames.
@@ -58,6 +62,12 @@ pub struct MorphArgs {
     /// the built-in shapes' box (centred, longest side 0.9).
     #[arg(long)]
     pub keep_scale: bool,
+    /// Level-set only: alignment of the source onto the target.
+    #[arg(long, value_enum, default_value_t = Align::None)]
+    pub align: Align,
+    /// Level-set only: the solver.
+    #[arg(long, value_enum, default_value_t = Solver::Sparse)]
+    pub solver: Solver,
     /// Output folder for frames, contact_sheet.png and report.json.
     #[arg(long, default_value = "out/morph")]
     pub out: PathBuf,
@@ -88,14 +98,24 @@ pub fn morph(args: &MorphArgs) -> anyhow::Result<Report> {
         target_reference: Some(target.reference(reference_res)?),
         ..ExportSettings::default()
     };
-    let bar = FrameBar::new(&format!("{:?}", args.method).to_lowercase(), settings.frames);
-    let report = match args.method {
+    let label = format!("{:?}", args.method).to_lowercase();
+    match args.method {
         Method::Baseline => {
             let morph = DistanceBlend::from_fields(source.field(), target.field(), &bounds, args.res)
                 .context("cannot set up the baseline morph")?;
-            export_sequence(&morph, &settings, &|p| bar.update(p))?
+            export(&morph, &settings, &label)
         }
-    };
+        Method::LevelSet => {
+            let options = level_set::Options { align: args.align, solver: args.solver, res: args.res };
+            export(&level_set::build(&source, &target, options)?, &settings, &label)
+        }
+    }
+}
+
+/// Exports `morph` with a progress bar over the frames.
+fn export<M: Morph>(morph: &M, settings: &ExportSettings, label: &str) -> anyhow::Result<Report> {
+    let bar = FrameBar::new(label, settings.frames);
+    let report = export_sequence(morph, settings, &|p| bar.update(p))?;
     bar.finish();
     Ok(report)
 }

@@ -43,6 +43,15 @@ fn demo_writes_frames_sheet_and_report() {
         // The baseline reproduces its inputs at t = 0 and 1 up to sampling.
         assert!(e["mean_voxels"].as_f64().unwrap() < 0.5, "{end}: {e}");
     }
+    // The level-set ball → C stays one piece and ends on the C.
+    let level_set: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("level_set_ball_to_c/report.json")).unwrap()).unwrap();
+    assert_eq!(level_set["method"], "level-set");
+    for f in level_set["frames"].as_array().unwrap() {
+        assert_eq!(f["components"], 1, "{f}");
+    }
+    assert!(level_set["endpoints"]["target"]["mean_voxels"].as_f64().unwrap() < 0.5);
+    assert!(out.join("level_set_mug_to_chain/contact_sheet.png").is_file());
     let _ = std::fs::remove_dir_all(&out);
 }
 
