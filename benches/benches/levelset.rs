@@ -8,7 +8,8 @@
 use criterion::{BatchSize, BenchmarkId, Criterion, criterion_group, criterion_main};
 use isomorph_common::{Aabb, Grid3, Shape};
 use isomorph_levelset::{
-    DenseSolver, EvolveSettings, FrameSchedule, Response, Solver, SparseFieldSolver, SpeedGrid, evolve,
+    DenseSolver, EvolveSettings, FrameSchedule, Response, Solver, SparseFieldSolver, SpeedGrid, StepParams,
+    evolve,
 };
 use std::hint::black_box;
 
@@ -46,18 +47,22 @@ fn step(c: &mut Criterion) {
     group.sample_size(10);
     for n in [64u32, 128, 256] {
         let (source, speed) = case(n);
-        let max_dt = 100.0;
+        let params = StepParams::default();
         let sparse = SparseFieldSolver::new(&source).unwrap();
         group.bench_function(BenchmarkId::new("sparse", n), |b| {
             b.iter_batched_ref(
                 || sparse.clone(),
-                |s| black_box(s.step(&speed, max_dt)),
+                |s| black_box(s.step(&speed, &params)),
                 BatchSize::LargeInput,
             )
         });
         let dense = DenseSolver::new(&source).unwrap();
         group.bench_function(BenchmarkId::new("dense", n), |b| {
-            b.iter_batched_ref(|| dense.clone(), |s| black_box(s.step(&speed, max_dt)), BatchSize::LargeInput)
+            b.iter_batched_ref(
+                || dense.clone(),
+                |s| black_box(s.step(&speed, &params)),
+                BatchSize::LargeInput,
+            )
         });
     }
     group.finish();

@@ -40,6 +40,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
             keep_scale: false,
             align,
             solver: Solver::Sparse,
+            curvature: None,
         };
         let report = morph(&morph_args)?;
         print_summary(&report, &morph_args);

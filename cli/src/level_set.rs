@@ -9,7 +9,7 @@ use isomorph_common::alignment::{AlignMode, align};
 use isomorph_common::glam::Affine3A;
 use isomorph_common::{AffinePath, Grid3};
 use isomorph_levelset::{
-    EvolveSettings, FrameSchedule, LevelSetMorph, Response, SolverKind, SpeedGrid, evolve,
+    Curvature, EvolveSettings, FrameSchedule, LevelSetMorph, Response, SolverKind, SpeedGrid, evolve,
 };
 
 /// How the source is placed on the target before evolving (Breen §6.2).
@@ -40,6 +40,8 @@ pub struct Options {
     pub solver: Solver,
     /// Grid nodes along the longest edge of the evolution box.
     pub res: u32,
+    /// Weight of the mean-curvature term, if any.
+    pub curvature: Option<f32>,
 }
 
 /// Evolves `source` into `target`; frames are kept at every iteration (each
@@ -69,6 +71,11 @@ pub fn build(source: &Input, target: &Input, options: Options) -> anyhow::Result
             Solver::Dense => SolverKind::Dense,
         },
         max_iterations: 20_000,
+        // λ = exp(−(D/ℓ)²) with ℓ half the box, as Yang & Jüttler's
+        // exp(−d²) on their [−1, 1]³ domain.
+        curvature: options
+            .curvature
+            .map(|weight| Curvature { weight, length: 0.5 * bounds.size().max_element() }),
         frames: FrameSchedule::EveryIterations(1),
         ..EvolveSettings::default()
     };

@@ -68,12 +68,22 @@ pub struct MorphArgs {
     /// Level-set only: the solver.
     #[arg(long, value_enum, default_value_t = Solver::Sparse)]
     pub solver: Solver,
+    /// Level-set only: weight of a mean-curvature term that smooths the
+    /// evolving surface away from the target (Yang & Jüttler's weighting).
+    #[arg(long, value_parser = parse_weight)]
+    pub curvature: Option<f32>,
     /// Output folder for frames, contact_sheet.png and report.json.
     #[arg(long, default_value = "out/morph")]
     pub out: PathBuf,
     /// Mesh format of the frames.
     #[arg(long, value_enum, default_value_t = Format::Ply)]
     pub format: Format,
+}
+
+/// Accepts a finite weight in `[0, 100]`.
+fn parse_weight(s: &str) -> Result<f32, String> {
+    let w: f32 = s.parse().map_err(|e| format!("{e}"))?;
+    if (0.0..=100.0).contains(&w) { Ok(w) } else { Err(format!("{w} is not in [0, 100]")) }
 }
 
 /// Runs `isomorph morph`.
@@ -106,7 +116,12 @@ pub fn morph(args: &MorphArgs) -> anyhow::Result<Report> {
             export(&morph, &settings, &label)
         }
         Method::LevelSet => {
-            let options = level_set::Options { align: args.align, solver: args.solver, res: args.res };
+            let options = level_set::Options {
+                align: args.align,
+                solver: args.solver,
+                res: args.res,
+                curvature: args.curvature,
+            };
             export(&level_set::build(&source, &target, options)?, &settings, &label)
         }
     }

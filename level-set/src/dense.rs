@@ -2,8 +2,8 @@
 //! of the grid is updated at every iteration. The reference for the sparse
 //! field solver; its cost grows with the volume.
 
-use crate::solver::{Solver, StepStats};
-use crate::stencil::{Lattice, speed_at_zero_crossing, upwind_norm};
+use crate::solver::{Solver, StepParams, StepStats, node_rate, stable_time_step};
+use crate::stencil::{Lattice, speed_at_zero_crossing};
 use crate::{LevelSetError, SpeedGrid};
 use isomorph_common::Grid3;
 use rayon::prelude::*;
@@ -31,15 +31,16 @@ impl DenseSolver {
 }
 
 impl Solver for DenseSolver {
-    fn step(&mut self, speed: &SpeedGrid, max_dt: f32) -> StepStats {
+    fn step(&mut self, speed: &SpeedGrid, params: &StepParams) -> StepStats {
         let (lattice, u, v) = (&self.lattice, &self.u, speed.values());
+        let h = speed.spacing();
         // Steps 4a–d: up-wind change per node into a separate volume.
         self.change.par_iter_mut().enumerate().for_each(|(n, c)| {
-            let (minus, plus) = lattice.one_sided(u, n);
-            *c = v[n] * upwind_norm(minus, plus, v[n]);
+            *c = node_rate(lattice, u, n, v[n], h, params.curvature).0;
         });
-        // Step 5: eq. 24.
-        let dt = if speed.max_abs() > 0.0 { (1.0 / (3.0 * speed.max_abs())).min(max_dt) } else { max_dt };
+        // Step 5: eq. 24 (λ ≤ 1, so the largest target speed bounds the
+        // distance term with or without curvature).
+        let dt = stable_time_step(speed.max_abs(), params);
         // Step 6: update, and the stopping statistics at the surface nodes
         // (target distance sampled at the subvoxel zero crossing, as the
         // sparse field does, so both solvers stop by the same measure).

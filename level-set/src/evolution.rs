@@ -2,7 +2,7 @@
 //! resulting [`LevelSetMorph`].
 
 use crate::band::BandFrame;
-use crate::solver::{Solver, StepStats};
+use crate::solver::{Curvature, Solver, StepParams, StepStats};
 use crate::stencil::Lattice;
 use crate::{DenseSolver, LevelSetError, SparseFieldSolver, SpeedGrid};
 use isomorph_common::glam::{Affine3A, UVec3, Vec3};
@@ -51,6 +51,8 @@ pub struct EvolveSettings {
     pub max_time_step: f32,
     /// Which intermediate frames to keep (the first and last always are).
     pub frames: FrameSchedule,
+    /// Optional mean-curvature regularization of the speed.
+    pub curvature: Option<Curvature>,
     /// Stop once the evolution time (eq. 17's `t`) reaches this; infinite by
     /// default. Lets two solvers be compared over the same evolution time.
     pub end_time: f64,
@@ -65,6 +67,7 @@ impl Default for EvolveSettings {
             rms_change: 1e-4,
             max_time_step: 1.0,
             frames: FrameSchedule::EveryIterations(10),
+            curvature: None,
             end_time: f64::INFINITY,
         }
     }
@@ -164,8 +167,9 @@ pub fn evolve(
     let mut stats = Vec::new();
     let (mut time, mut last_kept_time) = (0.0f64, 0.0f64);
     let mut converged = false;
+    let params = StepParams { max_time_step: settings.max_time_step, curvature: settings.curvature };
     for iteration in 1..=settings.max_iterations {
-        let s = solver.step(speed, settings.max_time_step);
+        let s = solver.step(speed, &params);
         time += f64::from(s.dt);
         stats.push(s);
         progress(&Progress { iteration, max_iterations: settings.max_iterations, stats: s });
@@ -204,6 +208,11 @@ fn check_settings(s: &EvolveSettings) -> Result<(), LevelSetError> {
     }
     if s.rms_distance.is_nan() || s.rms_change.is_nan() || s.end_time.is_nan() {
         return bad("rms thresholds", f64::NAN, "not NaN");
+    }
+    if let Some(c) = s.curvature
+        && !(c.weight.is_finite() && c.weight >= 0.0 && c.length.is_finite() && c.length > 0.0)
+    {
+        return bad("curvature", f64::from(c.weight), "weight ≥ 0 and length > 0, finite");
     }
     match s.frames {
         FrameSchedule::EveryIterations(0) => bad("frames", 0.0, "every k ≥ 1 iterations"),

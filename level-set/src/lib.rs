@@ -51,7 +51,7 @@ pub use error::LevelSetError;
 pub use evolution::{
     EvolveSettings, FrameSchedule, LevelSetMorph, Progress, SolverKind, check_overlap, evolve,
 };
-pub use solver::{Solver, StepStats};
+pub use solver::{Curvature, Solver, StepParams, StepStats};
 pub use sparse_field::SparseFieldSolver;
 pub use speed::{Response, SpeedGrid};
 

@@ -2,6 +2,7 @@
 //! statistics.
 
 use crate::SpeedGrid;
+use crate::stencil::{Lattice, upwind_norm};
 
 /// Statistics of one solver iteration; distances in voxels.
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
@@ -18,12 +19,82 @@ pub struct StepStats {
     pub surface_nodes: usize,
 }
 
+/// The mean-curvature term of the speed (Yang & Jüttler 2007, eq. 11):
+/// `γ = λ D + (1 − λ) w κ` with `λ = exp(−(D / ℓ)²)`, where `D` is the
+/// target distance and `κ = ∇·(∇φ/|∇φ|)` the mean curvature (sum of the
+/// principal curvatures; negative on convex parts of a positive-inside
+/// embedding, so the term shrinks bumps and fills dents). Far from the
+/// target the surface is smoothed; on the target (`D → 0`, `λ → 1`) the
+/// distance term alone fixes it. Mean-curvature motion smooths but does not
+/// stop thin necks from pinching off (it drives them to): measured on the
+/// aligned mug → chain at 40³, the most pieces in one frame went from 11
+/// without the term to 12–16 with `w ∈ [2, 5]`.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Curvature {
+    /// Weight `w` of the curvature term (voxels² per unit time; the speed
+    /// `w κ` is in voxels per unit time with `κ` in 1/voxel).
+    pub weight: f32,
+    /// Length `ℓ` (world units) over which `λ` falls from 1 to 1/e.
+    pub length: f32,
+}
+
+/// Per-iteration parameters shared by both solvers.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepParams {
+    /// Upper bound on the time step besides the stability bounds.
+    pub max_time_step: f32,
+    /// Optional mean-curvature regularization.
+    pub curvature: Option<Curvature>,
+}
+
+impl Default for StepParams {
+    fn default() -> Self {
+        Self { max_time_step: 1.0, curvature: None }
+    }
+}
+
+/// The rate `∂φ/∂t` at node `n` for target distance `d` (voxels, already
+/// sampled where the solver samples it) and the parts that bound the time
+/// step: `(rate, distance term speed)`.
+pub(crate) fn node_rate(
+    lattice: &Lattice,
+    u: &[f32],
+    n: usize,
+    d: f32,
+    spacing: f32,
+    curvature: Option<Curvature>,
+) -> (f32, f32) {
+    let (minus, plus) = lattice.one_sided(u, n);
+    match curvature {
+        None => (d * upwind_norm(minus, plus, d), d),
+        Some(c) => {
+            let lambda = (-(d * spacing / c.length).powi(2)).exp();
+            let gamma = lambda * d;
+            let (kappa, grad_norm) = lattice.mean_curvature(u, n);
+            (gamma * upwind_norm(minus, plus, gamma) + (1.0 - lambda) * c.weight * kappa * grad_norm, gamma)
+        }
+    }
+}
+
+/// The largest stable time step: eq. 24 for the distance term (largest
+/// speed `max_speed`), `1/(6w)` for the curvature term, and `max_dt`.
+pub(crate) fn stable_time_step(max_speed: f32, params: &StepParams) -> f32 {
+    let mut dt = params.max_time_step;
+    if max_speed > 0.0 {
+        dt = dt.min(1.0 / (3.0 * max_speed));
+    }
+    if let Some(c) = params.curvature.filter(|c| c.weight > 0.0) {
+        dt = dt.min(1.0 / (6.0 * c.weight));
+    }
+    dt
+}
+
 /// A level-set solver for `∂φ/∂t = |∇φ| γ` (Breen & Whitaker eq. 17) on a
 /// fixed lattice; values in voxel units, positive inside.
 pub trait Solver: Send {
     /// One explicit Euler iteration (eq. 18) with the largest stable time
-    /// step, capped at `max_dt`.
-    fn step(&mut self, speed: &SpeedGrid, max_dt: f32) -> StepStats;
+    /// step within `params`.
+    fn step(&mut self, speed: &SpeedGrid, params: &StepParams) -> StepStats;
 
     /// The embedding `φ` at every node (voxel units, positive inside). Only
     /// its sign and the values next to the zero set are meaningful for the

@@ -32,8 +32,8 @@
 //! Each iteration visits only the layer lists and their neighbours: the cost
 //! grows with the surface area, not the volume.
 
-use crate::solver::{Solver, StepStats};
-use crate::stencil::{Lattice, speed_at_zero_crossing, upwind_norm};
+use crate::solver::{Curvature, Solver, StepParams, StepStats, node_rate, stable_time_step};
+use crate::stencil::{Lattice, speed_at_zero_crossing};
 use crate::{LevelSetError, SpeedGrid};
 use isomorph_common::Grid3;
 use rayon::prelude::*;
@@ -62,8 +62,9 @@ pub struct SparseFieldSolver {
     /// Layer lists `L−2 … L+2` at index `ℓ + 2`; entries whose status no
     /// longer matches are dropped at the end of each iteration.
     layers: [Vec<u32>; 5],
-    /// Per active point: `(change rate, sampled speed)` of the current step.
-    rates: Vec<(f32, f32)>,
+    /// Per active point: `(change rate, distance-term speed, target
+    /// distance at the zero crossing)` of the current step.
+    rates: Vec<(f32, f32, f32)>,
 }
 
 fn slot(layer: i8) -> usize {
@@ -140,15 +141,15 @@ impl SparseFieldSolver {
 
     /// Step 1: change rate of every active point, with the speed sampled at
     /// its nearest zero crossing.
-    fn compute_rates(&mut self, speed: &SpeedGrid) {
-        let (lattice, u, v) = (&self.lattice, &self.u, speed.values());
+    fn compute_rates(&mut self, speed: &SpeedGrid, curvature: Option<Curvature>) {
+        let (lattice, u, v, h) = (&self.lattice, &self.u, speed.values(), speed.spacing());
         self.layers[slot(0)]
             .par_iter()
             .map(|&n| {
                 let n = n as usize;
-                let gamma = speed_at_zero_crossing(lattice, u, v, n);
-                let (minus, plus) = lattice.one_sided(u, n);
-                (gamma * upwind_norm(minus, plus, gamma), gamma)
+                let d = speed_at_zero_crossing(lattice, u, v, n);
+                let (rate, gamma) = node_rate(lattice, u, n, d, h, curvature);
+                (rate, gamma, d)
             })
             .collect_into_vec(&mut self.rates);
     }
@@ -159,10 +160,10 @@ impl SparseFieldSolver {
         let (mut up, mut down) = (Vec::new(), Vec::new());
         let (mut sum_change, mut sum_dist) = (0.0f64, 0.0f64);
         let active = std::mem::take(&mut self.layers[slot(0)]);
-        for (&n, &(rate, gamma)) in active.iter().zip(&self.rates) {
+        for (&n, &(rate, _, distance)) in active.iter().zip(&self.rates) {
             let n = n as usize;
             let new = self.u[n] + dt * rate;
-            sum_dist += f64::from(gamma * gamma);
+            sum_dist += f64::from(distance * distance);
             let direction: i8 = if new > ACTIVE_MAX {
                 1
             } else if new < -ACTIVE_MAX {
@@ -291,14 +292,11 @@ impl SparseFieldSolver {
 }
 
 impl Solver for SparseFieldSolver {
-    fn step(&mut self, speed: &SpeedGrid, max_dt: f32) -> StepStats {
-        self.compute_rates(speed);
+    fn step(&mut self, speed: &SpeedGrid, params: &StepParams) -> StepStats {
+        self.compute_rates(speed, params.curvature);
         let max_gamma = self.rates.iter().fold(0.0f32, |m, r| m.max(r.1.abs()));
         let max_rate = self.rates.iter().fold(0.0f32, |m, r| m.max(r.0.abs()));
-        let mut dt = max_dt;
-        if max_gamma > 0.0 {
-            dt = dt.min(1.0 / (3.0 * max_gamma));
-        }
+        let mut dt = stable_time_step(max_gamma, params);
         if max_rate > 0.0 {
             dt = dt.min(ACTIVE_MAX / max_rate);
         }

@@ -40,6 +40,7 @@ impl Response {
 pub struct SpeedGrid {
     values: Vec<f32>,
     lattice: Lattice,
+    spacing: f32,
     max_abs: f32,
 }
 
@@ -72,7 +73,7 @@ impl SpeedGrid {
                 response.apply(target.value(map(x))) * inv_h
             })
             .collect();
-        Self::from_voxel_values(lat, values)
+        Self::from_voxel_values(lat, lattice.spacing(), values)
     }
 
     /// A target distance grid (world units, positive inside) that already
@@ -83,10 +84,10 @@ impl SpeedGrid {
     pub fn from_grid(target: &Grid3<f32>, response: Response) -> Result<Self, LevelSetError> {
         let inv_h = 1.0 / target.spacing();
         let values = target.data().par_iter().map(|&d| response.apply(d) * inv_h).collect();
-        Self::from_voxel_values(Lattice::new(target.dims()), values)
+        Self::from_voxel_values(Lattice::new(target.dims()), target.spacing(), values)
     }
 
-    fn from_voxel_values(lattice: Lattice, values: Vec<f32>) -> Result<Self, LevelSetError> {
+    fn from_voxel_values(lattice: Lattice, spacing: f32, values: Vec<f32>) -> Result<Self, LevelSetError> {
         if let Some(node) = values.iter().position(|v| !v.is_finite()) {
             return Err(LevelSetError::NonFinite { what: "target", node });
         }
@@ -94,7 +95,7 @@ impl SpeedGrid {
             return Err(LevelSetError::NoSurface("target"));
         }
         let max_abs = values.par_iter().map(|v| v.abs()).reduce(|| 0.0, f32::max);
-        Ok(Self { values, lattice, max_abs })
+        Ok(Self { values, lattice, spacing, max_abs })
     }
 
     /// Speeds per node (voxel units), x-fastest.
@@ -105,6 +106,11 @@ impl SpeedGrid {
     /// Largest speed magnitude (voxels per unit time).
     pub fn max_abs(&self) -> f32 {
         self.max_abs
+    }
+
+    /// Grid spacing (world units per voxel).
+    pub fn spacing(&self) -> f32 {
+        self.spacing
     }
 
     pub(crate) fn lattice(&self) -> &Lattice {

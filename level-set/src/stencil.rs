@@ -81,6 +81,50 @@ impl Lattice {
         (minus, plus)
     }
 
+    /// Mean curvature `κ = ∇·(∇u/|∇u|)` at `n` (1/voxel; sum of the
+    /// principal curvatures, negative on convex parts of a positive-inside
+    /// embedding) from central differences over the 3×3×3 neighbourhood
+    /// (clamped at the boundary), and the central gradient magnitude.
+    pub(crate) fn mean_curvature(&self, u: &[f32], n: usize) -> (f32, f32) {
+        let c = self.coords(n);
+        let at = |d: [isize; 3]| {
+            let mut m = 0;
+            for axis in 0..3 {
+                let i = (c[axis] as isize + d[axis]).clamp(0, self.dims[axis] as isize - 1) as usize;
+                m += i * self.strides[axis];
+            }
+            u[m]
+        };
+        let e = |axis: usize, s: isize| {
+            let mut d = [0isize; 3];
+            d[axis] = s;
+            d
+        };
+        let un = u[n];
+        let first = |a: usize| 0.5 * (at(e(a, 1)) - at(e(a, -1)));
+        let second = |a: usize| at(e(a, 1)) - 2.0 * un + at(e(a, -1));
+        let mixed = |a: usize, b: usize| {
+            let d = |sa: isize, sb: isize| {
+                let mut d = [0isize; 3];
+                d[a] = sa;
+                d[b] = sb;
+                at(d)
+            };
+            0.25 * (d(1, 1) - d(1, -1) - d(-1, 1) + d(-1, -1))
+        };
+        let (gx, gy, gz) = (first(0), first(1), first(2));
+        let (xx, yy, zz) = (second(0), second(1), second(2));
+        let (xy, xz, yz) = (mixed(0, 1), mixed(0, 2), mixed(1, 2));
+        let g2 = gx * gx + gy * gy + gz * gz;
+        if g2 < 1e-12 {
+            return (0.0, 0.0);
+        }
+        let numerator = (yy + zz) * gx * gx + (xx + zz) * gy * gy + (xx + yy) * gz * gz
+            - 2.0 * (gx * gy * xy + gx * gz * xz + gy * gz * yz);
+        let g = g2.sqrt();
+        (numerator / (g2 * g), g)
+    }
+
     /// Central-difference gradient at `n` (one-sided at the boundary), in
     /// value units per voxel.
     pub(crate) fn central_gradient(&self, u: &[f32], n: usize) -> Vec3 {
@@ -177,6 +221,24 @@ mod tests {
         assert_eq!(p[0], -3.0);
         assert_eq!(upwind_norm(m, p, 1.0), 1.0);
         assert_eq!(upwind_norm(m, p, -1.0), 3.0);
+    }
+
+    #[test]
+    fn mean_curvature_of_a_sphere_is_minus_two_over_r() {
+        let l = Lattice::new(UVec3::splat(41));
+        let r = 12.0;
+        let u: Vec<f32> = (0..l.len())
+            .map(|n| {
+                let c = l.coords(n).map(|c| c as f32 - 20.0);
+                r - (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()
+            })
+            .collect();
+        // A node on the sphere's surface along a diagonal-ish direction.
+        let n = 20 + 27 * 41 + 29 * 41 * 41; // (20, 27, 29): |(0, 7, 9)| ≈ 11.4
+        let (kappa, g) = l.mean_curvature(&u, n);
+        let rho = (49.0f32 + 81.0).sqrt();
+        assert!((kappa + 2.0 / rho).abs() < 0.01, "kappa {kappa} vs {}", -2.0 / rho);
+        assert!((g - 1.0).abs() < 0.02);
     }
 
     #[test]
