@@ -24,7 +24,8 @@ impl DenseSolver {
     /// [`LevelSetError::NonFinite`], [`LevelSetError::GridTooSmall`],
     /// [`LevelSetError::NoSurface`] for a source without a sign change.
     pub fn new(source: &Grid3<f32>) -> Result<Self, LevelSetError> {
-        let (lattice, u) = crate::initial_embedding(source)?;
+        // The embedding and the change volume.
+        let (lattice, u) = crate::initial_embedding(source, 8)?;
         let change = vec![0.0; u.len()];
         Ok(Self { lattice, u, change })
     }

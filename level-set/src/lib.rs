@@ -58,11 +58,21 @@ pub use speed::{Response, SpeedGrid};
 use isomorph_common::{Grid3, GridError};
 use stencil::Lattice;
 
-/// Checks a source distance grid and converts it to voxel units.
-fn initial_embedding(source: &Grid3<f32>) -> Result<(Lattice, Vec<f32>), LevelSetError> {
+/// Checks a source distance grid and converts it to voxel units; a solver
+/// needing `bytes_per_node` of state per node is refused with
+/// [`GridError::TooLarge`] over the process-wide grid memory limit.
+fn initial_embedding(
+    source: &Grid3<f32>,
+    bytes_per_node: usize,
+) -> Result<(Lattice, Vec<f32>), LevelSetError> {
     let dims = source.dims();
     if dims.min_element() < 3 {
         return Err(GridError::TooSmall { dims, min: 3 }.into());
+    }
+    let requested = source.len().saturating_mul(bytes_per_node);
+    let limit = isomorph_common::grid::memory_limit();
+    if requested > limit {
+        return Err(GridError::TooLarge { dims, requested, limit }.into());
     }
     if let Some(node) = source.data().iter().position(|v| !v.is_finite()) {
         return Err(LevelSetError::NonFinite { what: "source", node });

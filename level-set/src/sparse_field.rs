@@ -83,7 +83,8 @@ impl SparseFieldSolver {
     /// [`LevelSetError::NonFinite`], [`LevelSetError::GridTooSmall`],
     /// [`LevelSetError::NoSurface`] for a source without a sign change.
     pub fn new(source: &Grid3<f32>) -> Result<Self, LevelSetError> {
-        let (lattice, mut u) = crate::initial_embedding(source)?;
+        // The embedding and the status byte per node.
+        let (lattice, mut u) = crate::initial_embedding(source, 5)?;
         let active: Vec<u32> = (0..u.len())
             .into_par_iter()
             .filter(|&n| {

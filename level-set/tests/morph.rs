@@ -156,3 +156,35 @@ fn curvature_regularized_morph_still_lands_on_the_target() {
     // The curvature term is active: the step is bounded by 1/(6w).
     assert!(morph.stats().iter().all(|s| s.dt <= 1.0 / 12.0 + 1e-6));
 }
+
+#[test]
+fn mug_becomes_the_chain_after_moment_alignment() {
+    use isomorph_common::alignment::{AlignMode, Moments, align};
+    let bounds = Aabb::cube(0.5);
+    let res = 64;
+    let (mug, chain) = (models::by_name("mug").unwrap(), models::by_name("chain").unwrap());
+    let moments = |s: &Shape| Moments::from_field(s, &bounds, res).unwrap();
+    let map = align(&moments(&mug), &moments(&chain), AlignMode::Affine).unwrap().map;
+    let region = mug.aabb().union(&chain.aabb().transformed(&map.inverse())).padded(0.1);
+    let source = Grid3::sample_box(&mug, &region, res).unwrap();
+    let speed = SpeedGrid::sample(&source, &chain, |x| map.transform_point3(x), Response::Identity).unwrap();
+    let path = isomorph_common::AffinePath::from_identity(&map).unwrap();
+    let morph = evolve(&source, &speed, Some(path), &EvolveSettings::default(), &|_| {}).unwrap();
+    assert!(morph.converged());
+    // Frames are placed by T(x, n/(N − 1)): the last one lies in the chain's space.
+    let last = morph.frame_mesh(1.0, 0).unwrap();
+    let reference = Grid3::sample_box(&chain, &bounds, 96).unwrap();
+    let reference = isomorph_common::marching_cubes::marching_cubes(&reference, 0.0);
+    let d = isomorph_common::mesh::distance::surface_distance(&last, &reference, 6000).unwrap();
+    // Voxel of the evolution grid, measured in the target's space.
+    let h = source.spacing() * map.matrix3.determinant().cbrt();
+    assert!(
+        d.mean / h < 0.5 && d.hausdorff / h < 1.5,
+        "mean {} Hausdorff {} voxels",
+        d.mean / h,
+        d.hausdorff / h
+    );
+    assert_eq!(last.connected_components(), 3, "the three links");
+    let first = morph.frame_mesh(0.0, 0).unwrap();
+    assert_eq!(first.genus(), Some(1), "the mug with its handle");
+}
