@@ -23,10 +23,10 @@
 //! (every edge used equally often in both directions, so the winding number
 //! is an integer off the surface) the sign is propagated instead of
 //! evaluated: the open ball of radius `|d(x)|` about a node contains no
-//! surface, so a neighbour inside that ball has the same winding number.
-//! Signs flow along x, y and z links whose longer end distance exceeds the
-//! link length, and the winding number is evaluated only once per region
-//! reached that way (in practice at the nodes next to the surface). The
+//! surface, so when the balls of two neighbours overlap (`|d(x)| + |d(y)| >
+//! |x − y|`) their union is a connected surface-free set and both have the
+//! same winding number. Signs flow along such x, y and z links, and the
+//! winding number is evaluated only once per region reached that way. The
 //! result is the same as evaluating the winding number at every node. On an
 //! open mesh the winding number is not constant on such balls and is
 //! evaluated at every node.
@@ -364,7 +364,7 @@ fn is_closed(mesh: &TriMesh) -> bool {
 
 /// Slabs of z-layers per parallel work item of [`propagate_signs`]; signs
 /// cross layer links only inside one item.
-const SIGN_SLABS: usize = 4;
+const SIGN_SLABS: usize = 8;
 /// Relative margin on the ball-containment test of a sign link, far above
 /// the rounding of exact `f32` distances.
 const LINK_MARGIN: f32 = 1e-4;
@@ -375,9 +375,9 @@ const LINK_MARGIN: f32 = 1e-4;
 fn propagate_signs(wn: &WindingNumber, lattice: &Lattice, d: &mut [f32]) {
     let (nx, ny) = (lattice.dims.x as usize, lattice.dims.y as usize);
     let limits = lattice.step.abs() * (1.0 + LINK_MARGIN) + Vec3::splat(f32::MIN_POSITIVE);
-    // Two nodes `a`, `b` one step apart along an axis share a sign when the
-    // longer distance exceeds the step (the other node lies in that ball).
-    let linked = |a: f32, b: f32, axis: usize| a.max(b) > limits[axis];
+    // Two nodes one step apart along an axis share a sign when their
+    // surface-free balls overlap: the distances add up to more than the step.
+    let linked = |a: f32, b: f32, axis: usize| a + b > limits[axis];
     d.par_chunks_mut(nx * ny * SIGN_SLABS).enumerate().for_each(|(chunk, d)| {
         // 0: unknown, 1: inside, -1: outside.
         let mut sign = vec![0i8; d.len()];

@@ -3,16 +3,21 @@
 //! per node.
 //!
 //! The lattice is cut into blocks of [`BLOCK`]³ nodes. For a block with
-//! centre `c` and half-diagonal `r`, one tree query gives the exact distance
-//! `d(c)`. Since the distance is 1-Lipschitz, every node `x` of the block has
-//! `d(x) ≤ d(c) + |x − c|`, and a triangle `T` nearest to `x` satisfies
-//! `dist(T, c) ≤ d(x) + |x − c| ≤ d(c) + 2r`. One range query collects those
-//! candidates with their exact distances `e_T = dist(T, c)`, sorted by `e_T`.
-//! Each node then scans the candidates in that order and stops at the first
-//! with `e_T − |x − c| >` its best distance so far (the triangle inequality
+//! centre `c`, one tree query gives the exact distance `d(c)`. Since the
+//! distance is 1-Lipschitz, every node `x` of the block has `d(x) ≤ d(c) +
+//! |x − c|`, and a triangle `T` nearest to `x` satisfies `dist(T, c) ≤ d(x)
+//! + |x − c| ≤ d(c) + 2r` where `r` bounds `|x − c|`. One range query
+//! collects those candidates with their exact distances `e_T = dist(T, c)`,
+//! sorted by `e_T`. Each half of the block along every axis (a sub-block
+//! with centre `c'` and radius `r'`) then narrows the list the same way to
+//! the triangles within `d(c') + 2r'` of `c'`, found among the block's
+//! candidates (the ball they lie in is inside the block's ball). Each node
+//! scans its sub-block's list in order of `e'_T` and stops at the first with
+//! `e'_T − |x − c'| >` its best distance so far (the triangle inequality
 //! makes that a lower bound for all the rest). The result is the exact
 //! minimum over all triangles, as a brute-force search would find it, at the
-//! cost of a few dozen point–triangle tests per node and no tree traversal.
+//! cost of a few dozen point–triangle tests per node (eight at a time,
+//! branch-free, see [`Pack`]) and one tree traversal per block.
 
 use super::{Best, ClosestPoint, STACK, Tri, TriangleBvh, closest_on_triangle};
 use crate::Aabb;
@@ -20,15 +25,61 @@ use glam::{UVec3, Vec3};
 use rayon::prelude::*;
 
 /// Nodes per block edge.
-const BLOCK: u32 = 4;
+const BLOCK: u32 = 8;
 /// Relative slack on the pruning bounds, covering the rounding of the `f32`
 /// distances they compare (far above it, far below any useful tolerance).
 const SLACK: f32 = 1e-5;
 
-/// Per-thread scratch of the block solver: candidates `(dist(T, c), slot)`,
-/// their packed query data, and the nearest slot of the last block centre
-/// (a starting bound for the next).
-type Scratch = (Vec<(f32, u32)>, Vec<Pack>, u32);
+/// Per-thread scratch space of the block solver.
+#[derive(Debug, Default)]
+struct Scratch {
+    /// The block's candidates `(dist(T, c), slot)` and their packs.
+    candidates: Vec<(f32, u32)>,
+    packs: Vec<Pack>,
+    /// The same for the current sub-block.
+    sub_candidates: Vec<(f32, u32)>,
+    sub_packs: Vec<Pack>,
+    /// Nearest slot of the last block centre (a starting bound for the next).
+    previous: u32,
+}
+
+/// One of the up to eight parts of a block.
+#[derive(Debug, Clone, Copy)]
+struct SubBlock {
+    lo: UVec3,
+    n: UVec3,
+    center: Vec3,
+    /// Distance from `center` to the farthest node.
+    radius: f32,
+}
+
+/// The block of `n` nodes from `lo` halved along each axis of more than one node.
+fn sub_blocks(lattice: &Lattice, lo: UVec3, n: UVec3) -> [Option<SubBlock>; 8] {
+    let mut out = [None; 8];
+    for (c, slot) in out.iter_mut().enumerate() {
+        let upper = UVec3::new(c as u32 & 1, (c as u32 >> 1) & 1, c as u32 >> 2);
+        let first = (n + UVec3::ONE) / 2;
+        let size = UVec3::select(upper.cmpeq(UVec3::ONE), n - first, first);
+        if size.min_element() == 0 {
+            continue;
+        }
+        let start = lo + upper * first;
+        let half = (size - UVec3::ONE).as_vec3() * 0.5;
+        *slot = Some(SubBlock {
+            lo: start,
+            n: size,
+            center: lattice.origin + lattice.step * (start.as_vec3() + half),
+            radius: (lattice.step * half).length(),
+        });
+    }
+    out
+}
+
+/// Sorts candidates by distance, then slot (non-negative floats order like
+/// their bit patterns).
+fn sort_candidates(candidates: &mut [(f32, u32)]) {
+    candidates.sort_unstable_by_key(|&(e, slot)| (u64::from(e.to_bits()) << 32) | u64::from(slot));
+}
 
 /// Triangles per [`Pack`].
 const LANES: usize = 8;
@@ -211,7 +262,7 @@ impl TriangleBvh {
         }
         let slab = nx * ny * BLOCK as usize;
         out.par_chunks_mut(slab).enumerate().for_each_init(
-            || (Vec::new(), Vec::new(), Best::NONE),
+            || Scratch { previous: Best::NONE, ..Scratch::default() },
             |scratch, (s, hits)| {
                 let k0 = s as u32 * BLOCK;
                 let kn = (lattice.dims.z - k0).min(BLOCK);
@@ -245,43 +296,75 @@ impl TriangleBvh {
         lattice: &Lattice,
         lo: UVec3,
         n: UVec3,
-        (candidates, packs, previous): &mut Scratch,
+        scratch: &mut Scratch,
         mut emit: impl FnMut(u32, u32, u32, LatticeHit),
     ) {
-        let half = (n - UVec3::ONE).as_vec3() * 0.5;
-        let center = lattice.origin + lattice.step * (lo.as_vec3() + half);
-        let radius = (lattice.step * half).length();
-        let start = if *previous == Best::NONE {
+        let center = lattice.origin + lattice.step * (lo.as_vec3() + (n - UVec3::ONE).as_vec3() * 0.5);
+        // The block is split in two along each axis; `span` bounds the
+        // distance from the centre to every node of a sub-block through the
+        // sub-block's centre (`|c' − c| + r'`), and so also to every node.
+        let subs = sub_blocks(lattice, lo, n);
+        let span = subs.iter().flatten().map(|s| (s.center - center).length() + s.radius).fold(0.0, f32::max);
+        let start = if scratch.previous == Best::NONE {
             Best::bound(f32::INFINITY)
         } else {
-            Best { d2: closest_on_triangle(center, &self.tris[*previous as usize]).d2, slot: *previous }
+            let previous = scratch.previous;
+            Best { d2: closest_on_triangle(center, &self.tris[previous as usize]).d2, slot: previous }
         };
         let nearest = self.search(center, start);
-        *previous = nearest.slot;
-        let reach = (nearest.d2.sqrt() + 2.0 * radius) * (1.0 + SLACK) + SLACK * radius;
-        self.gather(center, reach, candidates);
-        candidates.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        packs.clear();
-        packs.extend(candidates.chunks(LANES).map(|chunk| Pack::new(&self.tris, chunk)));
-        for k in lo.z..lo.z + n.z {
-            for j in lo.y..lo.y + n.y {
-                for i in lo.x..lo.x + n.x {
-                    let p = lattice.position(i, j, k);
-                    let offset = (p - center).length() * (1.0 + SLACK) + SLACK * radius;
-                    let (mut best2, mut best, mut index) = (f32::INFINITY, f32::INFINITY, 0);
-                    for (q, pack) in packs.iter().enumerate() {
-                        if pack.reach[0] > best + offset {
-                            break;
-                        }
-                        let d = pack.distances(p);
-                        if d.iter().any(|&x| x < best2) {
-                            let (d2, lane) = argmin(&d);
-                            (best2, best, index) = (d2, d2.sqrt(), q * LANES + lane);
-                        }
+        scratch.previous = nearest.slot;
+        let reach = (nearest.d2.sqrt() + 2.0 * span) * (1.0 + SLACK) + SLACK * span;
+        self.gather(center, reach, &mut scratch.candidates);
+        sort_candidates(&mut scratch.candidates);
+        scratch.packs.clear();
+        scratch.packs.extend(scratch.candidates.chunks(LANES).map(|chunk| Pack::new(&self.tris, chunk)));
+        for sub in subs.iter().flatten() {
+            // The sub-block's candidates: every triangle within d(c') + 2r'
+            // of its centre c', found among the block's (which hold them all,
+            // as the ball about c' of that radius lies in the block's).
+            let offset = (sub.center - center).length() * (1.0 + SLACK) + SLACK * span;
+            let own = &mut scratch.sub_candidates;
+            own.clear();
+            let mut nearest = f32::INFINITY;
+            let widen = 2.0 * sub.radius * (1.0 + SLACK) + SLACK * span;
+            for (q, pack) in scratch.packs.iter().enumerate() {
+                if pack.reach[0] > nearest + widen + offset {
+                    break;
+                }
+                let d = pack.distances(sub.center);
+                let lanes = (scratch.candidates.len() - q * LANES).min(LANES);
+                for (l, &d2) in d.iter().enumerate().take(lanes) {
+                    let e = d2.sqrt();
+                    nearest = nearest.min(e);
+                    if e <= nearest + widen {
+                        own.push((e, scratch.candidates[q * LANES + l].1));
                     }
-                    let slot = candidates[index].1;
-                    let triangle = self.ids[slot as usize];
-                    emit(i, j, k, LatticeHit { distance: best, triangle, slot });
+                }
+            }
+            own.retain(|&(e, _)| e <= nearest + widen);
+            sort_candidates(own);
+            scratch.sub_packs.clear();
+            scratch.sub_packs.extend(own.chunks(LANES).map(|chunk| Pack::new(&self.tris, chunk)));
+            for k in sub.lo.z..sub.lo.z + sub.n.z {
+                for j in sub.lo.y..sub.lo.y + sub.n.y {
+                    for i in sub.lo.x..sub.lo.x + sub.n.x {
+                        let p = lattice.position(i, j, k);
+                        let offset = (p - sub.center).length() * (1.0 + SLACK) + SLACK * span;
+                        let (mut best2, mut best, mut index) = (f32::INFINITY, f32::INFINITY, 0);
+                        for (q, pack) in scratch.sub_packs.iter().enumerate() {
+                            if pack.reach[0] > best + offset {
+                                break;
+                            }
+                            let d = pack.distances(p);
+                            if d.iter().any(|&x| x < best2) {
+                                let (d2, lane) = argmin(&d);
+                                (best2, best, index) = (d2, d2.sqrt(), q * LANES + lane);
+                            }
+                        }
+                        let slot = own[index].1;
+                        let triangle = self.ids[slot as usize];
+                        emit(i, j, k, LatticeHit { distance: best, triangle, slot });
+                    }
                 }
             }
         }
