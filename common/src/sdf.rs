@@ -56,7 +56,7 @@ use crate::grid::lattice_for_box;
 use crate::mesh::bvh::{ClosestPoint, Lattice, TriangleBvh};
 use crate::mesh::winding::{DEFAULT_BETA, WindingNumber};
 use crate::{Aabb, Field3, Grid3, GridError, TriMesh};
-use glam::{UVec3, Vec3};
+use glam::Vec3;
 use rayon::prelude::*;
 use std::collections::HashMap;
 
@@ -425,6 +425,7 @@ fn propagate_signs(wn: &WindingNumber, lattice: &Lattice, d: &mut [f32]) {
 mod tests {
     use super::*;
     use crate::mesh::metrics::test_meshes::{bunny, cube, read_obj, torus, uv_sphere};
+    use glam::UVec3;
 
     fn box_sd(p: Vec3) -> f32 {
         let q = p.abs() - Vec3::ONE;

@@ -2,7 +2,7 @@
 //! ([`TriangleBvh::nearest_on_lattice`]), much faster than one tree descent
 //! per node.
 //!
-//! The lattice is cut into blocks of [`BLOCK`]³ nodes. For a block with
+//! The lattice is cut into blocks of 8³ nodes. For a block with
 //! centre `c`, one tree query gives the exact distance `d(c)`. Since the
 //! distance is 1-Lipschitz, every node `x` of the block has `d(x) ≤ d(c) +
 //! |x − c|`, and a triangle `T` nearest to `x` satisfies `dist(T, c) ≤ d(x)
@@ -17,7 +17,24 @@
 //! makes that a lower bound for all the rest). The result is the exact
 //! minimum over all triangles, as a brute-force search would find it, at the
 //! cost of a few dozen point–triangle tests per node (eight at a time,
-//! branch-free, see [`Pack`]) and one tree traversal per block.
+//! branch-free, over structure-of-arrays packs that the compiler
+//! vectorizes) and one tree traversal per block.
+//!
+//! # Example
+//! ```
+//! use isomorph_common::mesh::bvh::{Lattice, TriangleBvh};
+//! use isomorph_common::{Aabb, TriMesh, glam::{UVec3, Vec3}};
+//!
+//! let mesh = TriMesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]])?;
+//! let bvh = TriangleBvh::new(&mesh);
+//! // 3 × 3 × 2 nodes over [0, 1]² × [1, 2].
+//! let lattice = Lattice::spanning(&Aabb::new(Vec3::Z, Vec3::ONE + Vec3::Z), UVec3::new(3, 3, 2));
+//! let hits = bvh.nearest_on_lattice(&lattice).expect("non-empty mesh");
+//! assert_eq!(hits.len(), 18);
+//! assert_eq!(hits[0].distance, 1.0); // node (0, 0, 0) at z = 1 above the corner
+//! assert_eq!(hits[17].distance, Vec3::new(0.5, 0.5, 2.0).length()); // (1, 1, 2) to (½, ½, 0)
+//! # Ok::<(), isomorph_common::MeshError>(())
+//! ```
 
 use super::{Best, ClosestPoint, STACK, Tri, TriangleBvh, closest_on_triangle};
 use crate::Aabb;
@@ -331,11 +348,10 @@ impl TriangleBvh {
                 if pack.reach[0] > nearest + widen + offset {
                     break;
                 }
-                let d = pack.distances(sub.center);
+                let e = pack.distances(sub.center).map(f32::sqrt);
+                nearest = e.iter().fold(nearest, |m, &x| min(m, x));
                 let lanes = (scratch.candidates.len() - q * LANES).min(LANES);
-                for (l, &d2) in d.iter().enumerate().take(lanes) {
-                    let e = d2.sqrt();
-                    nearest = nearest.min(e);
+                for (l, &e) in e.iter().enumerate().take(lanes) {
                     if e <= nearest + widen {
                         own.push((e, scratch.candidates[q * LANES + l].1));
                     }

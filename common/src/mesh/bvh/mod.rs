@@ -21,7 +21,7 @@
 //! Detection* §5.1.5) in `f32` was measured to err by up to 4·10⁻³ on
 //! unit-size slivers and so is not used.
 
-mod lattice;
+pub mod lattice;
 
 pub use lattice::{Lattice, LatticeHit};
 
