@@ -216,6 +216,19 @@ impl WindingNumber {
 }
 
 impl Node {
+    /// A node about `center` with zero moments, to be accumulated.
+    fn zero(center: Vec3, first: u32, count: u32) -> Self {
+        Node {
+            center,
+            far_radius: 0.0,
+            dipole: Vec3::ZERO,
+            first_moment: Mat3::ZERO,
+            second_moment: [Mat3::ZERO; 3],
+            first,
+            count,
+        }
+    }
+
     /// A leaf over `tris[start..end]` with its expansion.
     fn leaf(tris: &[[Vec3; 3]], start: usize, end: usize, beta: f32) -> Self {
         let part = &tris[start..end];
@@ -231,15 +244,7 @@ impl Node {
         } else {
             part.iter().map(|&[a, b, c]| a + b + c).sum::<Vec3>() / (3 * part.len()) as f32
         };
-        let mut node = Node {
-            center,
-            far_radius: 0.0,
-            dipole: Vec3::ZERO,
-            first_moment: Mat3::ZERO,
-            second_moment: [Mat3::ZERO; 3],
-            first: start as u32,
-            count: (end - start) as u32,
-        };
+        let mut node = Node::zero(center, start as u32, (end - start) as u32);
         let mut radius2 = 0.0f32;
         for &[a, b, c] in part {
             let [a, b, c] = [a - center, b - center, c - center];
@@ -270,15 +275,7 @@ impl Node {
         } else {
             0.5 * (children[0].center + children[1].center)
         };
-        let mut node = Node {
-            center,
-            far_radius: 0.0,
-            dipole: Vec3::ZERO,
-            first_moment: Mat3::ZERO,
-            second_moment: [Mat3::ZERO; 3],
-            first,
-            count: 0,
-        };
+        let mut node = Node::zero(center, first, 0);
         for child in children {
             // Shift the moments from the child's centre by s = c_child − center:
             // ∫ n (δ + s)ᵀ = M + d sᵀ, ∫ nᵢ (δ + s)(δ + s)ᵀ = Sᵢ + Mᵢ sᵀ + s Mᵢᵀ + dᵢ s sᵀ.
