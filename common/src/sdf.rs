@@ -245,11 +245,15 @@ impl MeshSdf {
 
     /// Signed distance at `p` (positive inside); NaN for a non-finite `p`.
     pub fn signed_distance(&self, p: Vec3) -> f32 {
-        let Some(hit) = self.closest(p) else { return f32::NAN };
+        self.closest(p).map_or(f32::NAN, |hit| self.signed(p, &hit))
+    }
+
+    /// The signed distance at `p` given its nearest point `hit`.
+    fn signed(&self, p: Vec3, hit: &ClosestPoint) -> f32 {
         let distance = hit.distance_squared.sqrt();
         let inside = match &self.sign {
             Sign::Winding(wn) => wn.is_inside(p),
-            Sign::Pseudonormal(normals) => Self::pseudonormal_inside(normals, p, &hit),
+            Sign::Pseudonormal(normals) => Self::pseudonormal_inside(normals, p, hit),
         };
         if inside { distance } else { -distance }
     }
@@ -333,6 +337,18 @@ pub fn mesh_sdf_grid(
 impl Field3 for MeshSdf {
     fn value(&self, p: Vec3) -> f32 {
         self.signed_distance(p)
+    }
+
+    /// Batch evaluation with coherent nearest-point queries
+    /// ([`TriangleBvh::closest_many`]); for whole lattices
+    /// [`MeshSdf::sample_lattice`] is much faster.
+    fn values(&self, points: &[Vec3], out: &mut [f32]) {
+        assert_eq!(points.len(), out.len(), "values: points and out differ in length");
+        let mut hits = vec![None; points.len()];
+        self.bvh.closest_many(points, &mut hits);
+        for ((o, &p), hit) in out.iter_mut().zip(points).zip(&hits) {
+            *o = hit.map_or(f32::NAN, |hit| self.signed(p, &hit));
+        }
     }
 
     fn bounds(&self) -> Option<Aabb> {
@@ -465,6 +481,9 @@ mod tests {
                 let sdf = MeshSdf::with_settings(&mesh, SdfSettings::default().with_sign(sign)).unwrap();
                 assert_eq!(sdf.is_closed(), closed);
                 let grid = sdf.sample_grid(&mesh.bounds().padded(0.15), 21).unwrap();
+                // The generic grid fill goes through `Field3::values`.
+                let filled = Grid3::sample_box(&sdf, &mesh.bounds().padded(0.15), 21).unwrap();
+                assert!(grid.data().iter().zip(filled.data()).all(|(a, b)| (a - b).abs() < 1e-5));
                 for (index, &got) in grid.data().iter().enumerate() {
                     let n = grid.node_of(index);
                     let p = grid.position(n.x, n.y, n.z);
