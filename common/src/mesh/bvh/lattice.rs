@@ -2,12 +2,13 @@
 //! ([`TriangleBvh::nearest_on_lattice`]), much faster than one tree descent
 //! per node.
 //!
-//! The lattice is cut into blocks of 8³ nodes. For a block with
-//! centre `c`, one tree query gives the exact distance `d(c)`. Since the
-//! distance is 1-Lipschitz, every node `x` of the block has `d(x) ≤ d(c) +
-//! |x − c|`, and a triangle `T` nearest to `x` satisfies `dist(T, c) ≤ d(x)
-//! + |x − c| ≤ d(c) + 2r` where `r` bounds `|x − c|`. One range query
-//! collects those candidates with their exact distances `e_T = dist(T, c)`,
+//! The lattice is cut into blocks of 8³ nodes. For a block with centre
+//! `c`, one tree query gives the exact distance `d(c)`. Since the distance
+//! is 1-Lipschitz, every node `x` of the block has `d(x) ≤ d(c) + |x − c|`,
+//! and a triangle `T` nearest to `x` satisfies
+//! `dist(T, c) ≤ d(x) + |x − c| ≤ d(c) + 2r` where `r` bounds `|x − c|`. One
+//! range query collects those candidates with their exact distances
+//! `e_T = dist(T, c)`,
 //! sorted by `e_T`. Each half of the block along every axis (a sub-block
 //! with centre `c'` and radius `r'`) then narrows the list the same way to
 //! the triangles within `d(c') + 2r'` of `c'`, found among the block's
