@@ -1,4 +1,5 @@
-//! Benchmarks of the shared core: marching cubes, grid fill, mesh parsing.
+//! Benchmarks of the shared core: marching cubes, grid fill, mesh parsing,
+//! mesh signed distance.
 //!
 //! `cargo bench -p isomorph-benches --bench common -- marching_cubes/torus/256`
 
@@ -8,7 +9,9 @@ use isomorph_benches::{data_path, torus, torus_grid};
 use isomorph_common::Grid3;
 use isomorph_common::alignment::Moments;
 use isomorph_common::marching_cubes::marching_cubes;
+use isomorph_common::mesh::bvh::Lattice;
 use isomorph_common::mesh::io::{MeshFormat, read_mesh, read_mesh_from};
+use isomorph_common::sdf::MeshSdf;
 use std::hint::black_box;
 use std::io::Cursor;
 
@@ -63,5 +66,20 @@ fn moments(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, marching_cubes_torus, grid_fill_torus, mesh_io_bunny, moments);
+/// Exact signed distance (winding-number sign) of the bunny on `n³` nodes
+/// spanning its bounding box padded 10 % per side, tree builds included.
+fn mesh_sdf_bunny(c: &mut Criterion) {
+    let mut group = c.benchmark_group("mesh_sdf/bunny");
+    group.sample_size(10);
+    let mesh = read_mesh(data_path("bunny.ply")).expect("bunny in data/");
+    let n = 128u32;
+    let lattice = Lattice::spanning(&mesh.bounds().padded(0.1), UVec3::splat(n));
+    group.throughput(Throughput::Elements(u64::from(n).pow(3)));
+    group.bench_function(BenchmarkId::from_parameter(n), |b| {
+        b.iter(|| MeshSdf::new(black_box(&mesh)).unwrap().sample_lattice(&lattice))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, marching_cubes_torus, grid_fill_torus, mesh_io_bunny, moments, mesh_sdf_bunny);
 criterion_main!(benches);

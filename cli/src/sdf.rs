@@ -65,9 +65,11 @@ pub fn run(args: &SdfArgs) -> anyhow::Result<()> {
 }
 
 /// The signed distance grid (positive inside) of `input` over `bounds` with
-/// `res` nodes along the longest edge: every node sampled from the input's
-/// field. The one place to swap in a faster mesh distance volume or CSG
-/// scan conversion.
+/// `res` nodes along the longest edge: a mesh through the exact lattice
+/// distance (winding-number sign), a built-in shape sampled from its field.
 fn distance_grid(input: &Input, bounds: &Aabb, res: u32) -> anyhow::Result<Grid3<f32>> {
-    Ok(Grid3::sample_box(input.field(), bounds, res)?)
+    Ok(match input {
+        Input::Mesh(_, sdf) => sdf.sample_grid(bounds, res)?,
+        Input::Builtin(shape) => Grid3::sample_box(shape, bounds, res)?,
+    })
 }

@@ -4,6 +4,7 @@ pub mod bvh;
 pub mod distance;
 pub mod io;
 pub mod metrics;
+pub mod winding;
 
 use crate::Aabb;
 use glam::{Affine3A, Vec3};

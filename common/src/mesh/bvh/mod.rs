@@ -21,6 +21,10 @@
 //! Detection* §5.1.5) in `f32` was measured to err by up to 4·10⁻³ on
 //! unit-size slivers and so is not used.
 
+pub mod lattice;
+
+pub use lattice::{Lattice, LatticeHit};
+
 use super::TriMesh;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -738,6 +742,14 @@ mod tests {
         let start = std::time::Instant::now();
         bvh.closest_many(&points, &mut out);
         let query = start.elapsed();
+        let start = std::time::Instant::now();
+        let hits = bvh.nearest_on_lattice(&Lattice::spanning(&bounds, glam::UVec3::splat(n as u32))).unwrap();
+        println!("lattice: {:?}", start.elapsed());
+        assert!(
+            hits.iter()
+                .zip(&out)
+                .all(|(h, o)| (h.distance - o.unwrap().distance_squared.sqrt()).abs() < 1e-5)
+        );
         let mean =
             out.iter().map(|o| o.unwrap().distance_squared.sqrt() as f64).sum::<f64>() / out.len() as f64;
         println!(
