@@ -1,7 +1,11 @@
 //! Volume warping with trivariate cubic B-splines after T. J. True, *Volume
 //! Warping*, M.S. thesis, 1992.
-//!
-//! **Status: not implemented yet.** This crate is a placeholder in the
-//! workspace layout; the method is tracked by its own issue (precomputed
-//! B-spline table, antialiased pushforward, local updates, direct
-//! manipulation). It builds on [`isomorph_common`].
+
+pub mod basis;
+mod error;
+pub mod map;
+pub mod table;
+
+pub use error::WarpError;
+pub use map::BSplineMap;
+pub use table::{CoefficientTable, DeformationArray, Evaluation};
