@@ -4,8 +4,12 @@
 pub mod basis;
 mod error;
 pub mod map;
+pub mod pushforward;
 pub mod table;
+pub mod warp;
 
 pub use error::WarpError;
 pub use map::BSplineMap;
+pub use pushforward::{Density, Filter};
 pub use table::{CoefficientTable, DeformationArray, Evaluation};
+pub use warp::{VolumeWarp, WarpSettings};
