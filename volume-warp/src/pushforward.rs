@@ -155,7 +155,8 @@ impl<T: Density> Splat<'_, T> {
             return None;
         }
         // Pass 1: target box of every slab.
-        let slabs: Vec<(u32, u32)> = (lo.z..hi.z).step_by(SLAB as usize).map(|z| (z, (z + SLAB).min(hi.z))).collect();
+        let slabs: Vec<(u32, u32)> =
+            (lo.z..hi.z).step_by(SLAB as usize).map(|z| (z, (z + SLAB).min(hi.z))).collect();
         let ranges: Vec<Option<(IVec3, IVec3)>> =
             slabs.par_iter().map(|&(z0, z1)| self.target_range(lo, hi, z0, z1)).collect();
         // Greedy waves of slabs with disjoint target z-ranges.
@@ -230,10 +231,9 @@ impl<T: Density> Splat<'_, T> {
         let mut last = IVec3::ZERO;
         for axis in 0..3 {
             (first[axis], last[axis]) = match self.filter {
-                Filter::Round => (
-                    (bmin[axis] as i32).max(0),
-                    (bmax[axis] as i32).min(self.target_dims[axis] as i32 - 1),
-                ),
+                Filter::Round => {
+                    ((bmin[axis] as i32).max(0), (bmax[axis] as i32).min(self.target_dims[axis] as i32 - 1))
+                }
                 _ => cover(bmin[axis], bmax[axis], self.target_dims[axis]),
             };
         }
@@ -243,7 +243,16 @@ impl<T: Density> Splat<'_, T> {
     /// Accumulates the slab `z0..z1` of the source box into `part`, the
     /// accumulator's z-layers from `zbase` on.
     #[allow(clippy::too_many_arguments)]
-    fn accumulate(&self, part: &mut Accumulator, zbase: i32, lo: UVec3, hi: UVec3, z0: u32, z1: u32, sign: f32) {
+    fn accumulate(
+        &self,
+        part: &mut Accumulator,
+        zbase: i32,
+        lo: UVec3,
+        hi: UVec3,
+        z0: u32,
+        z1: u32,
+        sign: f32,
+    ) {
         let (tx, ty) = (self.target_dims.x as usize, self.target_dims.y as usize);
         let layers = (part.len() / (tx * ty)) as i32;
         let pad = Vec3::splat(self.pad as f32);
@@ -251,7 +260,8 @@ impl<T: Density> Splat<'_, T> {
         for g in z0..z1 {
             for f in lo.y..hi.y {
                 for e in lo.x..hi.x {
-                    let n = e as usize + src_dims.x as usize * (f as usize + src_dims.y as usize * g as usize);
+                    let n =
+                        e as usize + src_dims.x as usize * (f as usize + src_dims.y as usize * g as usize);
                     let v = self.source[n].to_f32();
                     if self.filter == Filter::Round {
                         let q = (self.deformation.get(e, f, g) + pad).round();
@@ -270,7 +280,8 @@ impl<T: Density> Splat<'_, T> {
                     let (x0, x1) = cover(blo.x, bhi.x, self.target_dims.x);
                     let (y0, y1) = cover(blo.y, bhi.y, self.target_dims.y);
                     let (z0t, z1t) = cover(blo.z, bhi.z, self.target_dims.z);
-                    let overlap = |q: i32, l: f32, h: f32| (h.min(q as f32 + 0.5) - l.max(q as f32 - 0.5)).max(0.0);
+                    let overlap =
+                        |q: i32, l: f32, h: f32| (h.min(q as f32 + 0.5) - l.max(q as f32 - 0.5)).max(0.0);
                     for qz in z0t..=z1t {
                         let wz = sign * overlap(qz, blo.z, bhi.z);
                         let z = qz - zbase;

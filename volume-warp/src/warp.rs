@@ -2,6 +2,7 @@
 //! deformation mapping array, the accumulated target, and local updates when
 //! control points move.
 
+use crate::manipulate::{Drag, Handle, solve_drag};
 use crate::pushforward::{Density, Filter, Splat, resolve};
 use crate::table::{CoefficientTable, DeformationArray, Evaluation};
 use crate::{BSplineMap, WarpError};
@@ -206,7 +207,8 @@ impl<T: Density> VolumeWarp<T> {
     /// The local update for one validated control point move.
     fn move_one(&mut self, c: UVec3, position: Vec3) -> usize {
         let (lo, hi) = self.map.influence_box(c);
-        let moved = |map: &mut BSplineMap| map.set_control_point(c, position).expect("validated by the caller");
+        let moved =
+            |map: &mut BSplineMap| map.set_control_point(c, position).expect("validated by the caller");
         if lo.cmpge(hi).any() {
             moved(&mut self.map);
             return 0;
@@ -234,6 +236,19 @@ impl<T: Density> VolumeWarp<T> {
         }
         let n = hi - lo;
         n.x as usize * n.y as usize * n.z as usize
+    }
+
+    /// Direct manipulation (thesis §6): moves the control points by the
+    /// minimum-norm change that sends each handle's source point to its goal
+    /// ([`solve_drag`]), optionally only those within `influence` voxels of a
+    /// handle, and updates the target locally.
+    ///
+    /// # Errors
+    /// As [`solve_drag`].
+    pub fn drag(&mut self, handles: &[Handle], influence: Option<f32>) -> Result<Drag, WarpError> {
+        let drag = solve_drag(&self.map, handles, influence)?;
+        self.move_control_points(&drag.moves)?;
+        Ok(drag)
     }
 
     /// Inclusive target voxel box containing the image of the source voxels
@@ -290,7 +305,8 @@ impl<T: Density> VolumeWarp<T> {
                 for y in lo.y..=hi.y {
                     for x in lo.x..=hi.x {
                         let goal = Vec3::new(x as f32, y as f32, z as f32) - pad;
-                        let value = map.inverse(goal, NEWTON_TOLERANCE, NEWTON_ITERATIONS).map_or(0.0, sample);
+                        let value =
+                            map.inverse(goal, NEWTON_TOLERANCE, NEWTON_ITERATIONS).map_or(0.0, sample);
                         out[x as usize + y as usize * dims.x as usize] = T::from_f32(value);
                     }
                 }
@@ -435,7 +451,7 @@ mod tests {
             }
         }
         let mass = |g: &Grid3<u8>| g.data().iter().map(|&v| f64::from(v)).sum::<f64>();
-        for (filter, tolerance) in [(Filter::Box, 0.02), (Filter::Backward, 0.01), (Filter::Round, 0.1)] {
+        for (filter, tolerance) in [(Filter::Box, 0.005), (Filter::Backward, 0.005), (Filter::Round, 0.005)] {
             let w = VolumeWarp::with_map(dens.clone(), map.clone(), settings(8, 6, filter)).unwrap();
             let ratio = mass(w.target()) / mass(&dens);
             assert!((ratio - 1.0).abs() < tolerance, "{filter:?}: mass ratio {ratio}");
@@ -445,10 +461,16 @@ mod tests {
     #[test]
     fn bad_inputs_are_typed_errors() {
         let small = noise(UVec3::splat(5), 1);
-        assert!(matches!(VolumeWarp::new(small, WarpSettings::default()), Err(WarpError::LatticeTooFine { .. })));
+        assert!(matches!(
+            VolumeWarp::new(small, WarpSettings::default()),
+            Err(WarpError::LatticeTooFine { .. })
+        ));
         let mut field = noise(UVec3::splat(8), 1);
         field.data_mut()[17] = f32::NAN;
-        assert!(matches!(VolumeWarp::new(field, settings(5, 1, Filter::Box)), Err(WarpError::NonFiniteDensity(17))));
+        assert!(matches!(
+            VolumeWarp::new(field, settings(5, 1, Filter::Box)),
+            Err(WarpError::NonFiniteDensity(17))
+        ));
         let map = BSplineMap::identity(UVec3::splat(9), 5).unwrap();
         assert!(matches!(
             VolumeWarp::with_map(noise(UVec3::splat(8), 1), map, settings(5, 1, Filter::Box)),
@@ -459,6 +481,25 @@ mod tests {
         let bad = [(UVec3::ONE, Vec3::ONE), (UVec3::new(9, 0, 0), Vec3::ONE)];
         assert!(matches!(w.move_control_points(&bad), Err(WarpError::ControlOutOfRange { .. })));
         assert_eq!(w.target(), &before, "a failed move leaves the warp unchanged");
+    }
+
+    #[test]
+    fn dragging_a_volume_point_moves_its_density() {
+        // Drag the centre of a small ball 3 voxels along x: the ball's peak
+        // follows, and the result equals a full warp by the solved map.
+        let dims = UVec3::splat(24);
+        let dens = ball(dims, Vec3::new(10.0, 12.0, 12.0), 2.5);
+        let mut w = VolumeWarp::new(dens.clone(), settings(7, 2, Filter::Box)).unwrap();
+        let handle = Handle { point: Vec3::new(10.0, 12.0, 12.0), goal: Vec3::new(13.0, 12.0, 12.0) };
+        let drag = w.drag(&[handle], None).unwrap();
+        assert!(drag.residual < 1e-3);
+        assert!((w.map().eval(handle.point) - handle.goal).length() < 1e-3);
+        let moved = at(&w, UVec3::new(13, 12, 12), IVec3::ZERO);
+        assert!(moved > 200, "density at the goal {moved}");
+        let full = VolumeWarp::with_map(dens, w.map().clone(), settings(7, 2, Filter::Box)).unwrap();
+        for (a, b) in w.target().data().iter().zip(full.target().data()) {
+            assert!(a.abs_diff(*b) <= 1, "local {a} vs full {b}");
+        }
     }
 
     fn check_local_update(filter: Filter, moves: &[(UVec3, Vec3)], seed: u64) {
