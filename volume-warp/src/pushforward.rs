@@ -102,6 +102,18 @@ pub(crate) type Accumulator = [[f32; 2]];
 pub(crate) fn voxel_box(m: &DeformationArray, e: u32, f: u32, g: u32) -> (Vec3, Vec3) {
     let dims = m.dims();
     let c = m.get(e, f, g);
+    if e > 0 && f > 0 && g > 0 && e + 1 < dims.x && f + 1 < dims.y && g + 1 < dims.z {
+        // Interior voxel: the six face centres are midpoints with the six
+        // neighbours; min/max of the midpoints = midpoint of the min/max.
+        let points = m.points();
+        let n = m.index(e, f, g);
+        let (sy, sz) = (dims.x as usize, dims.x as usize * dims.y as usize);
+        let (xm, xp, ym, yp, zm, zp) =
+            (points[n - 1], points[n + 1], points[n - sy], points[n + sy], points[n - sz], points[n + sz]);
+        let lo = xm.min(xp).min(ym.min(yp)).min(zm.min(zp));
+        let hi = xm.max(xp).max(ym.max(yp)).max(zm.max(zp));
+        return (0.5 * (c + lo), 0.5 * (c + hi));
+    }
     let mut lo = Vec3::splat(f32::INFINITY);
     let mut hi = Vec3::splat(f32::NEG_INFINITY);
     let p = UVec3::new(e, f, g);
@@ -206,35 +218,69 @@ impl<T: Density> Splat<'_, T> {
         touched.map(|(a, b)| (a.as_uvec3(), b.as_uvec3()))
     }
 
-    /// Inclusive target voxel box touched by the source slab `z0..z1`.
+    /// Inclusive target voxel box touched by the source slab `z0..z1` (of
+    /// the source box `[lo, hi)`). Every interior face centre is a midpoint
+    /// of two mapped voxel centres of the slab grown by one voxel, so the
+    /// bounds of those centres bound it; only voxels on the volume's border
+    /// (extrapolated faces) need their boxes computed.
     fn target_range(&self, lo: UVec3, hi: UVec3, z0: u32, z1: u32) -> Option<(IVec3, IVec3)> {
-        let pad = Vec3::splat(self.pad as f32);
+        let m = self.deformation;
+        let dims = m.dims();
+        let round = self.filter == Filter::Round;
+        let (glo, ghi) = if round {
+            (UVec3::new(lo.x, lo.y, z0), UVec3::new(hi.x, hi.y, z1))
+        } else {
+            (
+                UVec3::new(lo.x, lo.y, z0).saturating_sub(UVec3::ONE),
+                (UVec3::new(hi.x, hi.y, z1) + UVec3::ONE).min(dims),
+            )
+        };
         let mut bmin = Vec3::splat(f32::INFINITY);
         let mut bmax = Vec3::splat(f32::NEG_INFINITY);
-        for g in z0..z1 {
-            for f in lo.y..hi.y {
-                for e in lo.x..hi.x {
-                    let (a, b) = match self.filter {
-                        Filter::Round => {
-                            let p = self.deformation.get(e, f, g).round();
-                            (p, p)
-                        }
-                        _ => voxel_box(self.deformation, e, f, g),
-                    };
-                    bmin = bmin.min(a);
-                    bmax = bmax.max(b);
+        for g in glo.z..ghi.z {
+            for f in glo.y..ghi.y {
+                let row = m.index(glo.x, f, g);
+                for &p in &m.points()[row..row + (ghi.x - glo.x) as usize] {
+                    bmin = bmin.min(p);
+                    bmax = bmax.max(p);
                 }
             }
         }
+        if !round {
+            let border = |e: u32, f: u32, g: u32| {
+                e == 0 || f == 0 || g == 0 || e + 1 == dims.x || f + 1 == dims.y || g + 1 == dims.z
+            };
+            for g in z0..z1 {
+                for f in lo.y..hi.y {
+                    let whole_row = g == 0 || f == 0 || g + 1 == dims.z || f + 1 == dims.y;
+                    let mut visit = |e: u32| {
+                        if border(e, f, g) {
+                            let (a, b) = voxel_box(m, e, f, g);
+                            bmin = bmin.min(a);
+                            bmax = bmax.max(b);
+                        }
+                    };
+                    if whole_row {
+                        (lo.x..hi.x).for_each(&mut visit);
+                    } else {
+                        visit(lo.x);
+                        visit(hi.x - 1);
+                    }
+                }
+            }
+        }
+        let pad = Vec3::splat(self.pad as f32);
         let (bmin, bmax) = (bmin + pad, bmax + pad);
         let mut first = IVec3::ZERO;
         let mut last = IVec3::ZERO;
         for axis in 0..3 {
-            (first[axis], last[axis]) = match self.filter {
-                Filter::Round => {
-                    ((bmin[axis] as i32).max(0), (bmax[axis] as i32).min(self.target_dims[axis] as i32 - 1))
-                }
-                _ => cover(bmin[axis], bmax[axis], self.target_dims[axis]),
+            (first[axis], last[axis]) = if round {
+                (
+                    (bmin[axis].round() as i32).max(0),
+                    (bmax[axis].round() as i32).min(self.target_dims[axis] as i32 - 1),
+                )
+            } else {
+                cover(bmin[axis], bmax[axis], self.target_dims[axis])
             };
         }
         first.cmple(last).all().then_some((first, last))

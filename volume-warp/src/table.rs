@@ -20,7 +20,7 @@
 
 use crate::basis::weight_poly;
 use crate::{BSplineMap, WarpError};
-use glam::{UVec3, Vec3};
+use glam::{UVec3, Vec3, Vec4};
 use rayon::prelude::*;
 
 /// The precomputed basis-weight products of eq. 4: for each of the `G³`
@@ -198,36 +198,38 @@ fn table_slice(
     let controls = map.controls();
     let disp = map.displacements();
     let (c, g_bar) = (g / gran.z, g % gran.z);
-    let mut dx = [0.0f32; 64];
-    let mut dy = [0.0f32; 64];
-    let mut dz = [0.0f32; 64];
+    let mut dx = [Vec4::ZERO; 16];
+    let mut dy = [Vec4::ZERO; 16];
+    let mut dz = [Vec4::ZERO; 16];
     let mut b = lo.y / gran.y;
     while b * gran.y < hi.y {
         let f_range = (b * gran.y).max(lo.y)..((b + 1) * gran.y).min(hi.y);
         let mut a = lo.x / gran.x;
         while a * gran.x < hi.x {
             let e_range = (a * gran.x).max(lo.x)..((a + 1) * gran.x).min(hi.x);
+            // The region's 64 control displacements, four per SIMD lane group.
             for n in 0..64 {
                 let idx = (a + (n as u32 & 3)) as usize
                     + controls.x as usize
                         * ((b + ((n as u32 >> 2) & 3)) as usize
                             + controls.y as usize * (c + (n as u32 >> 4)) as usize);
-                dx[n] = disp[idx].x;
-                dy[n] = disp[idx].y;
-                dz[n] = disp[idx].z;
+                dx[n / 4][n % 4] = disp[idx].x;
+                dy[n / 4][n % 4] = disp[idx].y;
+                dz[n / 4][n % 4] = disp[idx].z;
             }
             for f in f_range.clone() {
                 let row = nx * f as usize;
                 for e in e_range.clone() {
                     let w = table.entry(e - a * gran.x, f - b * gran.y, g_bar);
-                    let (mut sx, mut sy, mut sz) = ([0.0f32; 8], [0.0f32; 8], [0.0f32; 8]);
-                    for n in 0..64 {
-                        sx[n & 7] += w[n] * dx[n];
-                        sy[n & 7] += w[n] * dy[n];
-                        sz[n & 7] += w[n] * dz[n];
+                    let (mut sx, mut sy, mut sz) = (Vec4::ZERO, Vec4::ZERO, Vec4::ZERO);
+                    for (l, w4) in w.chunks_exact(4).enumerate() {
+                        let w4 = Vec4::from_slice(w4);
+                        sx += w4 * dx[l];
+                        sy += w4 * dy[l];
+                        sz += w4 * dz[l];
                     }
                     slice[row + e as usize] = Vec3::new(e as f32, f as f32, g as f32)
-                        + Vec3::new(sx.iter().sum(), sy.iter().sum(), sz.iter().sum());
+                        + Vec3::new(sx.element_sum(), sy.element_sum(), sz.element_sum());
                 }
             }
             a += 1;
