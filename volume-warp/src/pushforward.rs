@@ -144,9 +144,17 @@ pub(crate) fn voxel_box(m: &DeformationArray, e: u32, f: u32, g: u32) -> (Vec3, 
 /// the interval `[lo, hi]` in target coordinates, clipped to `0..n`.
 #[inline]
 fn cover(lo: f32, hi: f32, n: u32) -> (i32, i32) {
-    let first = ((lo + 0.5).floor() as i32).max(0);
-    let last = (((hi + 0.5).ceil() as i32) - 1).min(n as i32 - 1);
+    let first = floor(lo + 0.5).max(0);
+    let last = (-floor(-(hi + 0.5)) - 1).min(n as i32 - 1);
     (first, last)
+}
+
+/// `⌊x⌋` as an integer without a libm call (SSE2 has no rounding
+/// instruction); saturates for huge `x`, which the callers clamp anyway.
+#[inline]
+fn floor(x: f32) -> i32 {
+    let i = x as i32;
+    i - i32::from(x < i as f32)
 }
 
 /// What one accumulation pass reads.
@@ -276,8 +284,8 @@ impl<T: Density> Splat<'_, T> {
         for axis in 0..3 {
             (first[axis], last[axis]) = if round {
                 (
-                    (bmin[axis].round() as i32).max(0),
-                    (bmax[axis].round() as i32).min(self.target_dims[axis] as i32 - 1),
+                    floor(bmin[axis] + 0.5).max(0),
+                    floor(bmax[axis] + 0.5).min(self.target_dims[axis] as i32 - 1),
                 )
             } else {
                 cover(bmin[axis], bmax[axis], self.target_dims[axis])
@@ -303,6 +311,7 @@ impl<T: Density> Splat<'_, T> {
         let layers = (part.len() / (tx * ty)) as i32;
         let pad = Vec3::splat(self.pad as f32);
         let src_dims = self.deformation.dims();
+        let (mut ox, mut oy) = (Vec::with_capacity(8), Vec::with_capacity(8));
         for g in z0..z1 {
             for f in lo.y..hi.y {
                 for e in lo.x..hi.x {
@@ -310,9 +319,9 @@ impl<T: Density> Splat<'_, T> {
                         e as usize + src_dims.x as usize * (f as usize + src_dims.y as usize * g as usize);
                     let v = self.source[n].to_f32();
                     if self.filter == Filter::Round {
-                        let q = (self.deformation.get(e, f, g) + pad).round();
-                        let qi = q.as_ivec3();
-                        if q.cmpge(Vec3::ZERO).all() && qi.cmplt(self.target_dims.as_ivec3()).all() {
+                        let q = self.deformation.get(e, f, g) + pad + 0.5;
+                        let qi = IVec3::new(floor(q.x), floor(q.y), floor(q.z));
+                        if qi.cmpge(IVec3::ZERO).all() && qi.cmplt(self.target_dims.as_ivec3()).all() {
                             let z = qi.z - zbase;
                             debug_assert!((0..layers).contains(&z));
                             let cell = &mut part[qi.x as usize + tx * (qi.y as usize + ty * z as usize)];
@@ -326,20 +335,28 @@ impl<T: Density> Splat<'_, T> {
                     let (x0, x1) = cover(blo.x, bhi.x, self.target_dims.x);
                     let (y0, y1) = cover(blo.y, bhi.y, self.target_dims.y);
                     let (z0t, z1t) = cover(blo.z, bhi.z, self.target_dims.z);
+                    if x0 > x1 || y0 > y1 || z0t > z1t {
+                        continue;
+                    }
+                    // Overlap lengths per axis, then their products.
                     let overlap =
                         |q: i32, l: f32, h: f32| (h.min(q as f32 + 0.5) - l.max(q as f32 - 0.5)).max(0.0);
+                    ox.clear();
+                    ox.extend((x0..=x1).map(|q| overlap(q, blo.x, bhi.x)));
+                    oy.clear();
+                    oy.extend((y0..=y1).map(|q| overlap(q, blo.y, bhi.y)));
+                    let sv = sign * v;
                     for qz in z0t..=z1t {
-                        let wz = sign * overlap(qz, blo.z, bhi.z);
+                        let wz = overlap(qz, blo.z, bhi.z);
                         let z = qz - zbase;
                         debug_assert!((0..layers).contains(&z));
-                        for qy in y0..=y1 {
-                            let wyz = wz * overlap(qy, blo.y, bhi.y);
-                            let row = tx * (qy as usize + ty * z as usize);
-                            for qx in x0..=x1 {
-                                let w = wyz * overlap(qx, blo.x, bhi.x);
-                                let cell = &mut part[row + qx as usize];
-                                cell[0] += w;
-                                cell[1] += w * v;
+                        for (qy, &wy) in (y0..).zip(oy.iter()) {
+                            let wyz = wz * wy;
+                            let row = tx * (qy as usize + ty * z as usize) + x0 as usize;
+                            for (cell, &wx) in part[row..row + ox.len()].iter_mut().zip(ox.iter()) {
+                                let w = wyz * wx;
+                                cell[0] += sign * w;
+                                cell[1] += sv * w;
                             }
                         }
                     }
