@@ -35,7 +35,7 @@
 //! count, so neither does the result.
 
 use crate::table::DeformationArray;
-use glam::{IVec3, UVec3, Vec3};
+use glam::{IVec3, UVec3, Vec3A};
 use isomorph_common::Grid3;
 use rayon::prelude::*;
 
@@ -88,6 +88,11 @@ impl Density for f32 {
     const ZERO: Self = 0.0;
 }
 
+/// Target voxels per axis a source voxel's box may span in the
+/// accumulation fast path (boxes up to 3 voxels wide; larger ones, from
+/// strong stretching, take the general loop).
+const MAX_SPAN: usize = 4;
+
 /// Source z-slices per accumulation slab.
 const SLAB: u32 = 8;
 
@@ -98,8 +103,8 @@ pub(crate) type Accumulator = [[f32; 2]];
 /// The box filter's approximate image of source voxel `(e, f, g)`: the
 /// bounding box of its six transformed face centres (source voxel units,
 /// before padding).
-#[inline]
-pub(crate) fn voxel_box(m: &DeformationArray, e: u32, f: u32, g: u32) -> (Vec3, Vec3) {
+#[inline(always)]
+pub(crate) fn voxel_box(m: &DeformationArray, e: u32, f: u32, g: u32) -> (Vec3A, Vec3A) {
     let dims = m.dims();
     let c = m.get(e, f, g);
     if e > 0 && f > 0 && g > 0 && e + 1 < dims.x && f + 1 < dims.y && g + 1 < dims.z {
@@ -114,8 +119,8 @@ pub(crate) fn voxel_box(m: &DeformationArray, e: u32, f: u32, g: u32) -> (Vec3, 
         let hi = xm.max(xp).max(ym.max(yp)).max(zm.max(zp));
         return (0.5 * (c + lo), 0.5 * (c + hi));
     }
-    let mut lo = Vec3::splat(f32::INFINITY);
-    let mut hi = Vec3::splat(f32::NEG_INFINITY);
+    let mut lo = Vec3A::splat(f32::INFINITY);
+    let mut hi = Vec3A::splat(f32::NEG_INFINITY);
     let p = UVec3::new(e, f, g);
     for axis in 0..3 {
         let neighbour = |d: i32| {
@@ -127,12 +132,12 @@ pub(crate) fn voxel_box(m: &DeformationArray, e: u32, f: u32, g: u32) -> (Vec3, 
         let face_minus = match (minus, plus) {
             (Some(n), _) => 0.5 * (c + n),
             (None, Some(n)) => c - 0.5 * (n - c),
-            (None, None) => c - 0.5 * Vec3::AXES[axis],
+            (None, None) => c - 0.5 * Vec3A::AXES[axis],
         };
         let face_plus = match (plus, minus) {
             (Some(n), _) => 0.5 * (c + n),
             (None, Some(n)) => c + 0.5 * (c - n),
-            (None, None) => c + 0.5 * Vec3::AXES[axis],
+            (None, None) => c + 0.5 * Vec3A::AXES[axis],
         };
         lo = lo.min(face_minus).min(face_plus);
         hi = hi.max(face_minus).max(face_plus);
@@ -243,8 +248,8 @@ impl<T: Density> Splat<'_, T> {
                 (UVec3::new(hi.x, hi.y, z1) + UVec3::ONE).min(dims),
             )
         };
-        let mut bmin = Vec3::splat(f32::INFINITY);
-        let mut bmax = Vec3::splat(f32::NEG_INFINITY);
+        let mut bmin = Vec3A::splat(f32::INFINITY);
+        let mut bmax = Vec3A::splat(f32::NEG_INFINITY);
         for g in glo.z..ghi.z {
             for f in glo.y..ghi.y {
                 let row = m.index(glo.x, f, g);
@@ -277,7 +282,7 @@ impl<T: Density> Splat<'_, T> {
                 }
             }
         }
-        let pad = Vec3::splat(self.pad as f32);
+        let pad = Vec3A::splat(self.pad as f32);
         let (bmin, bmax) = (bmin + pad, bmax + pad);
         let mut first = IVec3::ZERO;
         let mut last = IVec3::ZERO;
@@ -309,9 +314,8 @@ impl<T: Density> Splat<'_, T> {
     ) {
         let (tx, ty) = (self.target_dims.x as usize, self.target_dims.y as usize);
         let layers = (part.len() / (tx * ty)) as i32;
-        let pad = Vec3::splat(self.pad as f32);
+        let pad = Vec3A::splat(self.pad as f32);
         let src_dims = self.deformation.dims();
-        let (mut ox, mut oy) = (Vec::with_capacity(8), Vec::with_capacity(8));
         for g in z0..z1 {
             for f in lo.y..hi.y {
                 for e in lo.x..hi.x {
@@ -338,25 +342,48 @@ impl<T: Density> Splat<'_, T> {
                     if x0 > x1 || y0 > y1 || z0t > z1t {
                         continue;
                     }
-                    // Overlap lengths per axis, then their products.
+                    // Overlap lengths per axis (at most MAX_SPAN target voxels
+                    // per axis in the fast path), then their products.
                     let overlap =
                         |q: i32, l: f32, h: f32| (h.min(q as f32 + 0.5) - l.max(q as f32 - 0.5)).max(0.0);
-                    ox.clear();
-                    ox.extend((x0..=x1).map(|q| overlap(q, blo.x, bhi.x)));
-                    oy.clear();
-                    oy.extend((y0..=y1).map(|q| overlap(q, blo.y, bhi.y)));
+                    let (nxs, nys) = ((x1 - x0 + 1) as usize, (y1 - y0 + 1) as usize);
                     let sv = sign * v;
-                    for qz in z0t..=z1t {
-                        let wz = overlap(qz, blo.z, bhi.z);
-                        let z = qz - zbase;
-                        debug_assert!((0..layers).contains(&z));
-                        for (qy, &wy) in (y0..).zip(oy.iter()) {
-                            let wyz = wz * wy;
-                            let row = tx * (qy as usize + ty * z as usize) + x0 as usize;
-                            for (cell, &wx) in part[row..row + ox.len()].iter_mut().zip(ox.iter()) {
-                                let w = wyz * wx;
-                                cell[0] += sign * w;
-                                cell[1] += sv * w;
+                    if nxs <= MAX_SPAN && nys <= MAX_SPAN {
+                        let mut ox = [0.0f32; MAX_SPAN];
+                        let mut oy = [0.0f32; MAX_SPAN];
+                        for (n, o) in ox[..nxs].iter_mut().enumerate() {
+                            *o = overlap(x0 + n as i32, blo.x, bhi.x);
+                        }
+                        for (n, o) in oy[..nys].iter_mut().enumerate() {
+                            *o = overlap(y0 + n as i32, blo.y, bhi.y);
+                        }
+                        for qz in z0t..=z1t {
+                            let wz = overlap(qz, blo.z, bhi.z);
+                            let z = qz - zbase;
+                            debug_assert!((0..layers).contains(&z));
+                            for (dy, &wy) in oy[..nys].iter().enumerate() {
+                                let wyz = wz * wy;
+                                let row = tx * ((y0 as usize + dy) + ty * z as usize) + x0 as usize;
+                                for (cell, &wx) in part[row..row + nxs].iter_mut().zip(&ox[..nxs]) {
+                                    let w = wyz * wx;
+                                    cell[0] += sign * w;
+                                    cell[1] += sv * w;
+                                }
+                            }
+                        }
+                    } else {
+                        for qz in z0t..=z1t {
+                            let wz = overlap(qz, blo.z, bhi.z);
+                            let z = qz - zbase;
+                            for qy in y0..=y1 {
+                                let wyz = wz * overlap(qy, blo.y, bhi.y);
+                                let row = tx * (qy as usize + ty * z as usize);
+                                for qx in x0..=x1 {
+                                    let w = wyz * overlap(qx, blo.x, bhi.x);
+                                    let cell = &mut part[row + qx as usize];
+                                    cell[0] += sign * w;
+                                    cell[1] += sv * w;
+                                }
                             }
                         }
                     }

@@ -20,7 +20,7 @@
 
 use crate::basis::weight_poly;
 use crate::{BSplineMap, WarpError};
-use glam::{UVec3, Vec3, Vec4};
+use glam::{UVec3, Vec3, Vec3A, Vec4};
 use rayon::prelude::*;
 
 /// The precomputed basis-weight products of eq. 4: for each of the `G³`
@@ -95,11 +95,12 @@ pub enum Evaluation {
 }
 
 /// The deformation mapping array: `B(e, f, g)` for every source voxel
-/// centre, in source voxel coordinates, x-fastest.
+/// centre, in source voxel coordinates, x-fastest (16-byte [`Vec3A`]s, so
+/// the pushforward's loads and min/max are single SIMD instructions).
 #[derive(Debug, Clone, PartialEq)]
 pub struct DeformationArray {
     dims: UVec3,
-    points: Vec<Vec3>,
+    points: Vec<Vec3A>,
 }
 
 impl DeformationArray {
@@ -108,11 +109,11 @@ impl DeformationArray {
     /// # Errors
     /// [`WarpError::Grid`] when the array does not fit the memory limit.
     pub fn identity(dims: UVec3) -> Result<Self, WarpError> {
-        let grid = isomorph_common::Grid3::new(dims, Vec3::ZERO, 1.0, Vec3::ZERO)?;
+        let grid = isomorph_common::Grid3::new(dims, Vec3::ZERO, 1.0, Vec3A::ZERO)?;
         let mut points = grid.into_data();
         let (nx, ny) = (dims.x as usize, dims.y as usize);
         points.par_iter_mut().enumerate().for_each(|(n, p)| {
-            *p = Vec3::new((n % nx) as f32, ((n / nx) % ny) as f32, (n / (nx * ny)) as f32);
+            *p = Vec3A::new((n % nx) as f32, ((n / nx) % ny) as f32, (n / (nx * ny)) as f32);
         });
         Ok(Self { dims, points })
     }
@@ -139,13 +140,13 @@ impl DeformationArray {
     }
 
     /// The mapped points, x-fastest.
-    pub fn points(&self) -> &[Vec3] {
+    pub fn points(&self) -> &[Vec3A] {
         &self.points
     }
 
     /// The image of voxel `(e, f, g)`.
     #[inline]
-    pub fn get(&self, e: u32, f: u32, g: u32) -> Vec3 {
+    pub fn get(&self, e: u32, f: u32, g: u32) -> Vec3A {
         self.points[self.index(e, f, g)]
     }
 
@@ -174,7 +175,7 @@ impl DeformationArray {
                 for f in lo.y..hi.y {
                     for e in lo.x..hi.x {
                         slice[e as usize + nx * f as usize] =
-                            map.eval(Vec3::new(e as f32, f as f32, g as f32));
+                            map.eval(Vec3::new(e as f32, f as f32, g as f32)).into();
                     }
                 }
             }),
@@ -188,7 +189,7 @@ impl DeformationArray {
 fn table_slice(
     map: &BSplineMap,
     table: &CoefficientTable,
-    slice: &mut [Vec3],
+    slice: &mut [Vec3A],
     g: u32,
     lo: UVec3,
     hi: UVec3,
@@ -228,8 +229,8 @@ fn table_slice(
                         sy += w4 * dy[l];
                         sz += w4 * dz[l];
                     }
-                    slice[row + e as usize] = Vec3::new(e as f32, f as f32, g as f32)
-                        + Vec3::new(sx.element_sum(), sy.element_sum(), sz.element_sum());
+                    slice[row + e as usize] = Vec3A::new(e as f32, f as f32, g as f32)
+                        + Vec3A::new(sx.element_sum(), sy.element_sum(), sz.element_sum());
                 }
             }
             a += 1;
@@ -294,7 +295,7 @@ mod tests {
             .fold(0.0, f32::max);
         assert!(worst < 1e-5, "table vs direct: worst difference {worst} voxels");
         let p = UVec3::new(13, 5, 22);
-        assert!((direct.get(p.x, p.y, p.z) - map.eval(p.as_vec3())).length() == 0.0);
+        assert_eq!(Vec3::from(direct.get(p.x, p.y, p.z)), map.eval(p.as_vec3()));
     }
 
     #[test]

@@ -258,7 +258,7 @@ impl<T: Density> VolumeWarp<T> {
         for g in lo.z..hi.z {
             for f in lo.y..hi.y {
                 for e in lo.x..hi.x {
-                    let p = self.deformation.get(e, f, g);
+                    let p = Vec3::from(self.deformation.get(e, f, g));
                     a = a.min(p);
                     b = b.max(p);
                 }
