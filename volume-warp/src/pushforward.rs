@@ -21,7 +21,7 @@
 //!
 //! **Backward** ([`Filter::Backward`], beyond the thesis): each target voxel
 //! `y` is pulled back, `x = B⁻¹(y)` by Newton iteration from `x = y`
-//! ([`BSplineMap::inverse`]), and the source is sampled trilinearly at `x`
+//! ([`crate::BSplineMap::inverse`]), and the source is sampled trilinearly at `x`
 //! (zero outside the source's voxels). No holes and no blockiness where the
 //! map stretches, smoother than the box filter on mild warps; but it samples
 //! only one preimage, so where the map folds (not injective) it shows one
