@@ -36,8 +36,9 @@
 //! - **Folds** (control points moved so far that `B` is not injective) are
 //!   not rejected: as the thesis says, the box filter handles them by
 //!   averaging overlapping images (weight above one is divided out);
-//!   the backward filter shows one sheet. Check `BSplineMap::jacobian`
-//!   for a non-positive determinant to detect them.
+//!   the backward filter shows one sheet. [`DeformationArray::folded_cells`]
+//!   (via [`VolumeWarp::deformation`]) counts the voxel cells where the map
+//!   folds, so callers can detect and report them.
 //!
 //! # Guarantees
 //! Identity map ⇒ the target equals the source (padded) exactly, for `u8`
