@@ -1,5 +1,5 @@
 //! The `isomorph` command line tool: run the demo, morph shapes and meshes,
-//! inspect meshes, write distance volumes and align shapes. `isomorph --help`
+//! inspect meshes, write distance volumes, align and warp shapes. `isomorph --help`
 //! lists the commands.
 
 mod align;
@@ -9,6 +9,7 @@ mod inputs;
 mod morph;
 mod progress;
 mod sdf;
+mod warp;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -35,6 +36,10 @@ enum Command {
     /// Align a source onto a target by their moments: print the map as JSON
     /// and write the aligned source mesh.
     Align(align::AlignArgs),
+    /// Warp a shape or mesh with True's trivariate B-spline volume warp: drag
+    /// surface points or move control points; writes the warped volume
+    /// (.npy), meshes and a before/after PNG.
+    Warp(warp::WarpArgs),
 }
 
 fn main() -> ExitCode {
@@ -45,6 +50,7 @@ fn main() -> ExitCode {
         Command::Info(args) => info::run(&args),
         Command::Sdf(args) => sdf::run(&args),
         Command::Align(args) => align::run(&args),
+        Command::Warp(args) => warp::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
