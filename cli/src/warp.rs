@@ -41,9 +41,10 @@ pub struct WarpArgs {
     /// Grid nodes along the longest edge of the input's padded box.
     #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(8..=1024))]
     pub res: u32,
-    /// Empty voxels added on every side of the warped volume.
-    #[arg(long, default_value_t = 4)]
-    pub pad: u32,
+    /// Empty voxels added on every side of the warped volume (default: 4
+    /// plus the longest drag or move, so the warped shape stays inside).
+    #[arg(long)]
+    pub pad: Option<u32>,
     /// Output folder: warped.npy (+ .json sidecar), source.obj, warped.obj,
     /// before_after.png.
     #[arg(long)]
@@ -92,7 +93,9 @@ pub fn run(args: &WarpArgs) -> anyhow::Result<()> {
         FilterArg::Round => Filter::Round,
         FilterArg::Backward => Filter::Backward,
     };
-    let settings = WarpSettings { csize: args.csize, pad: args.pad, filter, evaluation: Evaluation::Auto };
+    let longest = args.drags.iter().chain(&args.moves).map(|(_, d)| d.length()).fold(0.0f32, f32::max);
+    let pad = args.pad.unwrap_or(4 + (longest / h).ceil().min(1024.0) as u32);
+    let settings = WarpSettings { csize: args.csize, pad, filter, evaluation: Evaluation::Auto };
     let mut warp = VolumeWarp::new(density.clone(), settings)?;
     let set_up = start.elapsed().as_secs_f64();
     let edit = Instant::now();
