@@ -66,6 +66,9 @@ pub enum WarpError {
     /// (its region of influence excludes every control point that moves it).
     #[error("handle {0} cannot move: no control point inside the region of influence affects it")]
     Unreachable(usize),
+    /// A morph time is NaN or outside `[0, 1]`.
+    #[error("time {0} is outside [0, 1]")]
+    InvalidTime(f32),
     /// A volume could not be allocated.
     #[error(transparent)]
     Grid(#[from] GridError),

@@ -19,6 +19,7 @@
 //! | §5.4 antialiasing box filter, weight normalization | [`pushforward`] ([`Filter::Box`]) |
 //! | §6 direct manipulation (after Hsu et al. 1992) | [`manipulate`] ([`solve_drag`], [`VolumeWarp::drag`]) |
 //! | beyond the thesis: backward resampling by Newton inversion | [`Filter::Backward`], [`BSplineMap::inverse`] |
+//! | the map in world space (`Fn(Vec3) -> Vec3`, approximate inverse), the warp as a [`isomorph_common::Morph`] | [`morph`] ([`WorldMap`], [`WarpMorph`]) |
 //!
 //! # Choices where the thesis is open
 //! - Coordinates are source voxel indices; a lattice of `C` points per axis
@@ -76,6 +77,7 @@ pub mod basis;
 mod error;
 pub mod manipulate;
 pub mod map;
+pub mod morph;
 pub mod pushforward;
 pub mod table;
 pub mod warp;
@@ -83,6 +85,7 @@ pub mod warp;
 pub use error::WarpError;
 pub use manipulate::{Drag, Handle, solve_drag};
 pub use map::BSplineMap;
+pub use morph::{WarpMorph, WorldMap};
 pub use pushforward::{Density, Filter};
 pub use table::{CoefficientTable, DeformationArray, Evaluation};
 pub use warp::{VolumeWarp, WarpSettings};
