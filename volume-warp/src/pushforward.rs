@@ -71,7 +71,9 @@ impl Density for u8 {
     }
     #[inline]
     fn from_f32(v: f32) -> Self {
-        v.round().clamp(0.0, 255.0) as u8
+        // Round half up without a libm call (the value is clamped first, so
+        // the truncating cast rounds).
+        (v.clamp(0.0, 255.0) + 0.5) as u8
     }
     const ZERO: Self = 0;
 }
@@ -348,7 +350,29 @@ impl<T: Density> Splat<'_, T> {
                         |q: i32, l: f32, h: f32| (h.min(q as f32 + 0.5) - l.max(q as f32 - 0.5)).max(0.0);
                     let (nxs, nys) = ((x1 - x0 + 1) as usize, (y1 - y0 + 1) as usize);
                     let sv = sign * v;
-                    if nxs <= MAX_SPAN && nys <= MAX_SPAN {
+                    if nxs == 2 && nys == 2 && z1t == z0t + 1 {
+                        // The common case: a box straddling 2 × 2 × 2 target
+                        // voxels. Each (row, z) pair updates four contiguous
+                        // floats: weight and weighted value of two cells.
+                        let wx = [overlap(x0, blo.x, bhi.x), overlap(x1, blo.x, bhi.x)];
+                        let wy = [overlap(y0, blo.y, bhi.y), overlap(y1, blo.y, bhi.y)];
+                        let wz = [overlap(z0t, blo.z, bhi.z), overlap(z1t, blo.z, bhi.z)];
+                        let z = (z0t - zbase) as usize;
+                        debug_assert!(z as i32 + 1 < layers);
+                        let base = tx * (y0 as usize + ty * z) + x0 as usize;
+                        for (dz, &wzv) in wz.iter().enumerate() {
+                            for (dy, &wyv) in wy.iter().enumerate() {
+                                let row = base + tx * (dy + ty * dz);
+                                let wyz = wzv * wyv;
+                                let cells = &mut part[row..row + 2];
+                                let (w0, w1) = (wyz * wx[0], wyz * wx[1]);
+                                cells[0][0] += sign * w0;
+                                cells[0][1] += sv * w0;
+                                cells[1][0] += sign * w1;
+                                cells[1][1] += sv * w1;
+                            }
+                        }
+                    } else if nxs <= MAX_SPAN && nys <= MAX_SPAN {
                         let mut ox = [0.0f32; MAX_SPAN];
                         let mut oy = [0.0f32; MAX_SPAN];
                         for (n, o) in ox[..nxs].iter_mut().enumerate() {
