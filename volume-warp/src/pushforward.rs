@@ -26,8 +26,11 @@
 //! map stretches, smoother than the box filter on mild warps; but it samples
 //! only one preimage, so where the map folds (not injective) it shows one
 //! sheet instead of averaging, and where it compresses strongly it aliases
-//! (point sampling instead of the box filter's area average). Cost grows
-//! with the Newton iterations (about 3 map and Jacobian evaluations per target voxel).
+//! (point sampling instead of the box filter's area average). It costs one
+//! Newton solve (a few map and Jacobian evaluations, direct, no table) per
+//! target voxel. Measured on a sheared ball (`volume_preserving_warp_keeps_the_mass`),
+//! all three filters keep the total density within 0.5 %; the identity and
+//! whole-voxel translations are exact for all three.
 //!
 //! The accumulation is parallel over fixed slabs of source z-slices. Slabs
 //! whose target z-ranges are disjoint run concurrently on disjoint parts of
