@@ -48,6 +48,24 @@
 //! conservation (the box filter's bounding boxes over-cover sheared voxels;
 //! the weight normalization compensates only approximately).
 //!
+//! # Performance
+//! `cargo bench -p isomorph-benches --bench warp` (CSIZE 11, so 128 and 256
+//! are multiples of the 8 regions and the table applies; every control point
+//! displaced). Medians measured on the shared 2-core machine **under a load
+//! average of about 7** (other jobs running), so a quiet machine should be
+//! roughly 2–3× faster:
+//!
+//! | bench | median | issue target |
+//! |---|---|---|
+//! | `pushforward_box/256` (full box-filtered warp of 256³ u8) | 3.6 s | ≤ 0.5 s — **not met** |
+//! | `local_update/128` (one control point, 4×4×4 regions of 16³ voxels) | 98 ms | ≤ 10 ms — **not met** |
+//! | `map_eval/table/128` vs `map_eval/direct/128` | 97 ms vs 539 ms (5.5×) | table ≥ 3× faster — met |
+//!
+//! A local update costs in proportion to `(4·G)³` source voxels (`G` voxels
+//! per region), so finer lattices update faster. The default build targets
+//! baseline x86-64 (SSE2, no FMA); the table's 64-term dot products and the
+//! box filter would profit from `-C target-cpu=native`.
+//!
 //! # Example
 //! ```
 //! use isomorph_common::Grid3;
