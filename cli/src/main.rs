@@ -1,5 +1,5 @@
 //! The `isomorph` command line tool: run the demo, morph shapes and meshes,
-//! inspect meshes, write distance volumes and align shapes. `isomorph --help`
+//! inspect meshes, write distance volumes, align and warp shapes. `isomorph --help`
 //! lists the commands.
 
 mod align;
@@ -10,6 +10,7 @@ mod level_set;
 mod morph;
 mod progress;
 mod sdf;
+mod warp;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -36,6 +37,10 @@ enum Command {
     /// Align a source onto a target by their moments: print the map as JSON
     /// and write the aligned source mesh.
     Align(align::AlignArgs),
+    /// Warp a shape or mesh with True's trivariate B-spline volume warp: drag
+    /// surface points or move control points; writes the warped volume
+    /// (.npy), meshes and a before/after PNG.
+    Warp(warp::WarpArgs),
 }
 
 fn main() -> ExitCode {
@@ -46,6 +51,7 @@ fn main() -> ExitCode {
         Command::Info(args) => info::run(&args),
         Command::Sdf(args) => sdf::run(&args),
         Command::Align(args) => align::run(&args),
+        Command::Warp(args) => warp::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -241,3 +241,34 @@ fn align_puts_a_moved_mesh_back() {
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains(".ply, .obj or .stl"));
     let _ = std::fs::remove_dir_all(&out);
 }
+
+#[test]
+fn warp_drags_a_sphere_point_and_writes_volume_meshes_and_png() {
+    use isomorph_common::mesh::io::read_mesh;
+    let out = scratch("warp");
+    // The sphere's (radius 0.3) +x pole pulled outward by 0.15.
+    let o = isomorph(&[
+        "warp",
+        "sphere",
+        "--res",
+        "32",
+        "--csize",
+        "7",
+        "--drag",
+        "0.3,0,0:0.15,0,0",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "warp failed: {}", String::from_utf8_lossy(&o.stderr));
+    for f in ["warped.npy", "warped.json", "source.obj", "warped.obj", "before_after.png"] {
+        assert!(out.join(f).is_file(), "missing {f}");
+    }
+    let before = read_mesh(out.join("source.obj")).unwrap().bounds();
+    let after = read_mesh(out.join("warped.obj")).unwrap().bounds();
+    assert!(after.max.x > before.max.x + 0.1, "pole moved from {} to {}", before.max.x, after.max.x);
+    assert!((after.min.x - before.min.x).abs() < 0.02, "far side stays: {} vs {}", before.min.x, after.min.x);
+    // A malformed drag is one clear error line.
+    let o = isomorph(&["warp", "sphere", "--drag", "1,2:3,4,5", "--out", out.to_str().unwrap()]);
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("three finite numbers"));
+    let _ = std::fs::remove_dir_all(&out);
+}
