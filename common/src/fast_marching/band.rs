@@ -22,9 +22,10 @@ const MAX_ITERATIONS: usize = 12;
 const CONVERGED: f32 = 1e-4;
 /// Largest accepted residual of the projected point, in voxels (`|φ| / |∇φ|`).
 const RESIDUAL: f32 = 1e-3;
-/// Farthest accepted projection (voxels): band nodes lie within one voxel of
-/// the zero set, so anything farther went astray.
-const MAX_REACH: f32 = 2.0;
+/// Farthest accepted projection (voxels): band nodes of the first layer lie
+/// within one voxel of the zero set and those of the second within two, so
+/// anything farther went astray.
+const MAX_REACH: f32 = 2.5;
 
 /// Read access to a scalar grid in grid units.
 struct Sampler<'a> {
@@ -38,64 +39,69 @@ impl Sampler<'_> {
         self.values[i as usize + self.dims.x as usize * (j as usize + self.dims.y as usize * k as usize)]
     }
 
-    /// Central-difference gradient at a node (one-sided at the boundary).
-    fn node_gradient(&self, n: UVec3) -> Vec3 {
-        let mut g = Vec3::ZERO;
-        for axis in 0..3 {
-            let (mut lo, mut hi) = (n, n);
-            lo[axis] = n[axis].saturating_sub(1);
-            hi[axis] = (n[axis] + 1).min(self.dims[axis] - 1);
-            if hi[axis] > lo[axis] {
-                g[axis] = (self.at(hi.x, hi.y, hi.z) - self.at(lo.x, lo.y, lo.z)) / (hi[axis] - lo[axis]) as f32;
-            }
-        }
-        g
-    }
-
-    /// Trilinear value and interpolated gradient at grid point `p` (clamped
-    /// to the grid).
+    /// Trilinear value and its gradient at grid point `p` (clamped to the
+    /// grid). The gradient is the interpolant's own, so a Newton step lands
+    /// on the interpolated zero set.
     fn sample(&self, p: Vec3) -> (f32, Vec3) {
         let max = (self.dims - UVec3::ONE).as_vec3();
         let p = p.clamp(Vec3::ZERO, max);
         let base = p.floor().min((max - Vec3::ONE).max(Vec3::ZERO));
         let w = p - base;
         let b = base.as_uvec3();
-        let (mut v, mut g) = (0.0, Vec3::ZERO);
-        for corner in 0..8u32 {
-            let d = UVec3::new(corner & 1, (corner >> 1) & 1, corner >> 2);
-            let n = (b + d).min(self.dims - UVec3::ONE);
-            let wt = Vec3::select(d.cmpeq(UVec3::ONE), w, Vec3::ONE - w);
-            let weight = wt.x * wt.y * wt.z;
-            v += weight * self.at(n.x, n.y, n.z);
-            g += weight * self.node_gradient(n);
-        }
-        (v, g)
+        let hi = (b + UVec3::ONE).min(self.dims - UVec3::ONE);
+        let c = |x: bool, y: bool, z: bool| {
+            self.at(if x { hi.x } else { b.x }, if y { hi.y } else { b.y }, if z { hi.z } else { b.z })
+        };
+        let (c000, c100, c010, c110) = (c(false, false, false), c(true, false, false), c(false, true, false), c(true, true, false));
+        let (c001, c101, c011, c111) = (c(false, false, true), c(true, false, true), c(false, true, true), c(true, true, true));
+        // Interpolate along x, then y, then z, keeping the partial derivatives.
+        let x00 = c000 + w.x * (c100 - c000);
+        let x10 = c010 + w.x * (c110 - c010);
+        let x01 = c001 + w.x * (c101 - c001);
+        let x11 = c011 + w.x * (c111 - c011);
+        let y0 = x00 + w.y * (x10 - x00);
+        let y1 = x01 + w.y * (x11 - x01);
+        let value = y0 + w.z * (y1 - y0);
+        let dx0 = (c100 - c000) + w.y * ((c110 - c010) - (c100 - c000));
+        let dx1 = (c101 - c001) + w.y * ((c111 - c011) - (c101 - c001));
+        let gx = dx0 + w.z * (dx1 - dx0);
+        let gy = (x10 - x00) + w.z * ((x11 - x01) - (x10 - x00));
+        let gz = y1 - y0;
+        (value, Vec3::new(gx, gy, gz))
     }
 
-    /// Chopp's projection of node `x` onto the zero set; `None` when it does
-    /// not converge to a nearby zero.
-    fn project(&self, x: Vec3) -> Option<Vec3> {
-        let mut p = x;
+    /// Chopp's projection of node `x` onto the zero set, starting from
+    /// `start`; `None` when it does not converge to a nearby zero.
+    fn project(&self, x: Vec3, start: Vec3) -> Option<Vec3> {
+        let mut p = start;
+        let (mut v, mut g) = self.sample(p);
+        // The nearest iterate on the zero set: the interpolated gradient jumps
+        // across cell faces, so the iteration may end up cycling between
+        // zero-set points next to the answer rather than converging.
+        let mut best: Option<(f32, Vec3)> = None;
         for _ in 0..MAX_ITERATIONS {
-            let (v, g) = self.sample(p);
             let gg = g.length_squared();
             if !(gg > 1e-20) {
-                return None;
+                break;
             }
             let newton = -v * g / gg;
             let q = x - p;
             let tangential = q - q.dot(g) * g / gg;
             let step = newton + tangential;
             p += step;
-            if (p - x).length() > MAX_REACH {
-                return None;
+            let reach = (p - x).length();
+            if reach > MAX_REACH {
+                break;
+            }
+            (v, g) = self.sample(p);
+            if v.abs() <= RESIDUAL * g.length() && best.is_none_or(|b| reach < b.0) {
+                best = Some((reach, p));
             }
             if step.length() < CONVERGED {
-                let (v, g) = self.sample(p);
-                return (v.abs() <= RESIDUAL * g.length()).then_some(p);
+                break;
             }
         }
-        None
+        best.map(|b| b.1)
     }
 }
 
@@ -105,13 +111,82 @@ impl Sampler<'_> {
 /// set, its side and its closest point there (grid units).
 pub(crate) fn interface_seeds(values: &[f32], dims: UVec3) -> Vec<BandSeed> {
     let sampler = Sampler { values, dims };
+    let mut seeds = crossing_seeds(&sampler);
+    let second = second_layer(&sampler, &seeds);
+    seeds.extend(second);
+    seeds
+}
+
+/// The 6-neighbours of node `n` inside the grid.
+fn neighbours(n: UVec3, dims: UVec3) -> impl Iterator<Item = UVec3> {
+    (0..6).filter_map(move |d| {
+        let (axis, forward) = (d / 2, d % 2 == 1);
+        let mut m = n;
+        if forward {
+            (n[axis] + 1 < dims[axis]).then(|| {
+                m[axis] += 1;
+                m
+            })
+        } else {
+            (n[axis] > 0).then(|| {
+                m[axis] -= 1;
+                m
+            })
+        }
+    })
+}
+
+/// The second layer: nodes next to the first band layer, projected with
+/// Chopp's iteration started from their nearest neighbour's closest point.
+/// Exact distances one layer further out keep closest-point propagation
+/// from sampling the surface too coarsely right next to it.
+fn second_layer(sampler: &Sampler<'_>, first: &[BandSeed]) -> Vec<BandSeed> {
+    let dims = sampler.dims;
+    let linear = |n: UVec3| n.x + dims.x * (n.y + dims.y * n.z);
+    let node = |index: u32| {
+        let row = index / dims.x;
+        UVec3::new(index % dims.x, row % dims.y, row / dims.y)
+    };
+    let find = |index: u32| first.binary_search_by_key(&index, |s| s.index).ok().map(|i| &first[i]);
+    let mut candidates: Vec<u32> = first
+        .par_iter()
+        .flat_map_iter(|s| neighbours(node(s.index), dims).map(linear).filter(|&m| find(m).is_none()))
+        .collect();
+    candidates.par_sort_unstable();
+    candidates.dedup();
+    candidates
+        .into_par_iter()
+        .filter_map(|index| {
+            let n = node(index);
+            let x = n.as_vec3();
+            let start = neighbours(n, dims)
+                .filter_map(|m| find(linear(m)).and_then(|s| s.closest))
+                .min_by(|a, b| (*a - x).length_squared().total_cmp(&(*b - x).length_squared()))?;
+            let p = sampler.project(x, start)?;
+            let v = sampler.values[index as usize];
+            let normal = sampler.sample(p).1.try_normalize();
+            let distance = (p - x).length();
+            // The projection must not be worse than the start point.
+            (distance <= (start - x).length() + 1e-3).then_some(BandSeed {
+                index,
+                distance,
+                inside: Some(v > 0.0),
+                closest: Some(p),
+                normal,
+            })
+        })
+        .collect()
+}
+
+/// The first band layer: nodes with a sign change to a neighbour, and zero nodes.
+fn crossing_seeds(sampler: &Sampler<'_>) -> Vec<BandSeed> {
+    let (values, dims) = (sampler.values, sampler.dims);
     let (nx, ny) = (dims.x as usize, dims.y as usize);
     let rows = ny * dims.z as usize;
     (0..rows)
         .into_par_iter()
         .flat_map_iter(|row| {
             let (j, k) = ((row % ny) as u32, (row / ny) as u32);
-            let sampler = &sampler;
             (0..dims.x).filter_map(move |i| {
                 let index = i as usize + nx * row;
                 let v = values[index];
@@ -149,13 +224,13 @@ pub(crate) fn interface_seeds(values: &[f32], dims: UVec3) -> Vec<BandSeed> {
                     }
                 }
                 let (mut distance, mut closest) = best?;
-                if let Some(p) = sampler.project(x) {
+                if let Some(p) = sampler.project(x, x) {
                     let d = (p - x).length();
                     if d < distance {
                         (distance, closest) = (d, p);
                     }
                 }
-                let normal = (x - closest).try_normalize().or_else(|| sampler.sample(closest).1.try_normalize());
+                let normal = sampler.sample(closest).1.try_normalize();
                 Some(BandSeed { index: index as u32, distance, inside: Some(inside), closest: Some(closest), normal })
             })
         })

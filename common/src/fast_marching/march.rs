@@ -1,11 +1,22 @@
-//! The marching loop shared by [`march`](super::march),
+//! The marching loops shared by [`march`](super::march),
 //! [`redistance`](super::redistance) and CSG scan conversion.
 //!
 //! Everything here works in *grid units*: node `(i, j, k)` sits at `(i, j, k)`
 //! and distances are in voxels. Distances are marched as magnitudes on both
-//! sides of the surface at once; a per-node flag byte holds the Far / Trial /
-//! Known state, the side (inside or outside) and whether the node is a fixed
-//! seed.
+//! sides of the surface at once. Each node is one 8-byte cell (distance, and
+//! a tag holding the Far / Trial / Known state, the side, the seed flag and,
+//! for closest-point propagation, the index of its surface element), so a
+//! neighbour visit costs one memory access.
+//!
+//! - The Eikonal updates run Sethian's fast marching: Trial nodes in a
+//!   monotone radix heap, the smallest accepted (Known) and never revisited.
+//! - Closest-point propagation runs the same front in *shells* one voxel
+//!   wide (a bucketed queue in the manner of Kim's group marching and
+//!   Δ-stepping): the nodes of a shell are relaxed in memory order, and a node
+//!   whose distance drops after it was accepted is relaxed again, so every
+//!   node ends with the best surface element among its neighbours'. Walking
+//!   the front in memory order instead of heap order keeps the working set
+//!   in cache, which is what makes whole-grid redistancing fast.
 
 use super::heap::RadixHeap;
 use super::{FastMarchingError, Update};
@@ -14,19 +25,51 @@ use glam::{UVec3, Vec3};
 use rayon::prelude::*;
 
 /// Not yet touched by the front.
-const FAR: u8 = 0;
+const FAR: u32 = 0;
 /// In the narrow band with a tentative distance.
-const TRIAL: u8 = 1;
-/// Accepted: the distance is final.
-const KNOWN: u8 = 2;
+const TRIAL: u32 = 1;
+/// Accepted: final for the Eikonal updates; propagated with its current
+/// distance for closest-point propagation.
+const KNOWN: u32 = 2;
 /// Mask of the Far / Trial / Known state.
-const STATE: u8 = 3;
+const STATE: u32 = 3;
 /// The node lies inside (positive side).
-const INSIDE: u8 = 4;
+const INSIDE: u32 = 4;
 /// The node's side is known (`INSIDE` is meaningful).
-const SIGNED: u8 = 8;
+const SIGNED: u32 = 8;
 /// A seed: its distance is given and never updated.
-const FIXED: u8 = 16;
+const FIXED: u32 = 16;
+/// Bits of the tag below the surface-element index.
+const FLAG_BITS: u32 = 5;
+/// Mask of the flag bits.
+const FLAGS: u32 = (1 << FLAG_BITS) - 1;
+/// Surface-element index of a node that has none.
+const NO_SOURCE: u32 = u32::MAX >> FLAG_BITS;
+
+/// Width (voxels) of a closest-point shell.
+const SHELL_WIDTH: f32 = 1.0;
+
+/// One node: unsigned distance (voxels) and tag (`source << FLAG_BITS | flags`).
+#[derive(Debug, Clone, Copy)]
+struct Cell {
+    dist: f32,
+    tag: u32,
+}
+
+impl Cell {
+    #[inline]
+    fn flags(self) -> u32 {
+        self.tag & FLAGS
+    }
+    #[inline]
+    fn source(self) -> u32 {
+        self.tag >> FLAG_BITS
+    }
+    #[inline]
+    fn state(self) -> u32 {
+        self.tag & STATE
+    }
+}
 
 /// One band node with its distance and, for closest-point propagation, the
 /// surface point it is closest to (grid units).
@@ -84,17 +127,16 @@ pub(crate) struct Marcher {
     nx: u32,
     ny: u32,
     nz: u32,
-    /// Unsigned distance in voxels (`INFINITY` until reached).
-    dist: Vec<f32>,
-    flags: Vec<u8>,
-    /// Closest-point mode: the seed whose surface point each node uses.
-    source: Vec<u32>,
+    cells: Vec<Cell>,
     /// Closest-point mode: the seeds' surface elements.
     surfels: Vec<Surfel>,
     update: Update,
     /// Nodes farther than this (voxels) are never accepted.
     limit: f32,
+    /// Eikonal updates: the Trial nodes.
     heap: RadixHeap,
+    /// Closest-point propagation: the nodes queued in each shell.
+    shells: Vec<Vec<u32>>,
 }
 
 impl Marcher {
@@ -105,31 +147,25 @@ impl Marcher {
         if nodes > u32::MAX as u64 {
             return Err(FastMarchingError::TooManyNodes(nodes));
         }
-        let buffer = |fill| Grid3::new(dims, Vec3::ZERO, 1.0, fill).map(Grid3::into_data);
-        let dist = buffer(f32::INFINITY)?;
-        let flags = Grid3::new(dims, Vec3::ZERO, 1.0, FAR)?.into_data();
-        let source = match update {
-            Update::ClosestPoint => Grid3::new(dims, Vec3::ZERO, 1.0, u32::MAX)?.into_data(),
-            _ => Vec::new(),
-        };
+        let far = Cell { dist: f32::INFINITY, tag: NO_SOURCE << FLAG_BITS | FAR };
+        let cells = Grid3::new(dims, Vec3::ZERO, 1.0, far)?.into_data();
         Ok(Self {
             nx: dims.x,
             ny: dims.y,
             nz: dims.z,
-            dist,
-            flags,
-            source,
+            cells,
             surfels: Vec::new(),
             update,
             limit,
             heap: RadixHeap::new(),
+            shells: Vec::new(),
         })
     }
 
     /// Fixes every node's side from `values` (positive inside).
     pub(crate) fn set_sides(&mut self, values: &[f32]) {
-        self.flags.par_iter_mut().zip(values.par_iter()).for_each(|(f, &v)| {
-            *f = SIGNED | if v > 0.0 { INSIDE } else { 0 };
+        self.cells.par_iter_mut().zip(values.par_iter()).for_each(|(c, &v)| {
+            c.tag = (c.tag & !(INSIDE | SIGNED)) | SIGNED | if v > 0.0 { INSIDE } else { 0 };
         });
     }
 
@@ -137,25 +173,31 @@ impl Marcher {
     ///
     /// # Errors
     /// [`FastMarchingError::MissingClosestPoint`] in closest-point mode when
-    /// the seed has no surface point; `seed_number` names it.
+    /// the seed has no surface point (`seed_number` names it),
+    /// [`FastMarchingError::TooManyNodes`] past 2²⁷ seeds.
     pub(crate) fn add_seed(&mut self, seed: BandSeed, seed_number: usize) -> Result<(), FastMarchingError> {
         let n = seed.index as usize;
-        let mut f = (self.flags[n] & !STATE) | TRIAL | FIXED;
-        if let Some(inside) = seed.inside {
-            f = (f & !INSIDE) | SIGNED | if inside { INSIDE } else { 0 };
+        let cell = self.cells[n];
+        if seed.distance > cell.dist {
+            return Ok(()); // A node seeded twice keeps the nearer value.
         }
-        self.flags[n] = f;
+        let mut flags = (cell.flags() & !STATE) | TRIAL | FIXED;
+        if let Some(inside) = seed.inside {
+            flags = (flags & !INSIDE) | SIGNED | if inside { INSIDE } else { 0 };
+        }
+        let mut source = cell.source();
         if self.update == Update::ClosestPoint {
             let cp = seed.closest.ok_or(FastMarchingError::MissingClosestPoint(seed_number))?;
-            // A node seeded twice keeps the closer surface point.
-            if seed.distance > self.dist[n] {
-                return Ok(());
+            source = self.surfels.len() as u32;
+            if source >= NO_SOURCE {
+                return Err(FastMarchingError::TooManyNodes(source as u64));
             }
-            self.source[n] = self.surfels.len() as u32;
             self.surfels.push(Surfel::new(cp, seed.normal));
+            self.enqueue(seed.index, seed.distance, 0);
+        } else {
+            self.heap.push(seed.distance, seed.index);
         }
-        self.dist[n] = self.dist[n].min(seed.distance);
-        self.heap.push(seed.distance, seed.index);
+        self.cells[n] = Cell { dist: seed.distance, tag: source << FLAG_BITS | flags };
         Ok(())
     }
 
@@ -166,65 +208,114 @@ impl Marcher {
         [n - row * self.nx, row % self.ny, row / self.ny]
     }
 
+    /// The neighbour of `n` (coordinates `c`) one step along `axis`, if any.
+    #[inline]
+    fn neighbour(&self, n: u32, c: [u32; 3], axis: usize, forward: bool) -> Option<u32> {
+        let dims = [self.nx, self.ny, self.nz];
+        let stride = [1, self.nx, self.nx * self.ny][axis];
+        if forward {
+            (c[axis] + 1 < dims[axis]).then(|| n + stride)
+        } else {
+            (c[axis] > 0).then(|| n - stride)
+        }
+    }
+
     /// Runs the front until every reachable node within the limit is Known.
     pub(crate) fn run(&mut self) {
-        let strides = [1u32, self.nx, self.nx * self.ny];
-        let dims = [self.nx, self.ny, self.nz];
-        while let Some(n) = self.heap.pop() {
-            let nu = n as usize;
-            let f = self.flags[nu];
-            if f & STATE == KNOWN || self.dist[nu] > self.limit {
+        match self.update {
+            Update::ClosestPoint => self.run_shells(),
+            Update::FirstOrder | Update::SecondOrder => self.run_heap(),
+        }
+    }
+
+    /// Queues `n` (distance `d`) in its shell, or in shell `current` if the
+    /// front already passed it.
+    #[inline]
+    fn enqueue(&mut self, n: u32, d: f32, current: usize) {
+        let shell = ((d / SHELL_WIDTH) as usize).max(current);
+        if shell >= self.shells.len() {
+            self.shells.resize_with(shell + 1, Vec::new);
+        }
+        self.shells[shell].push(n);
+        PUSH.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    }
+
+    /// Closest-point propagation, one shell at a time (see the module docs).
+    fn run_shells(&mut self) {
+        let mut shell = 0;
+        let mut spare: Vec<u32> = Vec::new();
+        while shell < self.shells.len() {
+            if self.shells[shell].is_empty() {
+                shell += 1;
                 continue;
             }
-            self.flags[nu] = (f & !STATE) | KNOWN;
+            // Relax the shell's nodes; nodes re-queued into this shell are
+            // relaxed in a further round.
+            let mut list = std::mem::replace(&mut self.shells[shell], std::mem::take(&mut spare));
+            list.sort_unstable();
+            for &n in &list {
+                let cell = self.cells[n as usize];
+                if cell.state() == KNOWN || cell.dist > self.limit {
+                    continue;
+                }
+                self.cells[n as usize].tag = (cell.tag & !STATE) | KNOWN;
+                RELAX.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let surfel = self.surfels[cell.source() as usize];
+                let c = self.coords(n);
+                let x = Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32);
+                for axis in 0..3 {
+                    for forward in [false, true] {
+                        let Some(m) = self.neighbour(n, c, axis, forward) else { continue };
+                        let nb = self.cells[m as usize];
+                        if nb.flags() & FIXED != 0 || nb.source() == cell.source() {
+                            continue;
+                        }
+                        let mut y = x;
+                        y[axis] += if forward { 1.0 } else { -1.0 };
+                        let d = surfel.distance(y);
+                        if d < nb.dist {
+                            let mut flags = (nb.flags() & !STATE) | TRIAL;
+                            if flags & SIGNED == 0 && cell.flags() & SIGNED != 0 {
+                                flags |= SIGNED | (cell.flags() & INSIDE);
+                            }
+                            self.cells[m as usize] = Cell { dist: d, tag: cell.source() << FLAG_BITS | flags };
+                            self.enqueue(m, d, shell);
+                        }
+                    }
+                }
+            }
+            list.clear();
+            spare = list;
+        }
+    }
+
+    /// Sethian's fast marching with the Eikonal update.
+    fn run_heap(&mut self) {
+        while let Some(n) = self.heap.pop() {
+            let cell = self.cells[n as usize];
+            if cell.state() == KNOWN || cell.dist > self.limit {
+                continue;
+            }
+            self.cells[n as usize].tag = (cell.tag & !STATE) | KNOWN;
             let c = self.coords(n);
             for axis in 0..3 {
                 for forward in [false, true] {
-                    let m = if forward {
-                        if c[axis] + 1 >= dims[axis] {
-                            continue;
-                        }
-                        n + strides[axis]
-                    } else {
-                        if c[axis] == 0 {
-                            continue;
-                        }
-                        n - strides[axis]
-                    };
-                    let mu = m as usize;
-                    let fm = self.flags[mu];
-                    if fm & STATE == KNOWN || fm & FIXED != 0 {
+                    let Some(m) = self.neighbour(n, c, axis, forward) else { continue };
+                    let nb = self.cells[m as usize];
+                    if nb.state() == KNOWN || nb.flags() & FIXED != 0 {
                         continue;
                     }
-                    let mut fm = (fm & !STATE) | TRIAL;
-                    if fm & SIGNED == 0 && f & SIGNED != 0 {
-                        fm |= SIGNED | (f & INSIDE);
+                    let mut flags = (nb.flags() & !STATE) | TRIAL;
+                    if flags & SIGNED == 0 && cell.flags() & SIGNED != 0 {
+                        flags |= SIGNED | (cell.flags() & INSIDE);
                     }
-                    self.flags[mu] = fm;
-                    let candidate = match self.update {
-                        Update::ClosestPoint => {
-                            let s = self.source[nu];
-                            if self.source[mu] == s {
-                                continue;
-                            }
-                            let mut mc = c;
-                            mc[axis] = if forward { c[axis] + 1 } else { c[axis] - 1 };
-                            let p = Vec3::new(mc[0] as f32, mc[1] as f32, mc[2] as f32);
-                            let d = self.surfels[s as usize].distance(p);
-                            if d < self.dist[mu] {
-                                self.source[mu] = s;
-                            }
-                            d
-                        }
-                        Update::FirstOrder | Update::SecondOrder => {
-                            let mut mc = c;
-                            mc[axis] = if forward { c[axis] + 1 } else { c[axis] - 1 };
-                            self.eikonal(m, mc, strides, dims)
-                        }
-                    };
-                    if candidate < self.dist[mu] {
-                        self.dist[mu] = candidate;
-                        self.heap.push(candidate, m);
+                    self.cells[m as usize].tag = (nb.tag & !FLAGS) | flags;
+                    let mut mc = c;
+                    mc[axis] = if forward { c[axis] + 1 } else { c[axis] - 1 };
+                    let u = self.eikonal(m, mc);
+                    if u < nb.dist {
+                        self.cells[m as usize].dist = u;
+                        self.heap.push(u, m);
                     }
                 }
             }
@@ -232,14 +323,12 @@ impl Marcher {
     }
 
     /// True when Known node `m` may serve as an upwind neighbour of a node
-    /// with flags `fn_`: same side, or either side unknown, or on the surface.
+    /// with flags `own`: same side, or either side unknown, or on the surface.
     #[inline]
-    fn usable(&self, m: usize, fn_: u8) -> bool {
-        let fm = self.flags[m];
-        fm & STATE == KNOWN
-            && (self.dist[m] == 0.0
-                || fm & fn_ & SIGNED == 0
-                || (fm & INSIDE) == (fn_ & INSIDE))
+    fn usable(&self, m: u32, own: u32) -> bool {
+        let c = self.cells[m as usize];
+        let f = c.flags();
+        c.state() == KNOWN && (c.dist == 0.0 || f & own & SIGNED == 0 || (f & INSIDE) == (own & INSIDE))
     }
 
     /// The upwind Eikonal update `|∇u| = 1` at node `m` (coordinates `c`) from
@@ -248,37 +337,28 @@ impl Marcher {
     /// the setting asks for it and the second node out is Known and no larger;
     /// the quadratic is solved with 1, 2 or 3 axes, adding axes while the
     /// solution exceeds their neighbour value.
-    fn eikonal(&self, m: u32, c: [u32; 3], strides: [u32; 3], dims: [u32; 3]) -> f32 {
-        let fm = self.flags[m as usize];
+    fn eikonal(&self, m: u32, c: [u32; 3]) -> f32 {
+        let own = self.cells[m as usize].flags();
         let second = self.update == Update::SecondOrder;
-        // (upwind value a₁, centre b, weight c) per axis.
+        // (upwind value a₁, centre b, weight w) per axis.
         let mut terms = [(f32::INFINITY, 0.0f32, 0.0f32); 3];
-        for axis in 0..3 {
-            let s = strides[axis];
+        for (axis, term) in terms.iter_mut().enumerate() {
             for forward in [false, true] {
-                let (m1, m2) = if forward {
-                    if c[axis] + 1 >= dims[axis] {
-                        continue;
-                    }
-                    (m + s, (c[axis] + 2 < dims[axis]).then(|| m + 2 * s))
-                } else {
-                    if c[axis] == 0 {
-                        continue;
-                    }
-                    (m - s, (c[axis] >= 2).then(|| m - 2 * s))
-                };
-                if !self.usable(m1 as usize, fm) {
+                let Some(m1) = self.neighbour(m, c, axis, forward) else { continue };
+                if !self.usable(m1, own) {
                     continue;
                 }
-                let a1 = self.dist[m1 as usize];
-                if a1 >= terms[axis].0 {
+                let a1 = self.cells[m1 as usize].dist;
+                if a1 >= term.0 {
                     continue;
                 }
-                terms[axis] = (a1, a1, 1.0);
-                if second && let Some(m2) = m2 {
-                    let a2 = self.dist[m2 as usize];
-                    if self.usable(m2 as usize, fm) && a2 <= a1 {
-                        terms[axis] = (a1, (4.0 * a1 - a2) / 3.0, 2.25);
+                *term = (a1, a1, 1.0);
+                let mut c1 = c;
+                c1[axis] = if forward { c[axis] + 1 } else { c[axis] - 1 };
+                if second && let Some(m2) = self.neighbour(m1, c1, axis, forward) {
+                    let a2 = self.cells[m2 as usize].dist;
+                    if self.usable(m2, own) && a2 <= a1 {
+                        *term = (a1, (4.0 * a1 - a2) / 3.0, 2.25);
                     }
                 }
             }
@@ -305,26 +385,20 @@ impl Marcher {
     /// fill from the nodes whose side is known); nodes with no known side
     /// anywhere stay outside.
     fn flood_sides(&mut self) {
-        if self.flags.par_iter().all(|f| f & SIGNED != 0) {
+        if self.cells.par_iter().all(|c| c.flags() & SIGNED != 0) {
             return;
         }
-        let strides = [1u32, self.nx, self.nx * self.ny];
-        let dims = [self.nx, self.ny, self.nz];
-        let mut stack: Vec<u32> = (0..self.flags.len() as u32)
-            .filter(|&n| self.flags[n as usize] & SIGNED != 0)
-            .collect();
+        let mut stack: Vec<u32> =
+            (0..self.cells.len() as u32).filter(|&n| self.cells[n as usize].flags() & SIGNED != 0).collect();
         while let Some(n) = stack.pop() {
-            let f = self.flags[n as usize];
+            let side = self.cells[n as usize].flags() & INSIDE;
             let c = self.coords(n);
             for axis in 0..3 {
-                let neighbours = [
-                    (c[axis] > 0).then(|| n - strides[axis]),
-                    (c[axis] + 1 < dims[axis]).then(|| n + strides[axis]),
-                ];
-                for m in neighbours.into_iter().flatten() {
-                    let fm = &mut self.flags[m as usize];
-                    if *fm & SIGNED == 0 {
-                        *fm |= SIGNED | (f & INSIDE);
+                for forward in [false, true] {
+                    let Some(m) = self.neighbour(n, c, axis, forward) else { continue };
+                    let tag = &mut self.cells[m as usize].tag;
+                    if *tag & SIGNED == 0 {
+                        *tag |= SIGNED | side;
                         stack.push(m);
                     }
                 }
@@ -333,29 +407,19 @@ impl Marcher {
     }
 
     /// The signed result in world units: `±distance · spacing`, positive
-    /// inside; nodes never accepted get `±max_distance`.
-    pub(crate) fn finish(mut self, origin: Vec3, spacing: f32, max_distance: f32) -> Result<Grid3<f32>, FastMarchingError> {
+    /// inside; nodes never accepted get `±unreached`.
+    pub(crate) fn finish(mut self, origin: Vec3, spacing: f32, unreached: f32) -> Result<Grid3<f32>, FastMarchingError> {
         self.flood_sides();
         let limit = self.limit;
-        let mut dist = std::mem::take(&mut self.dist);
-        dist.par_iter_mut().zip(self.flags.par_iter()).for_each(|(d, &f)| {
-            let magnitude = if f & STATE == KNOWN && *d <= limit { *d * spacing } else { max_distance };
-            *d = if f & INSIDE != 0 { magnitude } else { -magnitude };
+        let dims = UVec3::new(self.nx, self.ny, self.nz);
+        let mut out = Grid3::new(dims, origin, spacing, 0.0f32)?;
+        out.data_mut().par_iter_mut().zip(self.cells.par_iter()).for_each(|(o, c)| {
+            let magnitude = if c.state() == KNOWN && c.dist <= limit { c.dist * spacing } else { unreached };
+            *o = if c.flags() & INSIDE != 0 { magnitude } else { -magnitude };
         });
-        Ok(Grid3::from_vec(UVec3::new(self.nx, self.ny, self.nz), origin, spacing, dist)?)
+        Ok(out)
     }
 }
-impl Marcher {
-    pub(crate) fn debug(&self, n: u32, c: Vec3) {
-        let x = Vec3::new((n % self.nx) as f32, ((n / self.nx) % self.ny) as f32, (n / self.nx / self.ny) as f32);
-        let s = self.source[n as usize];
-        println!("node {x} dist {} flags {} src {} cp {} |cp-c| {} exact {}", self.dist[n as usize], self.flags[n as usize], s, self.surfels[s as usize].point, (self.surfels[s as usize].point-c).length(), 10.0 - (x-c).length());
-        for d in [1u32, self.nx, self.nx*self.ny] {
-            for m in [n - d, n + d] {
-                let x = Vec3::new((m % self.nx) as f32, ((m / self.nx) % self.ny) as f32, (m / self.nx / self.ny) as f32);
-                let s = self.source[m as usize];
-                println!("  nb {x} dist {} flags {} src {} cp {} exact {}", self.dist[m as usize], self.flags[m as usize], s, self.surfels[s as usize].point,  10.0 - (x-c).length());
-            }
-        }
-    }
-}
+
+pub(crate) static RELAX: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+pub(crate) static PUSH: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);

@@ -76,15 +76,36 @@ fn redistance_torus() {
 }
 
 #[test]
-fn debug_cp() {
-    let (n, c, r) = (48, Vec3::new(23.3, 24.1, 23.7), 10.0);
-    let seeds = sphere_seeds(n, c, r);
-    let mut m = Marcher::new(UVec3::splat(n), Update::ClosestPoint, f32::INFINITY).unwrap();
-    for (i, s) in seeds.iter().enumerate() {
-        let u = s.node;
-        m.add_seed(BandSeed { index: u.x + n * (u.y + n * u.z), distance: s.distance.abs(), inside: Some(s.distance > 0.0), closest: s.closest_point, normal: s.closest_point.map(|c| (u.as_vec3() - c).normalize()) }, i).unwrap();
-    }
+#[ignore]
+fn timing() {
+    let torus = Shape::torus(0.3, 0.12);
+    let field = |p: Vec3| torus.distance(p) * (1.5 + 0.5 * (3.0 * p.x).sin() * (2.0 * p.y).cos());
+    let n: u32 = std::env::var("FMM_N").map(|s| s.parse().unwrap()).unwrap_or(256);
+    let h = 1.0 / (n - 1) as f32;
+    let grid = Grid3::sample(&field, UVec3::splat(n), Vec3::splat(-0.5), h).unwrap();
+    let t = std::time::Instant::now();
+    let seeds = band::interface_seeds(grid.data(), grid.dims());
+    println!("band {} seeds {:?}", seeds.len(), t.elapsed());
+    let t = std::time::Instant::now();
+    let mut m = Marcher::new(grid.dims(), Update::ClosestPoint, f32::INFINITY).unwrap();
+    m.set_sides(grid.data());
+    for (i, &s) in seeds.iter().enumerate() { m.add_seed(s, i).unwrap(); }
+    println!("setup {:?}", t.elapsed());
+    let t = std::time::Instant::now();
     m.run();
-    m.debug(22 + n * (19 + n * 18), c);
-    panic!();
+    println!("run {:?} {:?} {:?}", t.elapsed(), march::RELAX, march::PUSH);
+    let t = std::time::Instant::now();
+    let out = m.finish(grid.origin(), h, f32::INFINITY).unwrap();
+    println!("finish {:?}", t.elapsed());
+    let mut all = 0.0f32;
+    let mut near = 0.0f32;
+    for (index, &v) in out.data().iter().enumerate() {
+        let u = out.node_of(index);
+        let exact = torus.distance(out.position(u.x, u.y, u.z));
+        let e = (v - exact).abs() / h;
+        if e > all { println!("worst so far {u} exact {} got {} e {e} input {}", exact / h, v / h, grid.data()[index] / h); }
+        all = all.max(e);
+        if exact.abs() < 2.0 * h { near = near.max(e); }
+    }
+    println!("max {all} near {near}");
 }
