@@ -20,6 +20,7 @@ pub mod mesh;
 pub mod models;
 pub mod morph;
 pub mod render;
+pub mod scan_conversion;
 pub mod sdf;
 pub mod shape;
 pub mod transform;

@@ -12,7 +12,7 @@
 //! therefore kept to interpolation accuracy, and band distances are exact for
 //! planes and second-order accurate for curved surfaces.
 
-use super::march::BandSeed;
+use super::march::{BandSeed, DISC_RADIUS};
 use glam::{UVec3, Vec3};
 use rayon::prelude::*;
 
@@ -27,10 +27,103 @@ const RESIDUAL: f32 = 1e-3;
 /// anything farther went astray.
 const MAX_REACH: f32 = 2.5;
 
-/// Read access to a scalar grid in grid units.
-struct Sampler<'a> {
+/// Largest distance (voxels) a tangent disc may leave the surface.
+const DISC_FLATNESS: f32 = 0.03;
+
+/// The tangent disc at surface point `p`: the normal, and the largest radius
+/// (up to [`DISC_RADIUS`]) at which the disc stays within [`DISC_FLATNESS`]
+/// of the surface, estimated from the field at four rim points. Creases and
+/// sharp bends get small discs, flat parts full ones.
+fn tangent_disc<S: Surface + ?Sized>(surface: &S, p: Vec3) -> Option<(Vec3, f32)> {
+    let (_, g) = surface.sample(p);
+    let slope = g.length();
+    let n = g.try_normalize()?;
+    let t1 = n.any_orthonormal_vector();
+    let t2 = n.cross(t1);
+    let deviation = [t1, -t1, t2, -t2]
+        .into_iter()
+        .map(|t| surface.sample(p + DISC_RADIUS * t).0.abs() / slope)
+        .fold(0.0f32, f32::max);
+    let radius = if deviation <= DISC_FLATNESS {
+        DISC_RADIUS
+    } else {
+        DISC_RADIUS * (DISC_FLATNESS / deviation).sqrt()
+    };
+    Some((n, radius))
+}
+
+/// A surface given as the zero set of a field, seen in grid units.
+pub(crate) trait Surface: Sync {
+    /// The grid's node values (positive inside), x-fastest.
+    fn values(&self) -> &[f32];
+    /// Node counts.
+    fn dims(&self) -> UVec3;
+    /// Field value and gradient (per voxel) at grid point `p`.
+    fn sample(&self, p: Vec3) -> (f32, Vec3);
+    /// Where on the edge from node `a` (value `va`) to its neighbour `b`
+    /// (value `vb`, other side) the field crosses zero, as a fraction of the
+    /// edge from `a`.
+    fn edge_zero(&self, a: Vec3, b: Vec3, va: f32, vb: f32) -> f32;
+}
+
+/// Chopp's projection of node `x` onto the zero set of `surface`, starting
+/// from `start`; `None` when it finds no zero within reach.
+pub(crate) fn project<S: Surface + ?Sized>(surface: &S, x: Vec3, start: Vec3) -> Option<Vec3> {
+    let mut p = start;
+    let (mut v, mut g) = surface.sample(p);
+    // The nearest iterate on the zero set: the interpolated gradient jumps
+    // across cell faces, so the iteration may end up cycling between
+    // zero-set points next to the answer rather than converging.
+    let mut best: Option<(f32, Vec3)> = None;
+    for _ in 0..MAX_ITERATIONS {
+        let gg = g.length_squared();
+        if !(gg > 1e-20) {
+            break;
+        }
+        let newton = -v * g / gg;
+        let q = x - p;
+        let tangential = q - q.dot(g) * g / gg;
+        let step = newton + tangential;
+        p += step;
+        let reach = (p - x).length();
+        if reach > MAX_REACH {
+            break;
+        }
+        (v, g) = surface.sample(p);
+        if v.abs() <= RESIDUAL * g.length() && best.is_none_or(|b| reach < b.0) {
+            best = Some((reach, p));
+        }
+        if step.length() < CONVERGED {
+            break;
+        }
+    }
+    best.map(|b| b.1)
+}
+
+/// Read access to a scalar grid in grid units; its zero set is that of the
+/// trilinear interpolant.
+pub(crate) struct Sampler<'a> {
     values: &'a [f32],
     dims: UVec3,
+}
+
+impl Surface for Sampler<'_> {
+    fn values(&self) -> &[f32] {
+        self.values
+    }
+
+    fn dims(&self) -> UVec3 {
+        self.dims
+    }
+
+    fn sample(&self, p: Vec3) -> (f32, Vec3) {
+        self.trilinear(p)
+    }
+
+    /// Linear interpolation: the trilinear interpolant is linear on edges.
+    fn edge_zero(&self, _a: Vec3, _b: Vec3, va: f32, vb: f32) -> f32 {
+        va / (va - vb)
+    }
 }
 
 impl Sampler<'_> {
@@ -42,7 +135,7 @@ impl Sampler<'_> {
     /// Trilinear value and its gradient at grid point `p` (clamped to the
     /// grid). The gradient is the interpolant's own, so a Newton step lands
     /// on the interpolated zero set.
-    fn sample(&self, p: Vec3) -> (f32, Vec3) {
+    fn trilinear(&self, p: Vec3) -> (f32, Vec3) {
         let max = (self.dims - UVec3::ONE).as_vec3();
         let p = p.clamp(Vec3::ZERO, max);
         let base = p.floor().min((max - Vec3::ONE).max(Vec3::ZERO));
@@ -69,50 +162,21 @@ impl Sampler<'_> {
         let gz = y1 - y0;
         (value, Vec3::new(gx, gy, gz))
     }
-
-    /// Chopp's projection of node `x` onto the zero set, starting from
-    /// `start`; `None` when it does not converge to a nearby zero.
-    fn project(&self, x: Vec3, start: Vec3) -> Option<Vec3> {
-        let mut p = start;
-        let (mut v, mut g) = self.sample(p);
-        // The nearest iterate on the zero set: the interpolated gradient jumps
-        // across cell faces, so the iteration may end up cycling between
-        // zero-set points next to the answer rather than converging.
-        let mut best: Option<(f32, Vec3)> = None;
-        for _ in 0..MAX_ITERATIONS {
-            let gg = g.length_squared();
-            if !(gg > 1e-20) {
-                break;
-            }
-            let newton = -v * g / gg;
-            let q = x - p;
-            let tangential = q - q.dot(g) * g / gg;
-            let step = newton + tangential;
-            p += step;
-            let reach = (p - x).length();
-            if reach > MAX_REACH {
-                break;
-            }
-            (v, g) = self.sample(p);
-            if v.abs() <= RESIDUAL * g.length() && best.is_none_or(|b| reach < b.0) {
-                best = Some((reach, p));
-            }
-            if step.length() < CONVERGED {
-                break;
-            }
-        }
-        best.map(|b| b.1)
-    }
 }
 
-/// The band of `values` (positive inside) on a `dims` lattice: every node
-/// with a 6-neighbour on the other side (`> 0` vs `≤ 0`) and every node with
-/// value exactly zero, with its distance (voxels) to the interpolated zero
-/// set, its side and its closest point there (grid units).
-pub(crate) fn interface_seeds(values: &[f32], dims: UVec3) -> Vec<BandSeed> {
-    let sampler = Sampler { values, dims };
-    let mut seeds = crossing_seeds(&sampler);
-    let second = second_layer(&sampler, &seeds);
+/// The band of grid `values` (positive inside) on a `dims` lattice, measured
+/// to the zero set of their trilinear interpolant (see [`interface_seeds`]).
+pub(crate) fn grid_seeds(values: &[f32], dims: UVec3) -> Vec<BandSeed> {
+    interface_seeds(&Sampler { values, dims })
+}
+
+/// The band of `surface`'s node values: every node with a 6-neighbour on the
+/// other side (`> 0` vs `≤ 0`), every node with value exactly zero, and the
+/// nodes next to those (second layer), each with its distance (voxels) to
+/// the zero set, its side and its closest point there (grid units).
+pub(crate) fn interface_seeds<S: Surface + ?Sized>(surface: &S) -> Vec<BandSeed> {
+    let mut seeds = crossing_seeds(surface);
+    let second = second_layer(surface, &seeds);
     seeds.extend(second);
     seeds
 }
@@ -140,8 +204,8 @@ fn neighbours(n: UVec3, dims: UVec3) -> impl Iterator<Item = UVec3> {
 /// Chopp's iteration started from their nearest neighbour's closest point.
 /// Exact distances one layer further out keep closest-point propagation
 /// from sampling the surface too coarsely right next to it.
-fn second_layer(sampler: &Sampler<'_>, first: &[BandSeed]) -> Vec<BandSeed> {
-    let dims = sampler.dims;
+fn second_layer<S: Surface + ?Sized>(surface: &S, first: &[BandSeed]) -> Vec<BandSeed> {
+    let dims = surface.dims();
     let linear = |n: UVec3| n.x + dims.x * (n.y + dims.y * n.z);
     let node = |index: u32| {
         let row = index / dims.x;
@@ -162,9 +226,9 @@ fn second_layer(sampler: &Sampler<'_>, first: &[BandSeed]) -> Vec<BandSeed> {
             let start = neighbours(n, dims)
                 .filter_map(|m| find(linear(m)).and_then(|s| s.closest))
                 .min_by(|a, b| (*a - x).length_squared().total_cmp(&(*b - x).length_squared()))?;
-            let p = sampler.project(x, start)?;
-            let v = sampler.values[index as usize];
-            let normal = sampler.sample(p).1.try_normalize();
+            let p = project(surface, x, start)?;
+            let v = surface.values()[index as usize];
+            let disc = tangent_disc(surface, p);
             let distance = (p - x).length();
             // The projection must not be worse than the start point.
             (distance <= (start - x).length() + 1e-3).then_some(BandSeed {
@@ -172,15 +236,15 @@ fn second_layer(sampler: &Sampler<'_>, first: &[BandSeed]) -> Vec<BandSeed> {
                 distance,
                 inside: Some(v > 0.0),
                 closest: Some(p),
-                normal,
+                disc,
             })
         })
         .collect()
 }
 
 /// The first band layer: nodes with a sign change to a neighbour, and zero nodes.
-fn crossing_seeds(sampler: &Sampler<'_>) -> Vec<BandSeed> {
-    let (values, dims) = (sampler.values, sampler.dims);
+fn crossing_seeds<S: Surface + ?Sized>(surface: &S) -> Vec<BandSeed> {
+    let (values, dims) = (surface.values(), surface.dims());
     let (nx, ny) = (dims.x as usize, dims.y as usize);
     let rows = ny * dims.z as usize;
     (0..rows)
@@ -193,8 +257,8 @@ fn crossing_seeds(sampler: &Sampler<'_>) -> Vec<BandSeed> {
                 let x = Vec3::new(i as f32, j as f32, k as f32);
                 let inside = v > 0.0;
                 if v == 0.0 {
-                    let normal = sampler.sample(x).1.try_normalize();
-                    return Some(BandSeed { index: index as u32, distance: 0.0, inside: None, closest: Some(x), normal });
+                    let disc = tangent_disc(surface, x);
+                    return Some(BandSeed { index: index as u32, distance: 0.0, inside: None, closest: Some(x), disc });
                 }
                 // Crossings of the node's grid edges: exact zero-set points.
                 let mut best: Option<(f32, Vec3)> = None;
@@ -213,25 +277,25 @@ fn crossing_seeds(sampler: &Sampler<'_>) -> Vec<BandSeed> {
                             }
                             m[axis] -= 1;
                         }
-                        let w = sampler.at(m.x, m.y, m.z);
+                        let w = values[m.x as usize + nx * (m.y as usize + ny * m.z as usize)];
                         if (w > 0.0) == inside {
                             continue;
                         }
-                        let t = v / (v - w);
+                        let t = surface.edge_zero(x, m.as_vec3(), v, w);
                         if best.is_none_or(|b| t < b.0) {
                             best = Some((t, x + t * (m.as_vec3() - x)));
                         }
                     }
                 }
                 let (mut distance, mut closest) = best?;
-                if let Some(p) = sampler.project(x, x) {
+                if let Some(p) = project(surface, x, x) {
                     let d = (p - x).length();
                     if d < distance {
                         (distance, closest) = (d, p);
                     }
                 }
-                let normal = sampler.sample(closest).1.try_normalize();
-                Some(BandSeed { index: index as u32, distance, inside: Some(inside), closest: Some(closest), normal })
+                let disc = tangent_disc(surface, closest);
+                Some(BandSeed { index: index as u32, distance, inside: Some(inside), closest: Some(closest), disc })
             })
         })
         .collect()

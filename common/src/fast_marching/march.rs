@@ -83,15 +83,17 @@ pub(crate) struct BandSeed {
     pub(crate) inside: Option<bool>,
     /// Closest surface point in grid coordinates, when known.
     pub(crate) closest: Option<Vec3>,
-    /// Unit surface normal at `closest` (either orientation), when known.
-    pub(crate) normal: Option<Vec3>,
+    /// The tangent disc at `closest`: unit normal (either orientation) and
+    /// radius in voxels, when known.
+    pub(crate) disc: Option<(Vec3, f32)>,
 }
 
-/// Radius (voxels) of the tangent disc each seed stands for. Seeds' closest
-/// points sample the surface about one voxel apart, so discs of this radius
-/// cover it; the disc leaves the surface by `DISC_RADIUS² κ / 2` voxels where
-/// the curvature is κ (per voxel).
-const DISC_RADIUS: f32 = 0.75;
+/// Largest radius (voxels) of the tangent disc a seed stands for. Seeds'
+/// closest points sample the surface about one voxel apart, so discs of this
+/// radius cover it; a disc leaves the surface by `radius² κ / 2` voxels where
+/// the curvature is κ (per voxel), so band builders shrink it where the
+/// surface bends sharply.
+pub(crate) const DISC_RADIUS: f32 = 0.75;
 
 /// A seed's piece of surface: its closest point and the tangent disc there.
 #[derive(Debug, Clone, Copy)]
@@ -99,11 +101,14 @@ struct Surfel {
     point: Vec3,
     /// Unit normal, or zero when only the point is known.
     normal: Vec3,
+    /// Disc radius in voxels.
+    radius: f32,
 }
 
 impl Surfel {
-    fn new(point: Vec3, normal: Option<Vec3>) -> Self {
-        Self { point, normal: normal.map_or(Vec3::ZERO, Vec3::normalize_or_zero) }
+    fn new(point: Vec3, disc: Option<(Vec3, f32)>) -> Self {
+        let (normal, radius) = disc.map_or((Vec3::ZERO, 0.0), |(n, r)| (n.normalize_or_zero(), r));
+        Self { point, normal, radius }
     }
 
     /// Distance (voxels) from `x` to the nearest point of the tangent disc.
@@ -117,7 +122,7 @@ impl Surfel {
         let q = x - self.point;
         let tangential = q - q.dot(self.normal) * self.normal;
         let t = tangential.length();
-        let slide = if t > DISC_RADIUS { tangential * (DISC_RADIUS / t) } else { tangential };
+        let slide = if t > self.radius { tangential * (self.radius / t) } else { tangential };
         (q - slide).length()
     }
 }
@@ -192,7 +197,7 @@ impl Marcher {
             if source >= NO_SOURCE {
                 return Err(FastMarchingError::TooManyNodes(source as u64));
             }
-            self.surfels.push(Surfel::new(cp, seed.normal));
+            self.surfels.push(Surfel::new(cp, seed.disc));
             self.enqueue(seed.index, seed.distance, 0);
         } else {
             self.heap.push(seed.distance, seed.index);

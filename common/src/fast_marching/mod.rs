@@ -36,7 +36,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-mod band;
+pub(crate) mod band;
 mod heap;
 pub(crate) mod march;
 #[cfg(test)]
@@ -191,8 +191,8 @@ pub fn march(
         let index = n.x + dims.x * (n.y + dims.y * n.z);
         let inside = (seed.distance != 0.0).then_some(seed.distance > 0.0);
         let closest = seed.closest_point.map(|c| (c - origin) / spacing);
-        let normal = closest.and_then(|c| (n.as_vec3() - c).try_normalize());
-        let band = BandSeed { index, distance: seed.distance.abs() / spacing, inside, closest, normal };
+        let disc = closest.and_then(|c| (n.as_vec3() - c).try_normalize()).map(|n| (n, march::DISC_RADIUS));
+        let band = BandSeed { index, distance: seed.distance.abs() / spacing, inside, closest, disc };
         marcher.add_seed(band, number)?;
     }
     marcher.run();
@@ -217,28 +217,27 @@ pub fn redistance(grid: &Grid3<f32>, settings: &FastMarchingSettings) -> Result<
     if let Some(index) = values.par_iter().position_any(|v| v.is_nan()) {
         return Err(FastMarchingError::NaN { node: grid.node_of(index) });
     }
-    let (limit, unreached) = limits(settings, grid.spacing())?;
-    let seeds = band::interface_seeds(values, grid.dims());
-    march_band(values, grid, &seeds, settings.update, limit, unreached)
+    let seeds = band::grid_seeds(values, grid.dims());
+    march_band(values, grid, &seeds, settings)
 }
 
 /// Marches out from band `seeds` (grid units) with each node's side taken
 /// from the sign of `values` on `lattice`'s nodes.
 ///
 /// # Errors
-/// [`FastMarchingError::NoInterface`] without seeds, and memory errors.
+/// [`FastMarchingError::NoInterface`] without seeds,
+/// [`FastMarchingError::BadMaxDistance`], and memory errors.
 pub(crate) fn march_band(
     values: &[f32],
     lattice: &Grid3<f32>,
     seeds: &[BandSeed],
-    update: Update,
-    limit: f32,
-    unreached: f32,
+    settings: &FastMarchingSettings,
 ) -> Result<Grid3<f32>, FastMarchingError> {
+    let (limit, unreached) = limits(settings, lattice.spacing())?;
     if seeds.is_empty() {
         return Err(FastMarchingError::NoInterface);
     }
-    let mut marcher = Marcher::new(lattice.dims(), update, limit)?;
+    let mut marcher = Marcher::new(lattice.dims(), settings.update, limit)?;
     marcher.set_sides(values);
     for (number, &seed) in seeds.iter().enumerate() {
         marcher.add_seed(seed, number)?;

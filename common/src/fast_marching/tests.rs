@@ -84,7 +84,7 @@ fn timing() {
     let h = 1.0 / (n - 1) as f32;
     let grid = Grid3::sample(&field, UVec3::splat(n), Vec3::splat(-0.5), h).unwrap();
     let t = std::time::Instant::now();
-    let seeds = band::interface_seeds(grid.data(), grid.dims());
+    let seeds = band::grid_seeds(grid.data(), grid.dims());
     println!("band {} seeds {:?}", seeds.len(), t.elapsed());
     let t = std::time::Instant::now();
     let mut m = Marcher::new(grid.dims(), Update::ClosestPoint, f32::INFINITY).unwrap();
