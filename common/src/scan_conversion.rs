@@ -142,7 +142,7 @@ pub fn scan_convert(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Field3, models};
+    use crate::models;
 
     /// Max error (voxels) against an exact distance, overall and within 2 voxels.
     fn errors(grid: &Grid3<f32>, exact: &Shape) -> (f32, f32) {
@@ -161,46 +161,95 @@ mod tests {
     }
 
     #[test]
-    fn explore() {
-        let s = Shape::sphere(0.3).translated(Vec3::new(0.013, -0.021, 0.007));
-        let g = scan_convert(&s, &Aabb::cube(0.5), 48, &FastMarchingSettings::default()).unwrap();
-        println!("sphere {:?}", errors(&g, &s));
-        let b = Shape::cuboid(Vec3::new(0.3, 0.2, 0.25)).rotated(glam::Quat::from_rotation_z(0.3));
-        let g = scan_convert(&b, &Aabb::cube(0.5), 48, &FastMarchingSettings::default()).unwrap();
-        println!("box {:?}", errors(&g, &b));
+    fn sphere_and_box_match_their_exact_distances() {
+        let settings = FastMarchingSettings::default();
+        let sphere = Shape::sphere(0.3).translated(Vec3::new(0.013, -0.021, 0.007));
+        let grid = scan_convert(&sphere, &Aabb::cube(0.5), 48, &settings).unwrap();
+        let (all, near) = errors(&grid, &sphere);
+        assert!(all < 0.3 && near < 0.05, "sphere: max {all} voxels, near {near}");
+        // A rotated box: its closest points lie on edges and corners too.
+        let cuboid = Shape::cuboid(Vec3::new(0.3, 0.2, 0.25)).rotated(glam::Quat::from_rotation_z(0.3));
+        let grid = scan_convert(&cuboid, &Aabb::cube(0.5), 48, &settings).unwrap();
+        let (all, near) = errors(&grid, &cuboid);
+        assert!(all < 0.3 && near < 0.3, "box: max {all} voxels, near {near}");
+    }
+
+    /// Breen's models: the sign is the shape's everywhere, every zero crossing
+    /// of a grid edge is consistent with the distances at its ends (a node
+    /// is no farther from the surface than the crossing), and the gradient
+    /// has unit length away from medial axes, unlike the raw CSG field.
+    #[test]
+    fn breen_models_become_distance_volumes() {
         for name in ["mug", "chain", "ball", "c-shape"] {
-            let s = models::by_name(name).unwrap();
-            let t = std::time::Instant::now();
-            let g = scan_convert(&s, &Aabb::cube(0.5), 48, &FastMarchingSettings::default()).unwrap();
-            let h = g.spacing();
-            let mut grads = Vec::new();
-            let d = g.dims();
-            for k in 1..d.z - 1 { for j in 1..d.y - 1 { for i in 1..d.x - 1 {
-                grads.push(g.node_gradient(i, j, k).length());
-            }}}
-            grads.sort_by(|a, b| a.total_cmp(b));
-            let within = grads.iter().filter(|&&x| (x - 1.0).abs() < 0.05).count() as f32 / grads.len() as f32;
-            // zero set: shape surface points along grid edges
-            let mut zmax = 0.0f32;
-            let mut sign_bad = 0;
-            for (index, &v) in g.data().iter().enumerate() {
-                let n = g.node_of(index);
-                let p = g.position(n.x, n.y, n.z);
-                let f = s.distance(p);
-                if (f > 0.0) != (v > 0.0) && f != 0.0 { sign_bad += 1; }
-                if n.x + 1 < d.x {
-                    let q = g.position(n.x + 1, n.y, n.z);
-                    let fq = s.distance(q);
-                    if (f > 0.0) != (fq > 0.0) {
-                        let (mut lo, mut hi) = (0.0f32, 1.0f32);
-                        for _ in 0..30 { let m = 0.5*(lo+hi); if (s.distance(p + m*(q-p)) > 0.0) == (f > 0.0) { lo = m } else { hi = m } }
-                        let z = p + 0.5*(lo+hi)*(q-p);
-                        zmax = zmax.max(g.value(z).abs() / h);
+            let shape = models::by_name(name).unwrap();
+            let grid = scan_convert(&shape, &Aabb::cube(0.5), 40, &FastMarchingSettings::default()).unwrap();
+            let (h, dims) = (grid.spacing(), grid.dims());
+            let mut worst_crossing = 0.0f32;
+            for (index, &v) in grid.data().iter().enumerate() {
+                let n = grid.node_of(index);
+                let p = grid.position(n.x, n.y, n.z);
+                let f = shape.distance(p);
+                assert!(f == 0.0 || (f > 0.0) == (v > 0.0), "{name}: sign differs at {p}");
+                for axis in 0..3 {
+                    let mut m = n;
+                    m[axis] += 1;
+                    if m[axis] >= dims[axis] {
+                        continue;
                     }
+                    let q = grid.position(m.x, m.y, m.z);
+                    let w = *grid.get(m.x, m.y, m.z).unwrap();
+                    if (f > 0.0) == (shape.distance(q) > 0.0) {
+                        continue;
+                    }
+                    let (mut lo, mut hi) = (0.0f32, 1.0f32);
+                    for _ in 0..30 {
+                        let mid = 0.5 * (lo + hi);
+                        if (shape.distance(p + mid * (q - p)) > 0.0) == (f > 0.0) {
+                            lo = mid;
+                        } else {
+                            hi = mid;
+                        }
+                    }
+                    let t = 0.5 * (lo + hi);
+                    worst_crossing =
+                        worst_crossing.max((v.abs() - t * h) / h).max((w.abs() - (1.0 - t) * h) / h);
                 }
             }
-            println!("{name}: {:?} median grad {} within5% {within} zero {zmax} signbad {sign_bad}", t.elapsed(), grads[grads.len()/2]);
+            assert!(
+                worst_crossing < 0.02,
+                "{name}: a node is {worst_crossing} voxels farther than a crossing"
+            );
+            let unit = |g: &Grid3<f32>| {
+                let mut lengths = Vec::new();
+                for k in 1..dims.z - 1 {
+                    for j in 1..dims.y - 1 {
+                        for i in 1..dims.x - 1 {
+                            lengths.push(g.node_gradient(i, j, k).length());
+                        }
+                    }
+                }
+                lengths.iter().filter(|&&l| (l - 1.0).abs() < 0.05).count() as f32 / lengths.len() as f32
+            };
+            let share = unit(&grid);
+            assert!(share > 0.9, "{name}: only {share} of the nodes have |∇d| within 5% of 1");
+            if name == "c-shape" {
+                let raw = Grid3::sample(&shape, dims, grid.origin(), h).unwrap();
+                assert!(unit(&raw) < share - 0.1, "the raw superellipsoid field is not a distance");
+            }
         }
-        panic!();
+    }
+
+    #[test]
+    fn bad_inputs_are_typed_errors() {
+        let settings = FastMarchingSettings::default();
+        let bad = Shape::sphere(-1.0);
+        assert!(matches!(scan_convert(&bad, &Aabb::cube(0.5), 16, &settings), Err(ScanError::Shape(_))));
+        let far = Shape::sphere(0.1).translated(Vec3::splat(3.0));
+        assert_eq!(
+            scan_convert(&far, &Aabb::cube(0.5), 16, &settings),
+            Err(ScanError::FastMarching(FastMarchingError::NoInterface))
+        );
+        let sphere = Shape::sphere(0.3);
+        assert!(matches!(scan_convert(&sphere, &Aabb::cube(0.5), 1, &settings), Err(ScanError::Grid(_))));
     }
 }

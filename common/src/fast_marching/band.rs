@@ -145,8 +145,10 @@ impl Sampler<'_> {
         let c = |x: bool, y: bool, z: bool| {
             self.at(if x { hi.x } else { b.x }, if y { hi.y } else { b.y }, if z { hi.z } else { b.z })
         };
-        let (c000, c100, c010, c110) = (c(false, false, false), c(true, false, false), c(false, true, false), c(true, true, false));
-        let (c001, c101, c011, c111) = (c(false, false, true), c(true, false, true), c(false, true, true), c(true, true, true));
+        let (c000, c100, c010, c110) =
+            (c(false, false, false), c(true, false, false), c(false, true, false), c(true, true, false));
+        let (c001, c101, c011, c111) =
+            (c(false, false, true), c(true, false, true), c(false, true, true), c(true, true, true));
         // Interpolate along x, then y, then z, keeping the partial derivatives.
         let x00 = c000 + w.x * (c100 - c000);
         let x10 = c010 + w.x * (c110 - c010);
@@ -258,7 +260,13 @@ fn crossing_seeds<S: Surface + ?Sized>(surface: &S) -> Vec<BandSeed> {
                 let inside = v > 0.0;
                 if v == 0.0 {
                     let disc = tangent_disc(surface, x);
-                    return Some(BandSeed { index: index as u32, distance: 0.0, inside: None, closest: Some(x), disc });
+                    return Some(BandSeed {
+                        index: index as u32,
+                        distance: 0.0,
+                        inside: None,
+                        closest: Some(x),
+                        disc,
+                    });
                 }
                 // Crossings of the node's grid edges: exact zero-set points.
                 let mut best: Option<(f32, Vec3)> = None;
@@ -295,7 +303,13 @@ fn crossing_seeds<S: Surface + ?Sized>(surface: &S) -> Vec<BandSeed> {
                     }
                 }
                 let disc = tangent_disc(surface, closest);
-                Some(BandSeed { index: index as u32, distance, inside: Some(inside), closest: Some(closest), disc })
+                Some(BandSeed {
+                    index: index as u32,
+                    distance,
+                    inside: Some(inside),
+                    closest: Some(closest),
+                    disc,
+                })
             })
         })
         .collect()

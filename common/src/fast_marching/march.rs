@@ -20,9 +20,11 @@
 
 use super::heap::RadixHeap;
 use super::{FastMarchingError, Update};
-use crate::Grid3;
+use crate::grid::memory_limit;
+use crate::{Grid3, GridError};
 use glam::{UVec3, Vec3};
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 
 /// Not yet touched by the front.
 const FAR: u32 = 0;
@@ -48,15 +50,27 @@ const NO_SOURCE: u32 = u32::MAX >> FLAG_BITS;
 
 /// Width (voxels) of a closest-point shell.
 const SHELL_WIDTH: f32 = 1.0;
+/// Nodes per parallel task when relaxing a shell.
+const CHUNK: usize = 2048;
 
 /// One node: unsigned distance (voxels) and tag (`source << FLAG_BITS | flags`).
-#[derive(Debug, Clone, Copy)]
+/// Stored packed in an [`AtomicU64`] (distance bits high, tag low) so that
+/// shells can be relaxed in parallel with compare-and-swap updates.
+#[derive(Debug, Clone, Copy, PartialEq)]
 struct Cell {
     dist: f32,
     tag: u32,
 }
 
 impl Cell {
+    #[inline]
+    fn pack(self) -> u64 {
+        (u64::from(self.dist.to_bits()) << 32) | u64::from(self.tag)
+    }
+    #[inline]
+    fn unpack(v: u64) -> Self {
+        Self { dist: f32::from_bits((v >> 32) as u32), tag: v as u32 }
+    }
     #[inline]
     fn flags(self) -> u32 {
         self.tag & FLAGS
@@ -132,7 +146,7 @@ pub(crate) struct Marcher {
     nx: u32,
     ny: u32,
     nz: u32,
-    cells: Vec<Cell>,
+    cells: Vec<AtomicU64>,
     /// Closest-point mode: the seeds' surface elements.
     surfels: Vec<Surfel>,
     update: Update,
@@ -152,8 +166,12 @@ impl Marcher {
         if nodes > u32::MAX as u64 {
             return Err(FastMarchingError::TooManyNodes(nodes));
         }
-        let far = Cell { dist: f32::INFINITY, tag: NO_SOURCE << FLAG_BITS | FAR };
-        let cells = Grid3::new(dims, Vec3::ZERO, 1.0, far)?.into_data();
+        let far = Cell { dist: f32::INFINITY, tag: NO_SOURCE << FLAG_BITS | FAR }.pack();
+        let requested = (nodes as usize).saturating_mul(size_of::<AtomicU64>());
+        if requested > memory_limit() {
+            return Err(GridError::TooLarge { dims, requested, limit: memory_limit() }.into());
+        }
+        let cells = (0..nodes as usize).into_par_iter().map(|_| AtomicU64::new(far)).collect();
         Ok(Self {
             nx: dims.x,
             ny: dims.y,
@@ -167,10 +185,24 @@ impl Marcher {
         })
     }
 
+    /// The cell of node `n`.
+    #[inline]
+    fn cell(&self, n: u32) -> Cell {
+        Cell::unpack(self.cells[n as usize].load(Relaxed))
+    }
+
+    /// Overwrites the cell of node `n` (sequential phases only).
+    #[inline]
+    fn set(&self, n: u32, cell: Cell) {
+        self.cells[n as usize].store(cell.pack(), Relaxed);
+    }
+
     /// Fixes every node's side from `values` (positive inside).
     pub(crate) fn set_sides(&mut self, values: &[f32]) {
         self.cells.par_iter_mut().zip(values.par_iter()).for_each(|(c, &v)| {
-            c.tag = (c.tag & !(INSIDE | SIGNED)) | SIGNED | if v > 0.0 { INSIDE } else { 0 };
+            let mut cell = Cell::unpack(*c.get_mut());
+            cell.tag = (cell.tag & !(INSIDE | SIGNED)) | SIGNED | if v > 0.0 { INSIDE } else { 0 };
+            *c.get_mut() = cell.pack();
         });
     }
 
@@ -181,8 +213,7 @@ impl Marcher {
     /// the seed has no surface point (`seed_number` names it),
     /// [`FastMarchingError::TooManyNodes`] past 2²⁷ seeds.
     pub(crate) fn add_seed(&mut self, seed: BandSeed, seed_number: usize) -> Result<(), FastMarchingError> {
-        let n = seed.index as usize;
-        let cell = self.cells[n];
+        let cell = self.cell(seed.index);
         if seed.distance > cell.dist {
             return Ok(()); // A node seeded twice keeps the nearer value.
         }
@@ -202,7 +233,7 @@ impl Marcher {
         } else {
             self.heap.push(seed.distance, seed.index);
         }
-        self.cells[n] = Cell { dist: seed.distance, tag: source << FLAG_BITS | flags };
+        self.set(seed.index, Cell { dist: seed.distance, tag: source << FLAG_BITS | flags });
         Ok(())
     }
 
@@ -242,71 +273,105 @@ impl Marcher {
             self.shells.resize_with(shell + 1, Vec::new);
         }
         self.shells[shell].push(n);
-        PUSH.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     }
 
     /// Closest-point propagation, one shell at a time (see the module docs).
     fn run_shells(&mut self) {
         let mut shell = 0;
-        let mut spare: Vec<u32> = Vec::new();
         while shell < self.shells.len() {
             if self.shells[shell].is_empty() {
                 shell += 1;
                 continue;
             }
-            // Relax the shell's nodes; nodes re-queued into this shell are
-            // relaxed in a further round.
-            let mut list = std::mem::replace(&mut self.shells[shell], std::mem::take(&mut spare));
-            list.sort_unstable();
-            for &n in &list {
-                let cell = self.cells[n as usize];
-                if cell.state() == KNOWN || cell.dist > self.limit {
-                    continue;
-                }
-                self.cells[n as usize].tag = (cell.tag & !STATE) | KNOWN;
-                RELAX.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                let surfel = self.surfels[cell.source() as usize];
-                let c = self.coords(n);
-                let x = Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32);
-                for axis in 0..3 {
-                    for forward in [false, true] {
-                        let Some(m) = self.neighbour(n, c, axis, forward) else { continue };
-                        let nb = self.cells[m as usize];
-                        if nb.flags() & FIXED != 0 || nb.source() == cell.source() {
-                            continue;
+            // Relax the shell's nodes in memory order, in parallel; nodes
+            // re-queued into this shell are relaxed in a further round.
+            let mut list = std::mem::take(&mut self.shells[shell]);
+            if list.len() > 4 * CHUNK {
+                list.par_sort_unstable();
+            } else {
+                list.sort_unstable();
+            }
+            list.dedup();
+            let this = &*self;
+            let queued: Vec<Vec<(u32, f32)>> = list
+                .par_chunks(CHUNK)
+                .map(|chunk| {
+                    let mut out = Vec::new();
+                    for &n in chunk {
+                        this.relax(n, &mut out);
+                    }
+                    out
+                })
+                .collect();
+            for (m, d) in queued.into_iter().flatten() {
+                self.enqueue(m, d, shell);
+            }
+        }
+    }
+
+    /// Accepts node `n` and offers its surface element to its neighbours;
+    /// improved neighbours go to `out` with their new distance. Safe to run
+    /// on many nodes at once: every cell change is a compare-and-swap.
+    fn relax(&self, n: u32, out: &mut Vec<(u32, f32)>) {
+        let slot = &self.cells[n as usize];
+        let raw = slot.load(Relaxed);
+        let cell = Cell::unpack(raw);
+        if cell.state() == KNOWN || cell.dist > self.limit {
+            return;
+        }
+        let known = Cell { tag: (cell.tag & !STATE) | KNOWN, ..cell };
+        if slot.compare_exchange(raw, known.pack(), Relaxed, Relaxed).is_err() {
+            return; // Improved meanwhile: it is queued again.
+        }
+        let surfel = self.surfels[cell.source() as usize];
+        let c = self.coords(n);
+        let x = Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32);
+        for axis in 0..3 {
+            for forward in [false, true] {
+                let Some(m) = self.neighbour(n, c, axis, forward) else { continue };
+                let mut y = x;
+                y[axis] += if forward { 1.0 } else { -1.0 };
+                let target = &self.cells[m as usize];
+                let mut raw = target.load(Relaxed);
+                loop {
+                    let nb = Cell::unpack(raw);
+                    if nb.flags() & FIXED != 0 || nb.source() == cell.source() {
+                        break;
+                    }
+                    let d = surfel.distance(y);
+                    if d >= nb.dist {
+                        break;
+                    }
+                    let mut flags = (nb.flags() & !STATE) | TRIAL;
+                    if flags & SIGNED == 0 && cell.flags() & SIGNED != 0 {
+                        flags |= SIGNED | (cell.flags() & INSIDE);
+                    }
+                    let new = Cell { dist: d, tag: cell.source() << FLAG_BITS | flags };
+                    match target.compare_exchange(raw, new.pack(), Relaxed, Relaxed) {
+                        Ok(_) => {
+                            out.push((m, d));
+                            break;
                         }
-                        let mut y = x;
-                        y[axis] += if forward { 1.0 } else { -1.0 };
-                        let d = surfel.distance(y);
-                        if d < nb.dist {
-                            let mut flags = (nb.flags() & !STATE) | TRIAL;
-                            if flags & SIGNED == 0 && cell.flags() & SIGNED != 0 {
-                                flags |= SIGNED | (cell.flags() & INSIDE);
-                            }
-                            self.cells[m as usize] = Cell { dist: d, tag: cell.source() << FLAG_BITS | flags };
-                            self.enqueue(m, d, shell);
-                        }
+                        Err(now) => raw = now,
                     }
                 }
             }
-            list.clear();
-            spare = list;
         }
     }
 
     /// Sethian's fast marching with the Eikonal update.
     fn run_heap(&mut self) {
         while let Some(n) = self.heap.pop() {
-            let cell = self.cells[n as usize];
+            let cell = self.cell(n);
             if cell.state() == KNOWN || cell.dist > self.limit {
                 continue;
             }
-            self.cells[n as usize].tag = (cell.tag & !STATE) | KNOWN;
+            self.set(n, Cell { tag: (cell.tag & !STATE) | KNOWN, ..cell });
             let c = self.coords(n);
             for axis in 0..3 {
                 for forward in [false, true] {
                     let Some(m) = self.neighbour(n, c, axis, forward) else { continue };
-                    let nb = self.cells[m as usize];
+                    let nb = self.cell(m);
                     if nb.state() == KNOWN || nb.flags() & FIXED != 0 {
                         continue;
                     }
@@ -314,12 +379,12 @@ impl Marcher {
                     if flags & SIGNED == 0 && cell.flags() & SIGNED != 0 {
                         flags |= SIGNED | (cell.flags() & INSIDE);
                     }
-                    self.cells[m as usize].tag = (nb.tag & !FLAGS) | flags;
+                    self.set(m, Cell { tag: (nb.tag & !FLAGS) | flags, ..nb });
                     let mut mc = c;
                     mc[axis] = if forward { c[axis] + 1 } else { c[axis] - 1 };
                     let u = self.eikonal(m, mc);
                     if u < nb.dist {
-                        self.cells[m as usize].dist = u;
+                        self.set(m, Cell { dist: u, tag: (nb.tag & !FLAGS) | flags });
                         self.heap.push(u, m);
                     }
                 }
@@ -331,7 +396,7 @@ impl Marcher {
     /// with flags `own`: same side, or either side unknown, or on the surface.
     #[inline]
     fn usable(&self, m: u32, own: u32) -> bool {
-        let c = self.cells[m as usize];
+        let c = self.cell(m);
         let f = c.flags();
         c.state() == KNOWN && (c.dist == 0.0 || f & own & SIGNED == 0 || (f & INSIDE) == (own & INSIDE))
     }
@@ -343,7 +408,7 @@ impl Marcher {
     /// the quadratic is solved with 1, 2 or 3 axes, adding axes while the
     /// solution exceeds their neighbour value.
     fn eikonal(&self, m: u32, c: [u32; 3]) -> f32 {
-        let own = self.cells[m as usize].flags();
+        let own = self.cell(m).flags();
         let second = self.update == Update::SecondOrder;
         // (upwind value a₁, centre b, weight w) per axis.
         let mut terms = [(f32::INFINITY, 0.0f32, 0.0f32); 3];
@@ -353,7 +418,7 @@ impl Marcher {
                 if !self.usable(m1, own) {
                     continue;
                 }
-                let a1 = self.cells[m1 as usize].dist;
+                let a1 = self.cell(m1).dist;
                 if a1 >= term.0 {
                     continue;
                 }
@@ -361,7 +426,7 @@ impl Marcher {
                 let mut c1 = c;
                 c1[axis] = if forward { c[axis] + 1 } else { c[axis] - 1 };
                 if second && let Some(m2) = self.neighbour(m1, c1, axis, forward) {
-                    let a2 = self.cells[m2 as usize].dist;
+                    let a2 = self.cell(m2).dist;
                     if self.usable(m2, own) && a2 <= a1 {
                         *term = (a1, (4.0 * a1 - a2) / 3.0, 2.25);
                     }
@@ -390,20 +455,20 @@ impl Marcher {
     /// fill from the nodes whose side is known); nodes with no known side
     /// anywhere stay outside.
     fn flood_sides(&mut self) {
-        if self.cells.par_iter().all(|c| c.flags() & SIGNED != 0) {
+        if self.cells.par_iter().all(|c| Cell::unpack(c.load(Relaxed)).flags() & SIGNED != 0) {
             return;
         }
         let mut stack: Vec<u32> =
-            (0..self.cells.len() as u32).filter(|&n| self.cells[n as usize].flags() & SIGNED != 0).collect();
+            (0..self.cells.len() as u32).filter(|&n| self.cell(n).flags() & SIGNED != 0).collect();
         while let Some(n) = stack.pop() {
-            let side = self.cells[n as usize].flags() & INSIDE;
+            let side = self.cell(n).flags() & INSIDE;
             let c = self.coords(n);
             for axis in 0..3 {
                 for forward in [false, true] {
                     let Some(m) = self.neighbour(n, c, axis, forward) else { continue };
-                    let tag = &mut self.cells[m as usize].tag;
-                    if *tag & SIGNED == 0 {
-                        *tag |= SIGNED | side;
+                    let nb = self.cell(m);
+                    if nb.tag & SIGNED == 0 {
+                        self.set(m, Cell { tag: nb.tag | SIGNED | side, ..nb });
                         stack.push(m);
                     }
                 }
@@ -413,18 +478,21 @@ impl Marcher {
 
     /// The signed result in world units: `±distance · spacing`, positive
     /// inside; nodes never accepted get `±unreached`.
-    pub(crate) fn finish(mut self, origin: Vec3, spacing: f32, unreached: f32) -> Result<Grid3<f32>, FastMarchingError> {
+    pub(crate) fn finish(
+        mut self,
+        origin: Vec3,
+        spacing: f32,
+        unreached: f32,
+    ) -> Result<Grid3<f32>, FastMarchingError> {
         self.flood_sides();
         let limit = self.limit;
         let dims = UVec3::new(self.nx, self.ny, self.nz);
         let mut out = Grid3::new(dims, origin, spacing, 0.0f32)?;
         out.data_mut().par_iter_mut().zip(self.cells.par_iter()).for_each(|(o, c)| {
+            let c = Cell::unpack(c.load(Relaxed));
             let magnitude = if c.state() == KNOWN && c.dist <= limit { c.dist * spacing } else { unreached };
             *o = if c.flags() & INSIDE != 0 { magnitude } else { -magnitude };
         });
         Ok(out)
     }
 }
-
-pub(crate) static RELAX: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-pub(crate) static PUSH: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);

@@ -64,7 +64,9 @@ pub enum FastMarchingError {
         node: UVec3,
     },
     /// The grid has no sign change and no zero node, so it has no surface.
-    #[error("the grid has no zero crossing (all values are on one side), so there is no surface to measure from")]
+    #[error(
+        "the grid has no zero crossing (all values are on one side), so there is no surface to measure from"
+    )]
     NoInterface,
     /// [`march`] was called without seeds.
     #[error("fast marching needs at least one seed")]
@@ -212,7 +214,10 @@ pub fn march(
 /// [`FastMarchingError::NaN`] for a NaN value, [`FastMarchingError::NoInterface`]
 /// when the grid has no sign change and no zero node,
 /// [`FastMarchingError::BadMaxDistance`], and memory errors.
-pub fn redistance(grid: &Grid3<f32>, settings: &FastMarchingSettings) -> Result<Grid3<f32>, FastMarchingError> {
+pub fn redistance(
+    grid: &Grid3<f32>,
+    settings: &FastMarchingSettings,
+) -> Result<Grid3<f32>, FastMarchingError> {
     let values = grid.data();
     if let Some(index) = values.par_iter().position_any(|v| v.is_nan()) {
         return Err(FastMarchingError::NaN { node: grid.node_of(index) });
