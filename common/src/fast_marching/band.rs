@@ -77,7 +77,7 @@ pub(crate) fn project<S: Surface + ?Sized>(surface: &S, x: Vec3, start: Vec3) ->
     let mut best: Option<(f32, Vec3)> = None;
     for _ in 0..MAX_ITERATIONS {
         let gg = g.length_squared();
-        if !(gg > 1e-20) {
+        if gg.is_nan() || gg <= 1e-20 {
             break;
         }
         let newton = -v * g / gg;
