@@ -16,7 +16,9 @@
 //!   whose distance drops after it was accepted is relaxed again, so every
 //!   node ends with the best surface element among its neighbours'. Walking
 //!   the front in memory order instead of heap order keeps the working set
-//!   in cache, which is what makes whole-grid redistancing fast.
+//!   in cache, and a shell's nodes are relaxed in parallel: cells are packed
+//!   in `AtomicU64`s and every change is a compare-and-swap, so no
+//!   improvement is lost.
 
 use super::heap::RadixHeap;
 use super::{FastMarchingError, Update};
@@ -51,7 +53,10 @@ const NO_SOURCE: u32 = u32::MAX >> FLAG_BITS;
 /// Width (voxels) of a closest-point shell.
 const SHELL_WIDTH: f32 = 1.0;
 /// Nodes per parallel task when relaxing a shell.
-const CHUNK: usize = 2048;
+const CHUNK: usize = 4096;
+/// Rounds with fewer nodes run on one thread: the front takes thousands of
+/// rounds, and a fork-join per small round costs more than it saves.
+const PARALLEL_MIN: usize = 8 * CHUNK;
 
 /// One node: unsigned distance (voxels) and tag (`source << FLAG_BITS | flags`).
 /// Stored packed in an [`AtomicU64`] (distance bits high, tag low) so that
@@ -211,7 +216,7 @@ impl Marcher {
     /// # Errors
     /// [`FastMarchingError::MissingClosestPoint`] in closest-point mode when
     /// the seed has no surface point (`seed_number` names it),
-    /// [`FastMarchingError::TooManyNodes`] past 2²⁷ seeds.
+    /// [`FastMarchingError::TooManySeeds`] past 2²⁷ − 1 seeds.
     pub(crate) fn add_seed(&mut self, seed: BandSeed, seed_number: usize) -> Result<(), FastMarchingError> {
         let cell = self.cell(seed.index);
         if seed.distance > cell.dist {
@@ -226,7 +231,7 @@ impl Marcher {
             let cp = seed.closest.ok_or(FastMarchingError::MissingClosestPoint(seed_number))?;
             source = self.surfels.len() as u32;
             if source >= NO_SOURCE {
-                return Err(FastMarchingError::TooManyNodes(source as u64));
+                return Err(FastMarchingError::TooManySeeds(source as usize + 1));
             }
             self.surfels.push(Surfel::new(cp, seed.disc));
             self.enqueue(seed.index, seed.distance, 0);
@@ -286,23 +291,30 @@ impl Marcher {
             // Relax the shell's nodes in memory order, in parallel; nodes
             // re-queued into this shell are relaxed in a further round.
             let mut list = std::mem::take(&mut self.shells[shell]);
-            if list.len() > 4 * CHUNK {
+            if list.len() >= PARALLEL_MIN {
                 list.par_sort_unstable();
             } else {
                 list.sort_unstable();
             }
             list.dedup();
-            let this = &*self;
-            let queued: Vec<Vec<(u32, f32)>> = list
-                .par_chunks(CHUNK)
-                .map(|chunk| {
-                    let mut out = Vec::new();
-                    for &n in chunk {
-                        this.relax(n, &mut out);
-                    }
-                    out
-                })
-                .collect();
+            let queued: Vec<Vec<(u32, f32)>> = if list.len() >= PARALLEL_MIN {
+                let this = &*self;
+                list.par_chunks(CHUNK)
+                    .map(|chunk| {
+                        let mut out = Vec::new();
+                        for &n in chunk {
+                            this.relax(n, &mut out);
+                        }
+                        out
+                    })
+                    .collect()
+            } else {
+                let mut out = Vec::new();
+                for &n in &list {
+                    self.relax(n, &mut out);
+                }
+                vec![out]
+            };
             for (m, d) in queued.into_iter().flatten() {
                 self.enqueue(m, d, shell);
             }

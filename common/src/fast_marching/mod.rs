@@ -69,6 +69,10 @@ pub enum FastMarchingError {
     /// The grid has more nodes than 32-bit node indices can address.
     #[error("grid of {0} nodes is too large for fast marching (at most 2^32 − 1 nodes)")]
     TooManyNodes(u64),
+    /// Closest-point propagation has more seeds than its 27-bit seed
+    /// indices can address.
+    #[error("{0} seeds are too many for closest-point propagation (at most 2^27 − 1)")]
+    TooManySeeds(usize),
     /// An input value is NaN.
     #[error("value at node {node} is NaN; redistancing needs a sign at every node")]
     NaN {

@@ -179,14 +179,3 @@ fn bad_inputs_are_typed_errors() {
     assert!(march(dims, Vec3::ZERO, 1.0, &[bare], &settings(Update::FirstOrder)).is_ok());
     assert!(matches!(march(dims, Vec3::ZERO, -1.0, &[bare], &default), Err(FastMarchingError::Grid(_))));
 }
-
-#[test]
-#[ignore]
-fn timing() {
-    let n: u32 = std::env::var("FMM_N").map(|s| s.parse().unwrap()).unwrap_or(256);
-    let (torus, grid) = scaled_torus(n);
-    let t = std::time::Instant::now();
-    let sdf = redistance(&grid, &FastMarchingSettings::default()).unwrap();
-    println!("redistance {:?}", t.elapsed());
-    println!("{:?}", max_errors(&sdf, |p| torus.distance(p), 2.0));
-}
