@@ -16,9 +16,8 @@
 //!   whose distance drops after it was accepted is relaxed again, so every
 //!   node ends with the best surface element among its neighbours'. Walking
 //!   the front in memory order instead of heap order keeps the working set
-//!   in cache, and a shell's nodes are relaxed in parallel: cells are packed
-//!   in `AtomicU64`s and every change is a compare-and-swap, so no
-//!   improvement is lost.
+//!   in cache, and a large shell is relaxed in parallel by z-slabs (even
+//!   slabs together, then odd ones, so no two threads touch the same cell).
 
 use super::heap::RadixHeap;
 use super::{FastMarchingError, Update};
@@ -52,15 +51,25 @@ const NO_SOURCE: u32 = u32::MAX >> FLAG_BITS;
 
 /// Width (voxels) of a closest-point shell.
 const SHELL_WIDTH: f32 = 1.0;
-/// Nodes per parallel task when relaxing a shell.
-const CHUNK: usize = 4096;
 /// Rounds with fewer nodes run on one thread: the front takes thousands of
 /// rounds, and a fork-join per small round costs more than it saves.
-const PARALLEL_MIN: usize = 8 * CHUNK;
+const PARALLEL_MIN: usize = 32_768;
+/// Thinnest slab (z-planes) of a parallel round.
+const SLAB_PLANES: usize = 3;
+/// Offsets of the six neighbours, in the order of `Marcher::neighbour`'s
+/// `(axis, forward)` pairs `(d / 2, d % 2 == 1)`.
+const STEPS: [Vec3; 6] = [
+    Vec3::new(-1.0, 0.0, 0.0),
+    Vec3::new(1.0, 0.0, 0.0),
+    Vec3::new(0.0, -1.0, 0.0),
+    Vec3::new(0.0, 1.0, 0.0),
+    Vec3::new(0.0, 0.0, -1.0),
+    Vec3::new(0.0, 0.0, 1.0),
+];
 
 /// One node: unsigned distance (voxels) and tag (`source << FLAG_BITS | flags`).
 /// Stored packed in an [`AtomicU64`] (distance bits high, tag low) so that
-/// shells can be relaxed in parallel with compare-and-swap updates.
+/// slabs of a shell can be relaxed from several threads in safe code.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Cell {
     dist: f32,
@@ -196,7 +205,7 @@ impl Marcher {
         Cell::unpack(self.cells[n as usize].load(Relaxed))
     }
 
-    /// Overwrites the cell of node `n` (sequential phases only).
+    /// Overwrites the cell of node `n` (no other thread may touch it meanwhile).
     #[inline]
     fn set(&self, n: u32, cell: Cell) {
         self.cells[n as usize].store(cell.pack(), Relaxed);
@@ -288,26 +297,18 @@ impl Marcher {
                 shell += 1;
                 continue;
             }
-            // Relax the shell's nodes in memory order, in parallel; nodes
-            // re-queued into this shell are relaxed in a further round.
+            // Relax the shell's nodes in memory order; nodes re-queued into
+            // this shell are relaxed in a further round.
             let mut list = std::mem::take(&mut self.shells[shell]);
-            if list.len() >= PARALLEL_MIN {
+            let parallel = list.len() >= PARALLEL_MIN && self.nz as usize >= 4 * SLAB_PLANES;
+            if parallel {
                 list.par_sort_unstable();
             } else {
                 list.sort_unstable();
             }
             list.dedup();
-            let queued: Vec<Vec<(u32, f32)>> = if list.len() >= PARALLEL_MIN {
-                let this = &*self;
-                list.par_chunks(CHUNK)
-                    .map(|chunk| {
-                        let mut out = Vec::new();
-                        for &n in chunk {
-                            this.relax(n, &mut out);
-                        }
-                        out
-                    })
-                    .collect()
+            let queued: Vec<Vec<(u32, f32)>> = if parallel {
+                self.relax_slabs(&list)
             } else {
                 let mut out = Vec::new();
                 for &n in &list {
@@ -321,53 +322,75 @@ impl Marcher {
         }
     }
 
+    /// Relaxes the sorted `list` in parallel: it is cut into slabs of whole
+    /// z-planes, at least [`SLAB_PLANES`] thick, and the even slabs run
+    /// together, then the odd ones. A node only touches its own and the two
+    /// neighbouring planes, so slabs running together never touch the same
+    /// cell and plain loads and stores suffice.
+    fn relax_slabs(&self, list: &[u32]) -> Vec<Vec<(u32, f32)>> {
+        let plane = self.nx as u64 * self.ny as u64;
+        let thickness = SLAB_PLANES.max(self.nz as usize / 16);
+        let mut slabs = Vec::new();
+        let mut rest = list;
+        let mut k = thickness as u64;
+        while !rest.is_empty() {
+            let cut = rest.partition_point(|&n| (n as u64) < k * plane);
+            let (slab, tail) = rest.split_at(cut);
+            slabs.push(slab);
+            rest = tail;
+            k += thickness as u64;
+        }
+        let mut queued = Vec::with_capacity(slabs.len());
+        for parity in 0..2 {
+            let part: Vec<Vec<(u32, f32)>> = slabs
+                .par_iter()
+                .skip(parity)
+                .step_by(2)
+                .map(|slab| {
+                    let mut out = Vec::new();
+                    for &n in *slab {
+                        self.relax(n, &mut out);
+                    }
+                    out
+                })
+                .collect();
+            queued.extend(part);
+        }
+        queued
+    }
+
     /// Accepts node `n` and offers its surface element to its neighbours;
-    /// improved neighbours go to `out` with their new distance. Safe to run
-    /// on many nodes at once: every cell change is a compare-and-swap.
+    /// improved neighbours go to `out` with their new distance. Callers make
+    /// sure no other thread touches the same cells meanwhile.
     fn relax(&self, n: u32, out: &mut Vec<(u32, f32)>) {
-        let slot = &self.cells[n as usize];
-        let raw = slot.load(Relaxed);
-        let cell = Cell::unpack(raw);
+        let cell = self.cell(n);
         if cell.state() == KNOWN || cell.dist > self.limit {
             return;
         }
-        let known = Cell { tag: (cell.tag & !STATE) | KNOWN, ..cell };
-        if slot.compare_exchange(raw, known.pack(), Relaxed, Relaxed).is_err() {
-            return; // Improved meanwhile: it is queued again.
-        }
+        self.set(n, Cell { tag: (cell.tag & !STATE) | KNOWN, ..cell });
         let surfel = self.surfels[cell.source() as usize];
         let c = self.coords(n);
         let x = Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32);
-        for axis in 0..3 {
-            for forward in [false, true] {
-                let Some(m) = self.neighbour(n, c, axis, forward) else { continue };
-                let mut y = x;
-                y[axis] += if forward { 1.0 } else { -1.0 };
-                let target = &self.cells[m as usize];
-                let mut raw = target.load(Relaxed);
-                loop {
-                    let nb = Cell::unpack(raw);
-                    if nb.flags() & FIXED != 0 || nb.source() == cell.source() {
-                        break;
-                    }
-                    let d = surfel.distance(y);
-                    if d >= nb.dist {
-                        break;
-                    }
-                    let mut flags = (nb.flags() & !STATE) | TRIAL;
-                    if flags & SIGNED == 0 && cell.flags() & SIGNED != 0 {
-                        flags |= SIGNED | (cell.flags() & INSIDE);
-                    }
-                    let new = Cell { dist: d, tag: cell.source() << FLAG_BITS | flags };
-                    match target.compare_exchange(raw, new.pack(), Relaxed, Relaxed) {
-                        Ok(_) => {
-                            out.push((m, d));
-                            break;
-                        }
-                        Err(now) => raw = now,
-                    }
-                }
+        // Load all six neighbours first so that their cache misses overlap.
+        let mut targets = [None; 6];
+        for (d, t) in targets.iter_mut().enumerate() {
+            *t = self.neighbour(n, c, d / 2, d % 2 == 1).map(|m| (m, self.cell(m)));
+        }
+        for (d, target) in targets.into_iter().enumerate() {
+            let Some((m, nb)) = target else { continue };
+            if nb.flags() & FIXED != 0 || nb.source() == cell.source() {
+                continue;
             }
+            let dist = surfel.distance(x + STEPS[d]);
+            if dist >= nb.dist {
+                continue;
+            }
+            let mut flags = (nb.flags() & !STATE) | TRIAL;
+            if flags & SIGNED == 0 && cell.flags() & SIGNED != 0 {
+                flags |= SIGNED | (cell.flags() & INSIDE);
+            }
+            self.set(m, Cell { dist, tag: cell.source() << FLAG_BITS | flags });
+            out.push((m, dist));
         }
     }
 

@@ -12,7 +12,7 @@
 //! |---|---|---|---|
 //! | [`Update::FirstOrder`] | first-order upwind Eikonal `\|∇u\| = 1`, quadratic over 1–3 upwind axes; O(h), the error grows with the distance | 0.88, 0.14 voxel | 0.59, 0.07 voxel |
 //! | [`Update::SecondOrder`] | Sethian's second-order one-sided stencil, first order where the second upwind node is not Known; O(h²) in smooth regions | 0.31, 0.05 voxel | 0.19, 0.03 voxel |
-//! | [`Update::ClosestPoint`] (default) | each node inherits the surface element (closest point and tangent disc) of a neighbour; distance = to that disc; exact for planes | 0.26, 0.22 voxel | 0.15, 0.05 voxel |
+//! | [`Update::ClosestPoint`] (default) | each node inherits the surface element (closest point and tangent disc) of a neighbour; distance = to that disc; ≲ 0.06 voxel for planes | 0.26, 0.22 voxel | 0.15, 0.05 voxel |
 //!
 //! (Bounds asserted by the tests: first order < 1 voxel, second order
 //! < 0.35, closest point < 0.3 from one seed layer; [`redistance`] < 0.25
