@@ -3,9 +3,11 @@
 //! conversion.
 //!
 //! The front advances from the seeds in order of distance, on both sides of
-//! the surface at once (**positive inside**). The narrow band is a monotone
-//! radix heap of `(distance, node)` pairs over flat arrays (Far / Trial /
-//! Known flags, one byte per node), so a run does no per-node allocation.
+//! the surface at once (**positive inside**). Each node is one packed 8-byte
+//! cell (distance; Far / Trial / Known state, side, seed flag and surface
+//! element), and the narrow band is a monotone radix heap of `(distance,
+//! node)` pairs (Eikonal updates) or a queue of one-voxel shells
+//! (closest-point propagation), so a run does no per-node allocation.
 //! Three node updates are offered ([`Update`]):
 //!
 //! | update | what it computes | sphere, r = 10 voxels, exact seeds within 1 voxel: max error, within 3 voxels | torus 64³ by [`redistance`]: max error, within 2 voxels |
@@ -20,9 +22,9 @@
 //! propagation errs where a node's true closest point is not propagated
 //! through its neighbours (near medial axes, and next to a single seed
 //! layer on the concave side, which is why [`redistance`] and scan
-//! conversion seed two layers). It is also the fast mode: its front is
-//! relaxed shell by shell in memory order and in parallel (see
-//! `march.rs`), while the Eikonal updates run the classic sequential heap.
+//! conversion seed two layers). It is also the faster mode: its front is
+//! relaxed shell by shell in memory order, large shells in parallel by
+//! z-slabs, while the Eikonal updates run the classic sequential heap.
 //!
 //! [`redistance`] turns any grid whose zero level set is right but whose
 //! values are not distances (a sign field, a scaled or clamped field) into a
