@@ -8,6 +8,7 @@ use glam::{UVec3, Vec3};
 use isomorph_benches::{data_path, torus, torus_grid};
 use isomorph_common::Grid3;
 use isomorph_common::alignment::Moments;
+use isomorph_common::fast_marching::{FastMarchingSettings, redistance};
 use isomorph_common::marching_cubes::marching_cubes;
 use isomorph_common::mesh::bvh::Lattice;
 use isomorph_common::mesh::io::{MeshFormat, read_mesh, read_mesh_from};
@@ -36,6 +37,23 @@ fn grid_fill_torus(c: &mut Criterion) {
     let mut grid = Grid3::new(UVec3::splat(n), Vec3::splat(-0.5), 1.0 / (n - 1) as f32, 0.0f32).unwrap();
     group.throughput(Throughput::Elements(u64::from(n).pow(3)));
     group.bench_function(BenchmarkId::from_parameter(n), |b| b.iter(|| grid.fill_from(black_box(&shape))));
+    group.finish();
+}
+
+/// Redistancing the 256³ torus from a field with the right zero set but
+/// non-distance values (the torus distance times a smooth factor in [1, 2]).
+fn redistance_torus(c: &mut Criterion) {
+    let mut group = c.benchmark_group("redistance/torus");
+    group.sample_size(10);
+    let n = 256u32;
+    let shape = torus();
+    let field = |p: Vec3| shape.distance(p) * (1.5 + 0.5 * (3.0 * p.x).sin() * (2.0 * p.y).cos());
+    let grid = Grid3::sample(&field, UVec3::splat(n), Vec3::splat(-0.5), 1.0 / (n - 1) as f32).unwrap();
+    let settings = FastMarchingSettings::default();
+    group.throughput(Throughput::Elements(u64::from(n).pow(3)));
+    group.bench_function(BenchmarkId::from_parameter(n), |b| {
+        b.iter(|| redistance(black_box(&grid), &settings).unwrap())
+    });
     group.finish();
 }
 
@@ -81,5 +99,13 @@ fn mesh_sdf_bunny(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, marching_cubes_torus, grid_fill_torus, mesh_io_bunny, moments, mesh_sdf_bunny);
+criterion_group!(
+    benches,
+    marching_cubes_torus,
+    grid_fill_torus,
+    redistance_torus,
+    mesh_io_bunny,
+    moments,
+    mesh_sdf_bunny
+);
 criterion_main!(benches);

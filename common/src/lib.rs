@@ -21,6 +21,7 @@ pub mod models;
 pub mod morph;
 pub mod npy;
 pub mod render;
+pub mod scan_conversion;
 pub mod sdf;
 pub mod shape;
 pub mod transform;

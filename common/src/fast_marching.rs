@@ -1,1 +1,0 @@
-//! Fast marching and closest-point propagation (to be written).
