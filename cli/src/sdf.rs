@@ -4,6 +4,8 @@
 use crate::inputs::Input;
 use anyhow::Context;
 use clap::Args;
+use isomorph_common::fast_marching::FastMarchingSettings;
+use isomorph_common::scan_conversion::scan_convert;
 use isomorph_common::{Aabb, Grid3, npy};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -66,10 +68,13 @@ pub fn run(args: &SdfArgs) -> anyhow::Result<()> {
 
 /// The signed distance grid (positive inside) of `input` over `bounds` with
 /// `res` nodes along the longest edge: a mesh through the exact lattice
-/// distance (winding-number sign), a built-in shape sampled from its field.
+/// distance (winding-number sign); a built-in shape sampled from its field
+/// where that is an exact distance, else scan converted (Breen & Whitaker
+/// §6.1: closest points in a band, then fast marching).
 fn distance_grid(input: &Input, bounds: &Aabb, res: u32) -> anyhow::Result<Grid3<f32>> {
     Ok(match input {
         Input::Mesh(_, sdf) => sdf.sample_grid(bounds, res)?,
-        Input::Builtin(shape) => Grid3::sample_box(shape, bounds, res)?,
+        Input::Builtin(shape) if shape.is_exact_distance() => Grid3::sample_box(shape, bounds, res)?,
+        Input::Builtin(shape) => scan_convert(shape, bounds, res, &FastMarchingSettings::default())?,
     })
 }

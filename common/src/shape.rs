@@ -287,6 +287,33 @@ impl Shape {
         }
     }
 
+    /// Whether [`Shape::distance`] is the exact Euclidean signed distance
+    /// everywhere: sphere, box, torus and cylinder primitives, also when
+    /// placed by a rigid motion or a uniform scale. Superellipsoids and CSG
+    /// give only bounds away from the surface; convert those with
+    /// [`crate::scan_conversion::scan_convert`] when true distances matter.
+    pub fn is_exact_distance(&self) -> bool {
+        match self {
+            Shape::Sphere { .. } | Shape::Cuboid { .. } | Shape::Torus { .. } | Shape::Cylinder { .. } => {
+                true
+            }
+            Shape::Superellipsoid { .. }
+            | Shape::Union(_)
+            | Shape::Intersection(_)
+            | Shape::Difference(..) => false,
+            Shape::Placed(pl) => {
+                let m = pl.to_world.matrix3;
+                let lengths = [m.x_axis.length(), m.y_axis.length(), m.z_axis.length()];
+                let uniform = lengths.iter().all(|l| (l - lengths[0]).abs() <= 1e-5 * lengths[0]);
+                let orthogonal = m.x_axis.dot(m.y_axis).abs()
+                    + m.x_axis.dot(m.z_axis).abs()
+                    + m.y_axis.dot(m.z_axis).abs()
+                    <= 1e-5 * lengths[0] * lengths[0];
+                uniform && orthogonal && pl.shape.is_exact_distance()
+            }
+        }
+    }
+
     /// A box containing the shape (tight for primitives, conservative for CSG).
     pub fn aabb(&self) -> Aabb {
         match self {
@@ -426,6 +453,19 @@ mod tests {
     proptest! {
         /// Exact primitives are 1-Lipschitz and their value is zero only on the
         /// surface: moving by δ changes the value by at most δ.
+        #[test]
+        fn exactness_flag_follows_the_table(
+            r in 0.1f32..1.0, s in 0.5f32..2.0, stretch in 1.1f32..2.0
+        ) {
+            let sphere = Shape::sphere(r);
+            prop_assert!(sphere.is_exact_distance());
+            prop_assert!(sphere.clone().translated(Vec3::X).is_exact_distance());
+            prop_assert!(sphere.clone().scaled(s).rotated(Quat::from_rotation_x(s)).is_exact_distance());
+            let stretched = sphere.clone().transformed(Affine3A::from_scale(Vec3::new(stretch, 1.0, 1.0)));
+            prop_assert!(!stretched.is_exact_distance());
+            prop_assert!(!sphere.union(Shape::torus(r, r / 3.0)).is_exact_distance());
+        }
+
         #[test]
         fn exact_primitives_are_one_lipschitz(
             x in -1.0f32..1.0, y in -1.0f32..1.0, z in -1.0f32..1.0,
