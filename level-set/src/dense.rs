@@ -51,7 +51,7 @@ impl Solver for DenseSolver {
             .into_par_iter()
             .filter(|&n| lattice.on_zero_set(u, n))
             .map(|n| {
-                let gamma = speed_at_zero_crossing(lattice, u, v, n);
+                let gamma = speed_at_zero_crossing(lattice, u, speed, n);
                 ((dt * change[n]).powi(2), gamma * gamma, 1usize)
             })
             .reduce(|| (0.0, 0.0, 0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2));

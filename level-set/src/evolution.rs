@@ -150,13 +150,7 @@ pub fn evolve(
     progress: &dyn Fn(&Progress),
 ) -> Result<LevelSetMorph, LevelSetError> {
     check_settings(settings)?;
-    if speed.lattice() != &Lattice::new(source.dims()) {
-        return Err(LevelSetError::Grid(isomorph_common::GridError::Mismatch(format!(
-            "speed on {:?} nodes, source on {}",
-            speed.lattice().dims(),
-            source.dims()
-        ))));
-    }
+    source.check_same_lattice(speed.grid())?;
     let mut solver: Box<dyn Solver> = match settings.solver {
         SolverKind::SparseField => Box::new(SparseFieldSolver::new(source)?),
         SolverKind::Dense => Box::new(DenseSolver::new(source)?),

@@ -143,12 +143,12 @@ impl SparseFieldSolver {
     /// Step 1: change rate of every active point, with the speed sampled at
     /// its nearest zero crossing.
     fn compute_rates(&mut self, speed: &SpeedGrid, curvature: Option<Curvature>) {
-        let (lattice, u, v, h) = (&self.lattice, &self.u, speed.values(), speed.spacing());
+        let (lattice, u, h) = (&self.lattice, &self.u, speed.spacing());
         self.layers[slot(0)]
             .par_iter()
             .map(|&n| {
                 let n = n as usize;
-                let d = speed_at_zero_crossing(lattice, u, v, n);
+                let d = speed_at_zero_crossing(lattice, u, speed, n);
                 let (rate, gamma) = node_rate(lattice, u, n, d, h, curvature);
                 (rate, gamma, d)
             })

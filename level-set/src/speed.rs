@@ -38,9 +38,8 @@ impl Response {
 /// inside (the surface expands there).
 #[derive(Debug, Clone)]
 pub struct SpeedGrid {
-    values: Vec<f32>,
-    lattice: Lattice,
-    spacing: f32,
+    /// Speeds in voxel units on the evolution lattice.
+    grid: Grid3<f32>,
     max_abs: f32,
 }
 
@@ -73,7 +72,7 @@ impl SpeedGrid {
                 response.apply(target.value(map(x))) * inv_h
             })
             .collect();
-        Self::from_voxel_values(lat, lattice.spacing(), values)
+        Self::from_voxel_values(lattice, values)
     }
 
     /// A target distance grid (world units, positive inside) that already
@@ -84,10 +83,11 @@ impl SpeedGrid {
     pub fn from_grid(target: &Grid3<f32>, response: Response) -> Result<Self, LevelSetError> {
         let inv_h = 1.0 / target.spacing();
         let values = target.data().par_iter().map(|&d| response.apply(d) * inv_h).collect();
-        Self::from_voxel_values(Lattice::new(target.dims()), target.spacing(), values)
+        Self::from_voxel_values(target, values)
     }
 
-    fn from_voxel_values(lattice: Lattice, spacing: f32, values: Vec<f32>) -> Result<Self, LevelSetError> {
+    /// Wraps voxel-unit `values` on the lattice of `like`.
+    fn from_voxel_values(like: &Grid3<f32>, values: Vec<f32>) -> Result<Self, LevelSetError> {
         if let Some(node) = values.iter().position(|v| !v.is_finite()) {
             return Err(LevelSetError::NonFinite { what: "target", node });
         }
@@ -95,12 +95,13 @@ impl SpeedGrid {
             return Err(LevelSetError::NoSurface("target"));
         }
         let max_abs = values.par_iter().map(|v| v.abs()).reduce(|| 0.0, f32::max);
-        Ok(Self { values, lattice, spacing, max_abs })
+        let grid = Grid3::from_vec(like.dims(), like.origin(), like.spacing(), values)?;
+        Ok(Self { grid, max_abs })
     }
 
     /// Speeds per node (voxel units), x-fastest.
     pub fn values(&self) -> &[f32] {
-        &self.values
+        self.grid.data()
     }
 
     /// Largest speed magnitude (voxels per unit time).
@@ -110,10 +111,16 @@ impl SpeedGrid {
 
     /// Grid spacing (world units per voxel).
     pub fn spacing(&self) -> f32 {
-        self.spacing
+        self.grid.spacing()
     }
 
-    pub(crate) fn lattice(&self) -> &Lattice {
-        &self.lattice
+    /// The speeds as a grid (voxel units) on the evolution lattice.
+    pub fn grid(&self) -> &Grid3<f32> {
+        &self.grid
+    }
+
+    /// Trilinear speed at voxel coordinates `g` (clamped to the grid).
+    pub(crate) fn at_voxel(&self, g: Vec3) -> f32 {
+        self.grid.trilinear(self.grid.origin() + g * self.grid.spacing())
     }
 }

@@ -5,6 +5,7 @@
 //! spacing), as the paper assumes unit spacing; the level-set equation
 //! `∂φ/∂t = |∇φ| γ` keeps its time scale under that change of units.
 
+use crate::SpeedGrid;
 use isomorph_common::glam::{UVec3, Vec3};
 
 /// An x-fastest lattice of `dims` nodes: linear indices, coordinates and the
@@ -161,8 +162,8 @@ pub(crate) fn upwind_norm(minus: [f32; 3], plus: [f32; 3], speed: f32) -> f32 {
 /// The speed at the zero crossing nearest to node `n` (the sparse field's
 /// first-order modification): one Newton step along the central-difference
 /// gradient, `x' = x − u ∇u / |∇u|²`, then trilinear interpolation of the
-/// node speeds `speed` (same lattice).
-pub(crate) fn speed_at_zero_crossing(lattice: &Lattice, u: &[f32], speed: &[f32], n: usize) -> f32 {
+/// node speeds (same lattice).
+pub(crate) fn speed_at_zero_crossing(lattice: &Lattice, u: &[f32], speed: &SpeedGrid, n: usize) -> f32 {
     let grad = lattice.central_gradient(u, n);
     let [i, j, k] = lattice.coords(n);
     let mut x = Vec3::new(i as f32, j as f32, k as f32);
@@ -170,29 +171,7 @@ pub(crate) fn speed_at_zero_crossing(lattice: &Lattice, u: &[f32], speed: &[f32]
     if g2 > 1e-12 {
         x -= u[n] * grad / g2;
     }
-    trilinear(lattice, speed, x)
-}
-
-/// Trilinear interpolation of `values` on `lattice` at voxel coordinates `g`
-/// (clamped to the grid).
-pub(crate) fn trilinear(lattice: &Lattice, values: &[f32], g: Vec3) -> f32 {
-    let d = lattice.dims;
-    let max = Vec3::new((d[0] - 1) as f32, (d[1] - 1) as f32, (d[2] - 1) as f32);
-    let g = g.clamp(Vec3::ZERO, max);
-    let base = g.floor().min((max - Vec3::ONE).max(Vec3::ZERO));
-    let w = g - base;
-    let b = [base.x as usize, base.y as usize, base.z as usize];
-    let step = |axis: usize| if d[axis] > 1 { lattice.strides[axis] } else { 0 };
-    let (sx, sy, sz) = (step(0), step(1), step(2));
-    let i = b[0] + b[1] * lattice.strides[1] + b[2] * lattice.strides[2];
-    let v = |o: usize| values[i + o];
-    let x00 = v(0) + w.x * (v(sx) - v(0));
-    let x10 = v(sy) + w.x * (v(sy + sx) - v(sy));
-    let x01 = v(sz) + w.x * (v(sz + sx) - v(sz));
-    let x11 = v(sz + sy) + w.x * (v(sz + sy + sx) - v(sz + sy));
-    let y0 = x00 + w.y * (x10 - x00);
-    let y1 = x01 + w.y * (x11 - x01);
-    y0 + w.z * (y1 - y0)
+    speed.at_voxel(x)
 }
 
 #[cfg(test)]
@@ -239,16 +218,5 @@ mod tests {
         let rho = (49.0f32 + 81.0).sqrt();
         assert!((kappa + 2.0 / rho).abs() < 0.01, "kappa {kappa} vs {}", -2.0 / rho);
         assert!((g - 1.0).abs() < 0.02);
-    }
-
-    #[test]
-    fn trilinear_reproduces_linear_functions() {
-        let l = Lattice::new(UVec3::new(4, 3, 5));
-        let f = |c: [usize; 3]| 1.0 + 2.0 * c[0] as f32 - c[1] as f32 + 0.5 * c[2] as f32;
-        let values: Vec<f32> = (0..l.len()).map(|n| f(l.coords(n))).collect();
-        let g = Vec3::new(1.3, 0.7, 3.9);
-        let expected = 1.0 + 2.0 * g.x - g.y + 0.5 * g.z;
-        assert!((trilinear(&l, &values, g) - expected).abs() < 1e-5);
-        assert_eq!(trilinear(&l, &values, Vec3::new(3.0, 2.0, 4.0)), f([3, 2, 4]));
     }
 }
