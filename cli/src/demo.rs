@@ -41,6 +41,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
             align,
             solver: Solver::Sparse,
             curvature: None,
+            report: false,
         };
         let report = morph(&morph_args)?;
         print_summary(&report, &morph_args);

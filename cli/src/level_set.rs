@@ -2,24 +2,60 @@
 //! with optional moment alignment and a progress bar over the iterations.
 
 use crate::inputs::Input;
-use anyhow::Context;
+use anyhow::{Context, bail};
 use clap::ValueEnum;
 use indicatif::{ProgressBar, ProgressStyle};
 use isomorph_common::alignment::{AlignMode, align};
-use isomorph_common::glam::Affine3A;
+use isomorph_common::glam::{Affine3A, Mat4};
 use isomorph_common::{AffinePath, Grid3};
 use isomorph_levelset::{
-    Curvature, EvolveSettings, FrameSchedule, LevelSetMorph, Response, SolverKind, SpeedGrid, evolve,
+    Curvature, EvolveSettings, FrameSchedule, LevelSetMorph, Placement, Response, SolverKind, SpeedGrid,
+    evolve,
 };
+use std::path::{Path, PathBuf};
 
 /// How the source is placed on the target before evolving (Breen §6.2).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Align {
     /// Automatic alignment by moments (Breen, Appendix): centroids,
     /// principal axes and per-axis scale.
     Auto,
     /// Use both shapes where they are.
     None,
+    /// The map in a JSON file with a `matrix` entry (4×4, row-major, acting
+    /// on column vectors `(x, y, z, 1)`), as `isomorph align` prints it.
+    File(PathBuf),
+}
+
+/// Parses `--align`: `auto`, `none` or the path of a JSON map.
+pub fn parse_align(s: &str) -> Result<Align, String> {
+    match s {
+        "auto" => Ok(Align::Auto),
+        "none" => Ok(Align::None),
+        path if path.ends_with(".json") => Ok(Align::File(PathBuf::from(path))),
+        other => Err(format!("'{other}' is not auto, none or a .json file")),
+    }
+}
+
+/// Reads an affine map written by `isomorph align` (its `matrix` entry).
+///
+/// # Errors
+/// Unreadable files, a missing or malformed `matrix`, a last row other than
+/// `0 0 0 1`, non-finite entries or a singular map.
+pub fn read_map(path: &Path) -> anyhow::Result<Affine3A> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let json: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("{} is not JSON", path.display()))?;
+    let rows: [[f32; 4]; 4] = serde_json::from_value(json["matrix"].clone())
+        .with_context(|| format!("{}: expected \"matrix\": 4 rows of 4 numbers", path.display()))?;
+    if rows[3] != [0.0, 0.0, 0.0, 1.0] {
+        bail!("{}: the matrix's last row must be 0 0 0 1 (an affine map)", path.display());
+    }
+    let map = Affine3A::from_mat4(Mat4::from_cols_array_2d(&rows).transpose());
+    if !map.is_finite() || map.matrix3.determinant().abs() < 1e-12 {
+        bail!("{}: the map is not finite and invertible", path.display());
+    }
+    Ok(map)
 }
 
 /// The level-set solver on the command line.
@@ -32,7 +68,7 @@ pub enum Solver {
 }
 
 /// Level-set options of `isomorph morph`.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct Options {
     /// Alignment of source onto target.
     pub align: Align,
@@ -50,13 +86,14 @@ pub struct Options {
 ///
 /// # Errors
 /// Alignment, grid and level-set errors (e.g. shapes that do not overlap).
-pub fn build(source: &Input, target: &Input, options: Options) -> anyhow::Result<LevelSetMorph> {
-    let map = match options.align {
+pub fn build(source: &Input, target: &Input, options: &Options) -> anyhow::Result<LevelSetMorph> {
+    let map = match &options.align {
         Align::None => Affine3A::IDENTITY,
         Align::Auto => {
             let (a, b) = (source.moments(options.res)?, target.moments(options.res)?);
             align(&a, &b, AlignMode::Affine).context("cannot align the shapes")?.map
         }
+        Align::File(path) => read_map(path)?,
     };
     // The evolution happens in source space: the box holds the source and the
     // target pulled back by T.
@@ -64,7 +101,8 @@ pub fn build(source: &Input, target: &Input, options: Options) -> anyhow::Result
     let bounds = source.bounds().union(&target.bounds().transformed(&inverse)).padded(0.1);
     let grid = Grid3::sample_box(source.field(), &bounds, options.res)?;
     let speed = SpeedGrid::sample(&grid, target.field(), |x| map.transform_point3(x), Response::Identity)?;
-    let placement = (map != Affine3A::IDENTITY).then(|| AffinePath::from_identity(&map)).transpose()?;
+    let placement =
+        if map == Affine3A::IDENTITY { Placement::Identity } else { AffinePath::from_identity(&map)?.into() };
     let settings = EvolveSettings {
         solver: match options.solver {
             Solver::Sparse => SolverKind::SparseField,

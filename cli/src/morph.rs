@@ -62,8 +62,9 @@ pub struct MorphArgs {
     /// the built-in shapes' box (centred, longest side 0.9).
     #[arg(long)]
     pub keep_scale: bool,
-    /// Level-set only: alignment of the source onto the target.
-    #[arg(long, value_enum, default_value_t = Align::None)]
+    /// Level-set only: alignment of the source onto the target: `auto`
+    /// (moments), `none`, or a JSON map file as `isomorph align` prints it.
+    #[arg(long, default_value = "none", value_parser = level_set::parse_align)]
     pub align: Align,
     /// Level-set only: the solver.
     #[arg(long, value_enum, default_value_t = Solver::Sparse)]
@@ -78,6 +79,11 @@ pub struct MorphArgs {
     /// Mesh format of the frames.
     #[arg(long, value_enum, default_value_t = Format::Ply)]
     pub format: Format,
+    /// Print the JSON report (timings, per-frame metrics, endpoint
+    /// distances, the method's convergence details) on stdout instead of the
+    /// summary table; it is always written to `OUT/report.json` too.
+    #[arg(long)]
+    pub report: bool,
 }
 
 /// Accepts a finite weight in `[0, 100]`.
@@ -89,7 +95,11 @@ fn parse_weight(s: &str) -> Result<f32, String> {
 /// Runs `isomorph morph`.
 pub fn run(args: &MorphArgs) -> anyhow::Result<()> {
     let report = morph(args)?;
-    print_summary(&report, args);
+    if args.report {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print_summary(&report, args);
+    }
     Ok(())
 }
 
@@ -117,12 +127,12 @@ pub fn morph(args: &MorphArgs) -> anyhow::Result<Report> {
         }
         Method::LevelSet => {
             let options = level_set::Options {
-                align: args.align,
+                align: args.align.clone(),
                 solver: args.solver,
                 res: args.res,
                 curvature: args.curvature,
             };
-            export(&level_set::build(&source, &target, options)?, &settings, &label)
+            export(&level_set::build(&source, &target, &options)?, &settings, &label)
         }
     }
 }

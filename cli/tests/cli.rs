@@ -272,3 +272,64 @@ fn warp_drags_a_sphere_point_and_writes_volume_meshes_and_png() {
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("three finite numbers"));
     let _ = std::fs::remove_dir_all(&out);
 }
+
+#[test]
+fn level_set_morph_takes_an_align_file_and_prints_its_report() {
+    let out = scratch("align-file");
+    std::fs::create_dir_all(&out).unwrap();
+    let map = out.join("map.json");
+    let v = align_json(&["mug", "chain", "--res", "32", "--out", out.join("aligned.ply").to_str().unwrap()]);
+    std::fs::write(&map, v.to_string()).unwrap();
+    let frames = out.join("frames");
+    let o = isomorph(&[
+        "morph",
+        "--method",
+        "level-set",
+        "--source",
+        "mug",
+        "--target",
+        "chain",
+        "--align",
+        map.to_str().unwrap(),
+        "--res",
+        "32",
+        "--frames",
+        "3",
+        "--report",
+        "--out",
+        frames.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).expect("stdout is the JSON report");
+    assert_eq!(report["method"], "level-set");
+    assert_eq!(report["frames"].as_array().unwrap().len(), 3);
+    let details = &report["details"];
+    assert_eq!(details["placement"], "affine", "{details}");
+    assert_eq!(details["converged"], true, "{details}");
+    assert!(details["solver_iterations"].as_u64().unwrap() > 0);
+    // The aligned mug ends on the chain, placed in the chain's space.
+    let target = &report["endpoints"]["target"];
+    assert!(target["mean_voxels"].as_f64().unwrap() < 0.5, "{target}");
+    // A map file that is not affine is refused with one clear line.
+    std::fs::write(&map, r#"{"matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[1,0,0,1]]}"#).unwrap();
+    let o = isomorph(&[
+        "morph",
+        "--method",
+        "level-set",
+        "--source",
+        "mug",
+        "--target",
+        "chain",
+        "--align",
+        map.to_str().unwrap(),
+        "--out",
+        frames.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("last row"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}

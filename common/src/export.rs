@@ -193,6 +193,9 @@ pub struct Report {
     pub frames: Vec<FrameReport>,
     /// Endpoint distances.
     pub endpoints: Endpoints,
+    /// [`Morph::details`]: method-specific convergence and cost figures.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub details: Option<serde_json::Value>,
 }
 
 impl Report {
@@ -286,6 +289,7 @@ pub fn export_sequence<M: Morph + ?Sized>(
         total_seconds: start.elapsed().as_secs_f64(),
         frames: results.into_iter().map(|(r, _)| r).collect(),
         endpoints,
+        details: morph.details(),
     };
     let path = dir.join("report.json");
     let json = serde_json::to_string_pretty(&report).expect("report serializes");

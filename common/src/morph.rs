@@ -40,6 +40,13 @@ pub trait Morph: Sync {
     /// A box in field space containing the surface of every frame.
     fn bounds(&self) -> Aabb;
 
+    /// Method-specific facts a user needs to trust the result (iterations,
+    /// residuals, convergence, memory), as JSON; the sequence exporter
+    /// writes them into `report.json` under `details`. `None` by default.
+    fn details(&self) -> Option<serde_json::Value> {
+        None
+    }
+
     /// The frame at `t` as a world-space mesh: the field sampled over
     /// [`Morph::bounds`] with `res` nodes along its longest edge, marching
     /// cubes at the frame's iso value, then placed by the frame's transform.

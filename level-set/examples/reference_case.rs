@@ -7,7 +7,7 @@
 //! `cargo run --release -p isomorph-levelset --example reference_case -- 128 sparse`
 
 use isomorph_common::{Aabb, Field3, Grid3, Morph, Shape};
-use isomorph_levelset::{EvolveSettings, FrameSchedule, Response, SolverKind, SpeedGrid, evolve};
+use isomorph_levelset::{EvolveSettings, FrameSchedule, Placement, Response, SolverKind, SpeedGrid, evolve};
 use std::time::Instant;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -20,10 +20,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let source = Grid3::sample_box(&Shape::sphere(0.3), &Aabb::cube(0.5), n)?;
     let torus = Shape::torus(0.3, 0.12);
     let speed = SpeedGrid::sample(&source, &torus, |x| x, Response::Identity)?;
-    let settings =
+    let mut settings =
         EvolveSettings { solver, frames: FrameSchedule::EveryIterations(usize::MAX), ..Default::default() };
+    if solver == SolverKind::Dense {
+        let sparse = EvolveSettings { solver: SolverKind::SparseField, ..settings };
+        settings.end_time = evolve(&source, &speed, Placement::Identity, &sparse, &|_| {})?.end_time();
+        settings.max_iterations = 100_000;
+    }
     let start = Instant::now();
-    let morph = evolve(&source, &speed, None, &settings, &|_| {})?;
+    let morph = evolve(&source, &speed, Placement::Identity, &settings, &|_| {})?;
     let seconds = start.elapsed().as_secs_f64();
     let mesh = morph.frame_mesh(1.0, 0)?;
     let h = source.spacing();

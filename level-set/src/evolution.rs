@@ -4,11 +4,11 @@
 use crate::band::BandFrame;
 use crate::solver::{Curvature, Solver, StepParams, StepStats};
 use crate::stencil::Lattice;
-use crate::{DenseSolver, LevelSetError, SparseFieldSolver, SpeedGrid};
-use isomorph_common::glam::{Affine3A, UVec3, Vec3};
+use crate::{DenseSolver, LevelSetError, Placement, SparseFieldSolver, SpeedGrid};
+use isomorph_common::glam::{UVec3, Vec3};
 use isomorph_common::marching_cubes::marching_cubes;
 use isomorph_common::morph::{Frame, Morph};
-use isomorph_common::{Aabb, AffinePath, Grid3, TriMesh};
+use isomorph_common::{Aabb, Grid3, TriMesh};
 
 /// Which solver integrates the level-set equation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
@@ -86,14 +86,15 @@ pub struct Progress {
 
 /// A finished level-set evolution: the kept frames and how it went. As a
 /// [`Morph`], `frame(t)` is the kept frame nearest to `t·(N − 1)`, placed
-/// by the interpolated transform `T(x, n/(N − 1))` (Breen eq. 25–26).
+/// by the interpolated transform `T(x, n/(N − 1))` (Breen eq. 25–26; see
+/// [`Placement`]).
 #[derive(Debug, Clone)]
 pub struct LevelSetMorph {
     frames: Vec<BandFrame>,
     dims: UVec3,
     origin: Vec3,
     spacing: f32,
-    placement: Option<AffinePath>,
+    placement: Placement,
     stats: Vec<StepStats>,
     converged: bool,
 }
@@ -135,8 +136,9 @@ pub fn check_overlap(source: &Grid3<f32>, speed: &SpeedGrid) -> Result<(), Level
 /// Evolves the source surface (a signed distance grid, world units,
 /// positive inside) under the target `speed` until it matches the target
 /// (RMS distance or RMS change below the settings' thresholds) or the
-/// iteration cap, keeping frames as scheduled. `placement`, if given, is
-/// Breen's `T(x, α)`: kept frames are placed by it when polygonized.
+/// iteration cap, keeping frames as scheduled. `placement` is Breen's
+/// `T(x, α)`: kept frames are placed by it when polygonized (use
+/// [`Placement::Identity`] when the speed was sampled without a map).
 ///
 /// # Errors
 /// Input errors of the solvers, [`LevelSetError::NoOverlap`] when a target
@@ -145,7 +147,7 @@ pub fn check_overlap(source: &Grid3<f32>, speed: &SpeedGrid) -> Result<(), Level
 pub fn evolve(
     source: &Grid3<f32>,
     speed: &SpeedGrid,
-    placement: Option<AffinePath>,
+    placement: Placement,
     settings: &EvolveSettings,
     progress: &dyn Fn(&Progress),
 ) -> Result<LevelSetMorph, LevelSetError> {
@@ -268,10 +270,14 @@ impl LevelSetMorph {
         (t * (self.frames.len() - 1) as f32).round() as usize
     }
 
-    /// The placement `T(x, n/(N − 1))` of kept frame `n`.
-    fn placement(&self, n: usize) -> Affine3A {
-        let alpha = n as f32 / (self.frames.len() - 1).max(1) as f32;
-        self.placement.as_ref().map_or(Affine3A::IDENTITY, |p| p.at(alpha))
+    /// The placement parameter `α = n/(N − 1)` of kept frame `n`.
+    fn alpha(&self, n: usize) -> f32 {
+        n as f32 / (self.frames.len() - 1).max(1) as f32
+    }
+
+    /// Breen's `T(x, α)` placing the kept frames.
+    pub fn placement(&self) -> &Placement {
+        &self.placement
     }
 }
 
@@ -288,7 +294,7 @@ impl Morph for LevelSetMorph {
             return Err(LevelSetError::InvalidTime(t));
         }
         let n = self.index(t);
-        Ok(Frame { field: self.frame_grid(n)?, iso: 0.0, transform: self.placement(n) })
+        Ok(Frame { field: self.frame_grid(n)?, iso: 0.0, transform: self.placement.affine_at(self.alpha(n)) })
     }
 
     fn bounds(&self) -> Aabb {
@@ -298,9 +304,29 @@ impl Morph for LevelSetMorph {
     /// Marching cubes directly on the kept frame's lattice (`res` ignored),
     /// placed by `T(x, n/(N − 1))`.
     fn frame_mesh(&self, t: f32, _res: u32) -> Result<TriMesh, LevelSetError> {
-        let frame = self.frame(t)?;
-        let mut mesh = marching_cubes(&frame.field, 0.0);
-        mesh.transform(&frame.transform);
+        if !(0.0..=1.0).contains(&t) {
+            return Err(LevelSetError::InvalidTime(t));
+        }
+        let n = self.index(t);
+        let mut mesh = marching_cubes(&self.frame_grid(n)?, 0.0);
+        self.placement.apply(&mut mesh, self.alpha(n));
         Ok(mesh)
+    }
+
+    /// Iterations, convergence, evolution time, the last RMS target
+    /// distance and change (voxels), frames kept and their memory.
+    fn details(&self) -> Option<serde_json::Value> {
+        let last = self.stats.last().copied().unwrap_or_default();
+        Some(serde_json::json!({
+            "solver_iterations": self.stats.len(),
+            "converged": self.converged,
+            "evolution_time": self.end_time(),
+            "final_rms_distance_voxels": last.rms_distance,
+            "final_rms_change_voxels": last.rms_change,
+            "final_surface_nodes": last.surface_nodes,
+            "kept_frames": self.frames.len(),
+            "stored_frame_bytes": self.stored_bytes(),
+            "placement": self.placement.kind(),
+        }))
     }
 }

@@ -23,13 +23,13 @@
 //! # Example
 //! ```
 //! use isomorph_common::{Aabb, Grid3, Morph, Shape};
-//! use isomorph_levelset::{EvolveSettings, Response, SpeedGrid, evolve};
+//! use isomorph_levelset::{EvolveSettings, Placement, Response, SpeedGrid, evolve};
 //!
 //! let bounds = Aabb::cube(0.5);
 //! let source = Grid3::sample_box(&Shape::sphere(0.3), &bounds, 32)?;
 //! let torus = Shape::torus(0.3, 0.12);
 //! let speed = SpeedGrid::sample(&source, &torus, |x| x, Response::Identity)?;
-//! let morph = evolve(&source, &speed, None, &EvolveSettings::default(), &|_| {})?;
+//! let morph = evolve(&source, &speed, Placement::Identity, &EvolveSettings::default(), &|_| {})?;
 //! assert!(morph.converged());
 //! let last = morph.frame_mesh(1.0, 0)?;
 //! assert_eq!(last.genus(), Some(1)); // the sphere became a torus
@@ -40,6 +40,7 @@ mod band;
 mod dense;
 mod error;
 mod evolution;
+mod placement;
 mod solver;
 mod sparse_field;
 mod speed;
@@ -51,6 +52,7 @@ pub use error::LevelSetError;
 pub use evolution::{
     EvolveSettings, FrameSchedule, LevelSetMorph, Progress, SolverKind, check_overlap, evolve,
 };
+pub use placement::{Placement, Warp};
 pub use solver::{Curvature, Solver, StepParams, StepStats};
 pub use sparse_field::SparseFieldSolver;
 pub use speed::{Response, SpeedGrid};

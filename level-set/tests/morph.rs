@@ -3,7 +3,8 @@
 use isomorph_common::morph::{DistanceBlend, Morph};
 use isomorph_common::{Aabb, Field3, Grid3, Shape, TriMesh, models};
 use isomorph_levelset::{
-    EvolveSettings, FrameSchedule, LevelSetError, LevelSetMorph, Response, SolverKind, SpeedGrid, evolve,
+    EvolveSettings, FrameSchedule, LevelSetError, LevelSetMorph, Placement, Response, SolverKind, SpeedGrid,
+    evolve,
 };
 
 /// Sphere r = 0.3 → torus R = 0.3, r = 0.12 in [-0.5, 0.5]³ (the reference case).
@@ -12,7 +13,7 @@ fn sphere_torus(res: u32, solver: SolverKind) -> (LevelSetMorph, Grid3<f32>, Sha
     let torus = Shape::torus(0.3, 0.12);
     let speed = SpeedGrid::sample(&source, &torus, |x| x, Response::Identity).unwrap();
     let settings = EvolveSettings { solver, ..EvolveSettings::default() };
-    let morph = evolve(&source, &speed, None, &settings, &|_| {}).unwrap();
+    let morph = evolve(&source, &speed, Placement::Identity, &settings, &|_| {}).unwrap();
     (morph, source, torus)
 }
 
@@ -54,7 +55,7 @@ fn dense_and_sparse_solvers_agree() {
             rms_distance: 0.0,
             ..EvolveSettings::default()
         };
-        evolve(&source, &speed, None, &settings, &|_| {}).unwrap()
+        evolve(&source, &speed, Placement::Identity, &settings, &|_| {}).unwrap()
     };
     let (sparse, dense) = (run(SolverKind::SparseField), run(SolverKind::Dense));
     assert_eq!(sparse.len(), dense.len());
@@ -78,7 +79,7 @@ fn ball_to_c_never_pops_pieces_but_the_blend_does() {
     let target = Grid3::sample_box(&c, &bounds, res).unwrap();
     let speed = SpeedGrid::from_grid(&target, Response::Identity).unwrap();
     let settings = EvolveSettings { frames: FrameSchedule::EveryIterations(5), ..EvolveSettings::default() };
-    let morph = evolve(&source, &speed, None, &settings, &|_| {}).unwrap();
+    let morph = evolve(&source, &speed, Placement::Identity, &settings, &|_| {}).unwrap();
     let most = (0..morph.len())
         .map(|n| morph.frame_mesh(n as f32 / (morph.len() - 1) as f32, 0).unwrap().connected_components())
         .max()
@@ -115,12 +116,12 @@ fn bad_inputs_are_typed_errors() {
     let settings = EvolveSettings::default();
     let none = |_: &_| {};
     assert!(matches!(
-        evolve(&source, &speed, None, &settings, &none),
+        evolve(&source, &speed, Placement::Identity, &settings, &none),
         Err(LevelSetError::NoOverlap { components: 1, total: 1 })
     ));
     let empty = source.map(|_| -1.0f32).unwrap();
     assert!(matches!(
-        evolve(&empty, &speed, None, &settings, &none),
+        evolve(&empty, &speed, Placement::Identity, &settings, &none),
         Err(LevelSetError::NoSurface("source"))
     ));
     assert!(matches!(
@@ -130,13 +131,19 @@ fn bad_inputs_are_typed_errors() {
     let mut nan = source.clone();
     nan.data_mut()[7] = f32::NAN;
     assert!(matches!(
-        evolve(&nan, &speed, None, &settings, &none),
+        evolve(&nan, &speed, Placement::Identity, &settings, &none),
         Err(LevelSetError::NonFinite { what: "source", node: 7 })
     ));
     let other = Grid3::sample_box(&Shape::sphere(0.3), &bounds, 20).unwrap();
-    assert!(matches!(evolve(&other, &speed, None, &settings, &none), Err(LevelSetError::Grid(_))));
+    assert!(matches!(
+        evolve(&other, &speed, Placement::Identity, &settings, &none),
+        Err(LevelSetError::Grid(_))
+    ));
     let zero = EvolveSettings { max_iterations: 0, ..settings };
-    assert!(matches!(evolve(&source, &speed, None, &zero, &none), Err(LevelSetError::BadSetting { .. })));
+    assert!(matches!(
+        evolve(&source, &speed, Placement::Identity, &zero, &none),
+        Err(LevelSetError::BadSetting { .. })
+    ));
 }
 
 #[test]
@@ -147,7 +154,7 @@ fn curvature_regularized_morph_still_lands_on_the_target() {
     let speed = SpeedGrid::sample(&source, &torus, |x| x, Response::Identity).unwrap();
     let curvature = Some(Curvature { weight: 2.0, length: 0.5 });
     let settings = EvolveSettings { curvature, ..EvolveSettings::default() };
-    let morph = evolve(&source, &speed, None, &settings, &|_| {}).unwrap();
+    let morph = evolve(&source, &speed, Placement::Identity, &settings, &|_| {}).unwrap();
     assert!(morph.converged());
     let last = morph.frame_mesh(1.0, 0).unwrap();
     let (mean, max) = vertex_error(&last, &torus, source.spacing());
@@ -169,7 +176,7 @@ fn mug_becomes_the_chain_after_moment_alignment() {
     let source = Grid3::sample_box(&mug, &region, res).unwrap();
     let speed = SpeedGrid::sample(&source, &chain, |x| map.transform_point3(x), Response::Identity).unwrap();
     let path = isomorph_common::AffinePath::from_identity(&map).unwrap();
-    let morph = evolve(&source, &speed, Some(path), &EvolveSettings::default(), &|_| {}).unwrap();
+    let morph = evolve(&source, &speed, path.into(), &EvolveSettings::default(), &|_| {}).unwrap();
     assert!(morph.converged());
     // Frames are placed by T(x, n/(N − 1)): the last one lies in the chain's space.
     let last = morph.frame_mesh(1.0, 0).unwrap();
@@ -187,4 +194,30 @@ fn mug_becomes_the_chain_after_moment_alignment() {
     assert_eq!(last.connected_components(), 3, "the three links");
     let first = morph.frame_mesh(0.0, 0).unwrap();
     assert_eq!(first.genus(), Some(1), "the mug with its handle");
+}
+
+#[test]
+fn warp_placement_carries_the_last_frame_onto_the_target() {
+    use isomorph_common::glam::Vec3;
+    // A non-affine generalized warp W (a shear that bends along y): the
+    // speed is the torus seen through W, and frames are placed by
+    // T(x, α) = (1 − α) x + α W(x).
+    let warp = |p: Vec3| Vec3::new(p.x + 0.4 * p.y * p.y, p.y, p.z);
+    let source = Grid3::sample_box(&Shape::sphere(0.3), &Aabb::cube(0.5), 48).unwrap();
+    let torus = Shape::torus(0.3, 0.12);
+    let speed = SpeedGrid::sample(&source, &torus, warp, Response::Identity).unwrap();
+    let morph = evolve(&source, &speed, Placement::warp(warp), &EvolveSettings::default(), &|_| {}).unwrap();
+    assert!(morph.converged());
+    let h = source.spacing();
+    let worst = |mesh: &TriMesh, field: &dyn Field3| {
+        mesh.positions.iter().map(|&p| field.value(p).abs() / h).fold(0.0f32, f32::max)
+    };
+    // Frame 1 lies on the torus in the target's own space (the distance
+    // is only Lipschitz through W, so allow a voxel), frame 0 on the sphere.
+    let last = morph.frame_mesh(1.0, 0).unwrap();
+    assert!(worst(&last, &torus) < 1.0, "last frame off the torus by {} voxels", worst(&last, &torus));
+    let first = morph.frame_mesh(0.0, 0).unwrap();
+    let sphere = Shape::sphere(0.3);
+    assert!(worst(&first, &sphere) < 0.5, "first frame off the sphere by {} voxels", worst(&first, &sphere));
+    assert_eq!(morph.details().unwrap()["placement"], "warp");
 }
