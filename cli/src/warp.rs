@@ -4,21 +4,31 @@
 use crate::inputs::Input;
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
-use isomorph_common::glam::Vec3;
+use isomorph_common::Grid3;
+use isomorph_common::glam::{UVec3, Vec3};
 use isomorph_common::marching_cubes::marching_cubes;
 use isomorph_common::mesh::io::{MeshFormat, write_mesh};
+use isomorph_common::npy::{self, Volume};
 use isomorph_common::render::{RenderSettings, contact_sheet_titled, render};
-use isomorph_common::{Grid3, npy};
 use isomorph_warp::{Evaluation, Filter, Handle, VolumeWarp, WarpSettings};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Arguments of `isomorph warp`.
 #[derive(Debug, Args)]
 pub struct WarpArgs {
-    /// A built-in shape (sphere, torus, ball, c-shape, mug, chain, cube) or a
-    /// mesh file (.obj, .ply, .stl), kept in its own coordinates.
+    /// A built-in shape (sphere, torus, ball, c-shape, mug, chain, cube), a
+    /// mesh file (.obj, .ply, .stl), kept in its own coordinates, or a volume:
+    /// `.npy` (u8 densities 0–255, surface at 127.5; or f32/f64 fields,
+    /// positive inside, surface at 0; placed by its `.json` sidecar if any,
+    /// else in voxel units) or `.raw` (with `--raw-dims`).
     pub input: String,
+    /// Dimensions NX,NY,NZ of a `.raw` input (x fastest, no header).
+    #[arg(long, value_parser = parse_dims)]
+    pub raw_dims: Option<[u32; 3]>,
+    /// Value type of a `.raw` input.
+    #[arg(long, value_enum, default_value_t = RawType::U8)]
+    pub raw_type: RawType,
     /// Drag the surface point X,Y,Z by DX,DY,DZ (world units), e.g.
     /// `--drag 0.3,0,0:0.2,0,0`. Repeat for several points; all land exactly
     /// where asked unless they conflict (then least squares).
@@ -62,6 +72,93 @@ pub enum FilterArg {
     Backward,
 }
 
+/// Value types of `.raw` volumes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum RawType {
+    /// Bytes: densities 0–255, surface at 127.5.
+    U8,
+    /// Little-endian f32: a field, positive inside, surface at 0.
+    F32,
+}
+
+/// Parses `NX,NY,NZ`.
+fn parse_dims(s: &str) -> Result<[u32; 3], String> {
+    let v: Vec<u32> = s
+        .split(',')
+        .map(|x| x.trim().parse::<u32>().map_err(|e| format!("'{x}': {e}")))
+        .collect::<Result<_, _>>()?;
+    match v[..] {
+        [x, y, z] if x >= 2 && y >= 2 && z >= 2 => Ok([x, y, z]),
+        _ => Err(format!("'{s}' is not three sizes of at least 2")),
+    }
+}
+
+/// The input as a u8 density volume (0–255, surface at 127.5): volumes as
+/// they are (f32 fields converted as shapes are), shapes and meshes from
+/// their distance fields sampled at `res` nodes along the longest edge.
+fn density(args: &WarpArgs) -> anyhow::Result<Grid3<u8>> {
+    let volume = if args.input.ends_with(".npy") {
+        Some(npy::load_npy(Path::new(&args.input))?)
+    } else if args.input.ends_with(".raw") {
+        Some(read_raw(args)?)
+    } else {
+        None
+    };
+    Ok(match volume {
+        Some(Volume::U8(grid)) => grid,
+        Some(Volume::F32(field)) => {
+            if let Some(node) = field.data().iter().position(|v| !v.is_finite()) {
+                bail!("{}: value at node {node} is not finite", args.input);
+            }
+            to_density(&field)?
+        }
+        None => {
+            let input = Input::parse(&args.input, false)?;
+            let distance = Grid3::sample_box(input.field(), &input.bounds().padded(0.15), args.res)
+                .with_context(|| format!("cannot sample the distance field of {}", args.input))?;
+            to_density(&distance)?
+        }
+    })
+}
+
+/// Density as in the thesis from a field (positive inside, world units):
+/// 0–255, surface at 127.5, a two-voxel ramp.
+fn to_density(field: &Grid3<f32>) -> anyhow::Result<Grid3<u8>> {
+    let h = field.spacing();
+    Ok(field.map(|d| (127.5 + 64.0 * d / h).clamp(0.0, 255.0) as u8)?)
+}
+
+/// Reads a headerless `.raw` volume of `--raw-dims` and `--raw-type`.
+fn read_raw(args: &WarpArgs) -> anyhow::Result<Volume> {
+    let Some([x, y, z]) = args.raw_dims else {
+        bail!("{}: a .raw volume needs --raw-dims NX,NY,NZ", args.input);
+    };
+    let dims = UVec3::new(x, y, z);
+    let bytes = std::fs::read(&args.input).with_context(|| format!("cannot read {}", args.input))?;
+    let count = dims.as_u64vec3().element_product();
+    let size = match args.raw_type {
+        RawType::U8 => 1,
+        RawType::F32 => 4,
+    };
+    if bytes.len() as u64 != count * size {
+        bail!(
+            "{}: {} bytes, but {x}×{y}×{z} {:?} values need {}",
+            args.input,
+            bytes.len(),
+            args.raw_type,
+            count * size
+        );
+    }
+    Ok(match args.raw_type {
+        RawType::U8 => Volume::U8(Grid3::from_vec(dims, Vec3::ZERO, 1.0, bytes)?),
+        RawType::F32 => {
+            let values =
+                bytes.chunks_exact(4).map(|v| f32::from_le_bytes([v[0], v[1], v[2], v[3]])).collect();
+            Volume::F32(Grid3::from_vec(dims, Vec3::ZERO, 1.0, values)?)
+        }
+    })
+}
+
 /// Parses `A,B,C:D,E,F` into two vectors.
 fn parse_pair(s: &str) -> Result<(Vec3, Vec3), String> {
     let (a, b) = s.split_once(':').ok_or_else(|| format!("'{s}' is not of the form X,Y,Z:DX,DY,DZ"))?;
@@ -81,13 +178,9 @@ fn parse_pair(s: &str) -> Result<(Vec3, Vec3), String> {
 /// Runs `isomorph warp`.
 pub fn run(args: &WarpArgs) -> anyhow::Result<()> {
     let start = Instant::now();
-    let input = Input::parse(&args.input, false)?;
-    let distance = Grid3::sample_box(input.field(), &input.bounds().padded(0.15), args.res)
-        .with_context(|| format!("cannot sample the distance field of {}", args.input))?;
-    // Density as in the thesis: 0–255, surface at 127.5, a two-voxel ramp.
-    let h = distance.spacing();
-    let density = distance.map(|d| (127.5 + 64.0 * d / h).clamp(0.0, 255.0) as u8)?;
-    let to_voxels = |p: Vec3| distance.to_grid(p);
+    let density = density(args)?;
+    let h = density.spacing();
+    let to_voxels = |p: Vec3| density.to_grid(p);
     let filter = match args.filter {
         FilterArg::Box => Filter::Box,
         FilterArg::Round => Filter::Round,

@@ -333,3 +333,52 @@ fn level_set_morph_takes_an_align_file_and_prints_its_report() {
     );
     let _ = std::fs::remove_dir_all(&out);
 }
+
+#[test]
+fn warp_takes_npy_and_raw_volumes() {
+    use isomorph_common::mesh::io::read_mesh;
+    let out = scratch("warp-volumes");
+    std::fs::create_dir_all(&out).unwrap();
+    // An f32 distance volume with its sidecar, written by `isomorph sdf`.
+    let npy = out.join("sphere.npy");
+    let o = isomorph(&["sdf", "sphere", "--res", "32", "--pad", "0.2", "--out", npy.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let warped = out.join("from-npy");
+    let o = isomorph(&[
+        "warp",
+        npy.to_str().unwrap(),
+        "--csize",
+        "7",
+        "--drag",
+        "0.3,0,0:0.12,0,0",
+        "--out",
+        warped.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let before = read_mesh(warped.join("source.obj")).unwrap().bounds();
+    let after = read_mesh(warped.join("warped.obj")).unwrap().bounds();
+    // The volume keeps its world placement from the sidecar.
+    assert!((before.max.x - 0.3).abs() < 0.03, "source pole at {}", before.max.x);
+    assert!(after.max.x > before.max.x + 0.08, "pole moved from {} to {}", before.max.x, after.max.x);
+    // A u8 density cube in a headerless .raw file, in voxel units.
+    let n = 24u32;
+    let bytes: Vec<u8> = (0..n * n * n)
+        .map(|i| {
+            let c = [i % n, (i / n) % n, i / (n * n)];
+            if c.iter().all(|&v| (6..18).contains(&v)) { 255 } else { 0 }
+        })
+        .collect();
+    let raw = out.join("cube.raw");
+    std::fs::write(&raw, &bytes).unwrap();
+    let moved = out.join("from-raw");
+    let args = ["warp", raw.to_str().unwrap(), "--move", "3,3,3:0,0,2", "--out", moved.to_str().unwrap()];
+    let o = isomorph(&[&args[..], &["--raw-dims", "24,24,24"]].concat());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(moved.join("warped.npy").is_file() && moved.join("before_after.png").is_file());
+    // Without dimensions, or with the wrong ones, one clear error line.
+    let o = isomorph(&args);
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("--raw-dims"));
+    let o = isomorph(&[&args[..], &["--raw-dims", "24,24,23"]].concat());
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("bytes"));
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -1,5 +1,9 @@
 //! Writing a [`Grid3<f32>`] as a NumPy `.npy` array plus a JSON sidecar with
-//! its placement in the world.
+//! its placement in the world, and reading `.npy` volumes back
+//! ([`load_npy`]: f32, f64 or u8 values, C or Fortran order).
+//!
+//! The format is a short text header and raw values, so it is read and
+//! written here directly rather than through a dependency.
 //!
 //! # Layout
 //! The `.npy` file (format version 1.0) holds the values as little-endian
@@ -29,7 +33,8 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-use crate::Grid3;
+use crate::{Grid3, GridError};
+use glam::{UVec3, Vec3};
 use serde::{Deserialize, Serialize};
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
@@ -45,7 +50,7 @@ const ALIGNMENT: usize = 64;
 /// Values per chunk when converting to little-endian bytes.
 const CHUNK: usize = 1 << 14;
 
-/// Errors of [`save_npy`].
+/// Errors of [`save_npy`] and [`load_npy`].
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum NpyError {
@@ -67,6 +72,197 @@ pub enum NpyError {
         #[source]
         source: serde_json::Error,
     },
+    /// A file is not a `.npy` volume this reader understands.
+    #[error("{path}: {reason}")]
+    Format {
+        /// The file being read.
+        path: PathBuf,
+        /// What is wrong, and what is accepted.
+        reason: String,
+    },
+    /// The volume does not fit the memory limit or has too few nodes.
+    #[error(transparent)]
+    Grid(#[from] GridError),
+}
+
+/// A volume read from a `.npy` file.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Volume {
+    /// Floating-point values (`<f4`, `<f8` or `>f4`/`>f8`, converted to
+    /// f32): a field, positive inside, surface at 0 unless stated otherwise.
+    F32(Grid3<f32>),
+    /// Bytes (`|u1`): densities 0–255, material at 255, surface at 127.5
+    /// (True's convention).
+    U8(Grid3<u8>),
+}
+
+impl Volume {
+    /// Node counts along x, y, z.
+    pub fn dims(&self) -> UVec3 {
+        match self {
+            Volume::F32(g) => g.dims(),
+            Volume::U8(g) => g.dims(),
+        }
+    }
+}
+
+/// Element types [`read_npy`] accepts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Dtype {
+    F32 { little: bool },
+    F64 { little: bool },
+    U8,
+}
+
+impl Dtype {
+    fn parse(descr: &str) -> Option<Self> {
+        Some(match descr {
+            "<f4" => Dtype::F32 { little: true },
+            ">f4" => Dtype::F32 { little: false },
+            "<f8" => Dtype::F64 { little: true },
+            ">f8" => Dtype::F64 { little: false },
+            "|u1" | "<u1" | ">u1" => Dtype::U8,
+            _ => return None,
+        })
+    }
+
+    fn size(self) -> usize {
+        match self {
+            Dtype::F32 { .. } => 4,
+            Dtype::F64 { .. } => 8,
+            Dtype::U8 => 1,
+        }
+    }
+}
+
+/// The value of `key` in a NumPy header dict (`'key': value`), up to the
+/// next top-level comma.
+fn header_entry<'a>(header: &'a str, key: &str) -> Option<&'a str> {
+    let start = header.find(&format!("'{key}'"))? + key.len() + 2;
+    let rest = header[start..].trim_start().strip_prefix(':')?.trim_start();
+    let end = if rest.starts_with('(') { rest.find(')')? + 1 } else { rest.find([',', '}'])? };
+    Some(rest[..end].trim())
+}
+
+/// Parses `.npy` bytes into a volume on the lattice `origin`, `spacing`.
+///
+/// The array must be three-dimensional. In C order, shape `(nz, ny, nx)`
+/// (the last axis fastest, as [`write_npy`] writes); in Fortran order, shape
+/// `(nx, ny, nz)` (the first axis fastest). Either way grid x is the fastest
+/// axis, so the bytes are used in place.
+///
+/// # Errors
+/// [`NpyError::Format`] (`path` names the source) for a bad magic string,
+/// version, header, dtype, shape or length; [`NpyError::Grid`] for memory.
+pub fn read_npy(bytes: &[u8], origin: Vec3, spacing: f32, path: &Path) -> Result<Volume, NpyError> {
+    let bad = |reason: String| NpyError::Format { path: path.to_path_buf(), reason };
+    if bytes.len() < 10 || &bytes[..6] != MAGIC {
+        return Err(bad("not a .npy file (no \\x93NUMPY magic)".into()));
+    }
+    let (header_start, header_len) = match bytes[6] {
+        1 => (10, usize::from(u16::from_le_bytes([bytes[8], bytes[9]]))),
+        2 | 3 if bytes.len() >= 12 => {
+            (12, u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize)
+        }
+        v => return Err(bad(format!(".npy format version {v} is not supported (1, 2 or 3)"))),
+    };
+    let data_start = header_start + header_len;
+    let header = bytes
+        .get(header_start..data_start)
+        .and_then(|h| std::str::from_utf8(h).ok())
+        .ok_or_else(|| bad("truncated or non-text header".into()))?;
+    let descr = header_entry(header, "descr").map(|d| d.trim_matches(['\'', '"']));
+    let dtype = descr
+        .and_then(Dtype::parse)
+        .ok_or_else(|| bad(format!("dtype {descr:?} is not supported (f4, f8 or u1)")))?;
+    let fortran = match header_entry(header, "fortran_order") {
+        Some("False") => false,
+        Some("True") => true,
+        other => return Err(bad(format!("fortran_order {other:?} is not True or False"))),
+    };
+    let shape: Vec<u32> = header_entry(header, "shape")
+        .map(|s| s.trim_matches(['(', ')']).split(',').filter(|t| !t.trim().is_empty()))
+        .ok_or_else(|| bad("no shape in the header".into()))?
+        .map(|t| t.trim().parse::<u32>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| bad(format!("bad shape: {e}")))?;
+    let [a, b, c] = shape[..] else {
+        return Err(bad(format!("the array has shape {shape:?}; a volume needs three axes")));
+    };
+    let dims = if fortran { UVec3::new(a, b, c) } else { UVec3::new(c, b, a) };
+    let count = dims.as_u64vec3().element_product();
+    let data = &bytes[data_start..];
+    if (data.len() as u64) != count * dtype.size() as u64 {
+        return Err(bad(format!("{} data bytes for {count} values of {} bytes", data.len(), dtype.size())));
+    }
+    let requested = usize::try_from(count).unwrap_or(usize::MAX).saturating_mul(4);
+    if requested > crate::grid::memory_limit() {
+        return Err(GridError::TooLarge { dims, requested, limit: crate::grid::memory_limit() }.into());
+    }
+    Ok(match dtype {
+        Dtype::U8 => Volume::U8(Grid3::from_vec(dims, origin, spacing, data.to_vec())?),
+        Dtype::F32 { little } => {
+            let values = data
+                .chunks_exact(4)
+                .map(|v| {
+                    let v = [v[0], v[1], v[2], v[3]];
+                    if little { f32::from_le_bytes(v) } else { f32::from_be_bytes(v) }
+                })
+                .collect();
+            Volume::F32(Grid3::from_vec(dims, origin, spacing, values)?)
+        }
+        Dtype::F64 { little } => {
+            let values = data
+                .chunks_exact(8)
+                .map(|v| {
+                    let v: [u8; 8] = v.try_into().expect("chunks of 8");
+                    (if little { f64::from_le_bytes(v) } else { f64::from_be_bytes(v) }) as f32
+                })
+                .collect();
+            Volume::F32(Grid3::from_vec(dims, origin, spacing, values)?)
+        }
+    })
+}
+
+/// Reads a `.npy` volume (see [`read_npy`]). Its placement comes from the
+/// [`NpyMetadata`] sidecar when one exists (as [`save_npy`] writes it), else
+/// the volume sits at the origin with unit spacing (voxel units).
+///
+/// # Errors
+/// [`NpyError::Io`] for unreadable files, [`NpyError::Format`] for a
+/// malformed array or sidecar or one whose dims disagree, and
+/// [`NpyError::Grid`] for memory.
+pub fn load_npy(path: &Path) -> Result<Volume, NpyError> {
+    let io_error = |path: &Path| {
+        let path = path.to_path_buf();
+        move |source| NpyError::Io { path, source }
+    };
+    let bytes = std::fs::read(path).map_err(io_error(path))?;
+    let sidecar = sidecar_path(path);
+    let meta: Option<NpyMetadata> = match std::fs::read(&sidecar) {
+        Ok(json) => Some(serde_json::from_slice(&json).map_err(|e| NpyError::Format {
+            path: sidecar.clone(),
+            reason: format!("not an isomorph sidecar: {e}"),
+        })?),
+        Err(_) => None,
+    };
+    let (origin, spacing) = meta.as_ref().map_or((Vec3::ZERO, 1.0), |m| (Vec3::from(m.origin), m.spacing));
+    if !(origin.is_finite() && spacing.is_finite() && spacing > 0.0) {
+        return Err(NpyError::Format {
+            path: sidecar,
+            reason: "origin or spacing is not finite and positive".into(),
+        });
+    }
+    let volume = read_npy(&bytes, origin, spacing, path)?;
+    if let Some(m) = meta
+        && UVec3::from(m.dims) != volume.dims()
+    {
+        return Err(NpyError::Format {
+            path: sidecar,
+            reason: format!("the sidecar says dims {:?}, the array has {}", m.dims, volume.dims()),
+        });
+    }
+    Ok(volume)
 }
 
 /// The JSON sidecar of a `.npy` grid: how its array maps to the world.
@@ -174,7 +370,6 @@ pub fn save_npy(grid: &Grid3<f32>, path: &Path) -> Result<PathBuf, NpyError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::{UVec3, Vec3};
 
     /// Splits `.npy` bytes into (version, header text, data bytes).
     fn parse(bytes: &[u8]) -> ((u8, u8), &str, &[u8]) {
@@ -238,6 +433,67 @@ mod tests {
         assert_eq!((meta.sign.as_str(), meta.axis_order.as_str()), ("positive inside", "zyx"));
         let missing = dir.join("no/such/dir/grid.npy");
         assert!(matches!(save_npy(&grid, &missing), Err(NpyError::Io { path, .. }) if path == missing));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn read_gives_back_what_write_wrote() {
+        let dims = UVec3::new(4, 3, 2);
+        let data: Vec<f32> = (0..24).map(|v| v as f32 * 0.25 - 1.0).collect();
+        let grid = Grid3::from_vec(dims, Vec3::new(-1.0, 0.5, 2.0), 0.25, data).unwrap();
+        let mut bytes = Vec::new();
+        write_npy(&grid, &mut bytes).unwrap();
+        let here = Path::new("mem.npy");
+        let Volume::F32(back) = read_npy(&bytes, grid.origin(), 0.25, here).unwrap() else { panic!("f32") };
+        assert_eq!(back, grid);
+        // Truncated data, a 2D shape and an unknown dtype are refused.
+        assert!(matches!(
+            read_npy(&bytes[..bytes.len() - 1], Vec3::ZERO, 1.0, here),
+            Err(NpyError::Format { .. })
+        ));
+        assert!(matches!(read_npy(b"not numpy at all", Vec3::ZERO, 1.0, here), Err(NpyError::Format { .. })));
+        let other = |dict: &str, data: &[u8]| {
+            let mut b = MAGIC.to_vec();
+            b.extend_from_slice(&[1, 0]);
+            b.extend_from_slice(&(dict.len() as u16).to_le_bytes());
+            b.extend_from_slice(dict.as_bytes());
+            b.extend_from_slice(data);
+            read_npy(&b, Vec3::ZERO, 1.0, here)
+        };
+        let flat = other("{'descr': '<f4', 'fortran_order': False, 'shape': (2, 3), }", &[0; 24]);
+        assert!(matches!(flat, Err(NpyError::Format { reason, .. }) if reason.contains("three axes")));
+        let complex = other("{'descr': '<c8', 'fortran_order': False, 'shape': (1, 1, 1), }", &[0; 8]);
+        assert!(matches!(complex, Err(NpyError::Format { reason, .. }) if reason.contains("dtype")));
+        // Fortran-order bytes: shape (nx, ny, nz), x fastest.
+        let bytes: Vec<u8> = (0..24).collect();
+        let Ok(Volume::U8(g)) =
+            other("{'descr': '|u1', 'fortran_order': True, 'shape': (4, 3, 2), }", &bytes)
+        else {
+            panic!("u8 Fortran volume")
+        };
+        assert_eq!(g.dims(), dims);
+        assert_eq!(*g.get(3, 2, 1).unwrap(), 23);
+        // Big-endian f8 is converted.
+        let be: Vec<u8> = (0..8).flat_map(|v| (f64::from(v) * 0.5).to_be_bytes()).collect();
+        let Ok(Volume::F32(g)) = other("{'descr': '>f8', 'fortran_order': False, 'shape': (2, 2, 2), }", &be)
+        else {
+            panic!("f64 volume")
+        };
+        assert_eq!(*g.get(1, 1, 1).unwrap(), 3.5);
+    }
+
+    #[test]
+    fn load_uses_the_sidecar_placement() {
+        let dir = std::env::temp_dir().join(format!("isomorph-npy-load-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("sphere.npy");
+        let grid = Grid3::sample_box(&crate::Shape::sphere(0.3), &crate::Aabb::cube(0.5), 9).unwrap();
+        save_npy(&grid, &path).unwrap();
+        assert_eq!(load_npy(&path).unwrap(), Volume::F32(grid.clone()));
+        // Without the sidecar: voxel units at the origin.
+        std::fs::remove_file(sidecar_path(&path)).unwrap();
+        let Volume::F32(bare) = load_npy(&path).unwrap() else { panic!("f32") };
+        assert_eq!((bare.origin(), bare.spacing(), bare.data()), (Vec3::ZERO, 1.0, grid.data()));
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

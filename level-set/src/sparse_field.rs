@@ -62,6 +62,9 @@ pub struct SparseFieldSolver {
     /// Layer lists `L−2 … L+2` at index `ℓ + 2`; entries whose status no
     /// longer matches are dropped at the end of each iteration.
     layers: [Vec<u32>; 5],
+    /// Length of each layer list's prefix that is sorted by node index
+    /// (entries pushed since the last [`Self::compact`] follow it).
+    sorted: [usize; 5],
     /// Per active point: `(change rate, distance-term speed, target
     /// distance at the zero crossing)` of the current step.
     rates: Vec<(f32, f32, f32)>,
@@ -100,7 +103,8 @@ impl SparseFieldSolver {
             status[n as usize] = 0;
             u[n as usize] = u[n as usize].clamp(-ACTIVE_MAX, ACTIVE_MAX);
         }
-        let mut solver = Self { lattice, u, status, layers: Default::default(), rates: Vec::new() };
+        let mut solver =
+            Self { lattice, u, status, layers: Default::default(), sorted: [0; 5], rates: Vec::new() };
         solver.layers[slot(0)] = active;
         // Grow the layers outwards from the active set.
         for layer in 1..=LAYERS {
@@ -127,6 +131,7 @@ impl SparseFieldSolver {
             }
         }
         solver.propagate_layer_values();
+        solver.compact();
         Ok(solver)
     }
 
@@ -283,13 +288,42 @@ impl SparseFieldSolver {
         }
     }
 
-    /// Drops list entries whose status moved on.
+    /// Drops list entries whose status moved on, and keeps every list
+    /// sorted by node index (the entries pushed during the iteration are
+    /// sorted and merged in, duplicates dropped): the next iteration then
+    /// sweeps memory in order instead of jumping about the grid, which is
+    /// what keeps the cost per point flat once the grid outgrows the cache.
     fn compact(&mut self) {
+        let status = &self.status;
         for layer in -LAYERS..=LAYERS {
-            let status = &self.status;
-            self.layers[slot(layer)].retain(|&n| status[n as usize] == layer);
+            let list = &mut self.layers[slot(layer)];
+            let keep = |n: &u32| status[*n as usize] == layer;
+            let split = self.sorted[slot(layer)].min(list.len());
+            let mut fresh: Vec<u32> = list.drain(split..).filter(keep).collect();
+            list.retain(keep);
+            if !fresh.is_empty() {
+                fresh.sort_unstable();
+                *list = merge_sorted(list, &fresh);
+            }
+            self.sorted[slot(layer)] = list.len();
         }
     }
+}
+
+/// The sorted union of two sorted lists, without duplicates.
+fn merge_sorted(a: &[u32], b: &[u32]) -> Vec<u32> {
+    let mut out = Vec::with_capacity(a.len() + b.len());
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() && j < b.len() {
+        let next = a[i].min(b[j]);
+        i += usize::from(a[i] == next);
+        j += usize::from(b[j] == next);
+        out.push(next);
+    }
+    out.extend_from_slice(&a[i..]);
+    out.extend_from_slice(&b[j..]);
+    out.dedup();
+    out
 }
 
 impl Solver for SparseFieldSolver {
@@ -310,5 +344,38 @@ impl Solver for SparseFieldSolver {
 
     fn embedding(&self) -> &[f32] {
         &self.u
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use isomorph_common::{Aabb, Shape};
+
+    #[test]
+    fn merge_keeps_order_and_drops_duplicates() {
+        assert_eq!(merge_sorted(&[1, 4, 9], &[2, 4, 4, 10]), vec![1, 2, 4, 9, 10]);
+        assert_eq!(merge_sorted(&[], &[3, 3]), vec![3]);
+        assert_eq!(merge_sorted(&[7], &[]), vec![7]);
+    }
+
+    #[test]
+    fn layer_lists_stay_sorted_unique_and_consistent_with_status() {
+        let source = Grid3::sample_box(&Shape::sphere(0.3), &Aabb::cube(0.5), 32).unwrap();
+        let speed =
+            SpeedGrid::sample(&source, &Shape::torus(0.3, 0.12), |x| x, crate::Response::Identity).unwrap();
+        let mut solver = SparseFieldSolver::new(&source).unwrap();
+        for _ in 0..20 {
+            solver.step(&speed, &StepParams::default());
+            for layer in -LAYERS..=LAYERS {
+                let list = &solver.layers[slot(layer)];
+                assert!(list.windows(2).all(|w| w[0] < w[1]), "layer {layer} not strictly sorted");
+                assert!(list.iter().all(|&n| solver.status[n as usize] == layer));
+            }
+            // Every node of a layer status is on its list.
+            let on_lists: usize = solver.layers.iter().map(Vec::len).sum();
+            let with_status = solver.status.iter().filter(|&&s| (-LAYERS..=LAYERS).contains(&s)).count();
+            assert_eq!(on_lists, with_status);
+        }
     }
 }
