@@ -4,13 +4,20 @@
 use anyhow::{Context, bail};
 use isomorph_common::alignment::Moments;
 use isomorph_common::glam::{Affine3A, Quat, Vec3};
-use isomorph_common::mesh::io::read_mesh;
+use isomorph_common::mesh::io::{MeshFormat, read_mesh, read_mesh_from};
 use isomorph_common::sdf::MeshSdf;
 use isomorph_common::{Aabb, Field3, Shape, TriMesh, marching_cubes::polygonize, models};
 use std::path::Path;
 
 /// Longest box side of a mesh input after fitting (world units).
 pub const FIT_SIZE: f32 = 0.9;
+
+/// The Stanford bunny (`data/bunny.ply`, see `data/README.md` for its
+/// source and attribution), built in as the mesh named `bunny`.
+const BUNNY_PLY: &[u8] = include_bytes!("../../data/bunny.ply");
+
+/// Name of the built-in bunny mesh.
+pub const BUNNY: &str = "bunny";
 
 /// A shape to morph: analytic or a mesh.
 pub enum Input {
@@ -31,13 +38,16 @@ impl Input {
             return Ok(Input::Builtin(shape));
         }
         let path = Path::new(spec);
-        if !path.exists() {
+        let mut mesh = if spec == BUNNY {
+            read_mesh_from(BUNNY_PLY, MeshFormat::PlyBinaryLittleEndian).context("the built-in bunny")?
+        } else if path.exists() {
+            read_mesh(path).with_context(|| format!("cannot read {spec}"))?
+        } else {
             bail!(
-                "'{spec}' is neither a built-in shape ({}) nor an existing mesh file",
+                "'{spec}' is neither a built-in shape ({}, {BUNNY}) nor an existing mesh file",
                 models::NAMES.join(", ")
             );
-        }
-        let mut mesh = read_mesh(path).with_context(|| format!("cannot read {spec}"))?;
+        };
         if fit {
             let b = mesh.bounds();
             let scale = FIT_SIZE / b.size().max_element().max(f32::MIN_POSITIVE);

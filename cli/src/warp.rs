@@ -9,7 +9,7 @@ use isomorph_common::glam::{UVec3, Vec3};
 use isomorph_common::marching_cubes::marching_cubes;
 use isomorph_common::mesh::io::{MeshFormat, write_mesh};
 use isomorph_common::npy::{self, Volume};
-use isomorph_common::render::{RenderSettings, contact_sheet_titled, render};
+use isomorph_common::render::{Camera, RenderSettings, contact_sheet_titled, render};
 use isomorph_warp::{Evaluation, Filter, Handle, VolumeWarp, WarpSettings};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -227,7 +227,10 @@ pub fn run(args: &WarpArgs) -> anyhow::Result<()> {
         write_mesh(mesh, &path, MeshFormat::Obj)
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
-    let view = RenderSettings::default();
+    // One camera for both, so the edit shows as a change of shape and size.
+    let both = before.bounds().union(&after.bounds());
+    let view =
+        RenderSettings { camera: Some(Camera::fit(&both, Camera::DEFAULT_VIEW_DIR)), ..Default::default() };
     let sheet = contact_sheet_titled(
         &[(render(&before, &view), "before".to_string()), (render(&after, &view), "after".to_string())],
         2,

@@ -52,6 +52,11 @@ fn demo_writes_frames_sheet_and_report() {
     }
     assert!(level_set["endpoints"]["target"]["mean_voxels"].as_f64().unwrap() < 0.5);
     assert!(out.join("level_set_mug_to_chain/contact_sheet.png").is_file());
+    // The warped bunny: the ear tip was dragged up by 2.5 units.
+    let ear = out.join("warp_bunny_ear");
+    assert!(ear.join("before_after.png").is_file());
+    let top = |f: &str| isomorph_common::mesh::io::read_mesh(ear.join(f)).unwrap().bounds().max.y;
+    assert!(top("warped.obj") > top("source.obj") + 2.0, "{} vs {}", top("warped.obj"), top("source.obj"));
     let _ = std::fs::remove_dir_all(&out);
 }
 

@@ -21,6 +21,7 @@
 use crate::basis::weight_poly;
 use crate::{BSplineMap, WarpError};
 use glam::{UVec3, Vec3, Vec3A, Vec4};
+use isomorph_common::GridError;
 use rayon::prelude::*;
 
 /// The precomputed basis-weight products of eq. 4: for each of the `G³`
@@ -38,7 +39,9 @@ impl CoefficientTable {
     ///
     /// # Errors
     /// [`WarpError::NotTableable`] when a source dimension is not an integer
-    /// multiple of the region count along that axis.
+    /// multiple of the region count along that axis; [`WarpError::Grid`]
+    /// ([`GridError::TooLarge`]) when the table's `G³ · 64` weights (256
+    /// bytes per entry) exceed the process-wide grid memory limit.
     pub fn new(map: &BSplineMap) -> Result<Self, WarpError> {
         let dims = map.source_dims();
         let regions = map.regions();
@@ -46,6 +49,12 @@ impl CoefficientTable {
             return Err(WarpError::NotTableable { source_dims: dims, regions });
         }
         let g = dims / regions;
+        let count = g.as_u64vec3().element_product();
+        let requested = usize::try_from(count).unwrap_or(usize::MAX).saturating_mul(size_of::<[f32; 64]>());
+        let limit = isomorph_common::grid::memory_limit();
+        if requested > limit {
+            return Err(GridError::TooLarge { dims: g, requested, limit }.into());
+        }
         // Per-axis basis values B_i(ē/G) summed from the polynomial
         // coefficients b_ip (the inner sums of eq. 4; the triple sum over
         // p, q, r factors into these three).
@@ -273,6 +282,16 @@ fn table_slice(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_table_over_the_memory_limit_is_refused_before_allocation() {
+        // One region over 1024³ voxels: 2³⁰ entries of 256 bytes.
+        let map = BSplineMap::with_controls(UVec3::splat(1024), UVec3::splat(4)).unwrap();
+        match CoefficientTable::new(&map) {
+            Err(WarpError::Grid(GridError::TooLarge { requested, .. })) => assert_eq!(requested, 256 << 30),
+            other => panic!("expected TooLarge, got {other:?}"),
+        }
+    }
 
     fn random_map(dims: UVec3, controls: UVec3, amplitude: f32, seed: u64) -> BSplineMap {
         let mut map = BSplineMap::with_controls(dims, controls).unwrap();
