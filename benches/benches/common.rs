@@ -12,7 +12,7 @@ use isomorph_common::fast_marching::{FastMarchingSettings, redistance};
 use isomorph_common::marching_cubes::marching_cubes;
 use isomorph_common::mesh::bvh::Lattice;
 use isomorph_common::mesh::io::{MeshFormat, read_mesh, read_mesh_from};
-use isomorph_common::sdf::MeshSdf;
+use isomorph_common::sdf::{MeshSdf, SdfSettings, VolumeMode};
 use std::hint::black_box;
 use std::io::Cursor;
 
@@ -95,6 +95,15 @@ fn mesh_sdf_bunny(c: &mut Criterion) {
     group.throughput(Throughput::Elements(u64::from(n).pow(3)));
     group.bench_function(BenchmarkId::from_parameter(n), |b| {
         b.iter(|| MeshSdf::new(black_box(&mesh)).unwrap().sample_lattice(&lattice))
+    });
+    // Exact in a two-voxel band, closest-point fast marching beyond.
+    let bounds = mesh.bounds().padded(0.1);
+    let width = 2.0 * bounds.size().max_element() / (n - 1) as f32;
+    let settings = SdfSettings::default().with_volume(VolumeMode::NarrowBand { width });
+    group.bench_function(BenchmarkId::new("band", n), |b| {
+        b.iter(|| {
+            MeshSdf::with_settings(black_box(&mesh), settings).unwrap().sample_grid(&bounds, n).unwrap()
+        })
     });
     group.finish();
 }

@@ -6,6 +6,7 @@ use anyhow::Context;
 use clap::Args;
 use isomorph_common::fast_marching::FastMarchingSettings;
 use isomorph_common::scan_conversion::scan_convert;
+use isomorph_common::sdf::{MeshSdf, SdfSettings, VolumeMode};
 use isomorph_common::{Aabb, Grid3, npy};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -23,9 +24,20 @@ pub struct SdfArgs {
     /// Padding of the input's box, as a fraction of its extent per side.
     #[arg(long, default_value_t = 0.1, value_parser = parse_pad)]
     pub pad: f32,
+    /// Mesh inputs: compute the exact distance only within this many voxels
+    /// of the surface and fill the rest by closest-point fast marching
+    /// (default: exact everywhere).
+    #[arg(long, value_parser = parse_band)]
+    pub band: Option<f32>,
     /// Output .npy file; the sidecar goes next to it with extension .json.
     #[arg(long)]
     pub out: PathBuf,
+}
+
+/// Accepts a finite band half-width in `(0, 1000]` voxels.
+fn parse_band(s: &str) -> Result<f32, String> {
+    let w: f32 = s.parse().map_err(|e| format!("{e}"))?;
+    if w > 0.0 && w <= 1000.0 { Ok(w) } else { Err(format!("{w} is not in (0, 1000] voxels")) }
 }
 
 /// Accepts a finite padding fraction in `[0, 10]`.
@@ -40,7 +52,7 @@ pub fn run(args: &SdfArgs) -> anyhow::Result<()> {
     let input = Input::parse(&args.input, false)?;
     let bounds = input.bounds().padded(args.pad);
     let sampled = Instant::now();
-    let grid = distance_grid(&input, &bounds, args.res)
+    let grid = distance_grid(&input, &bounds, args.res, args.band)
         .with_context(|| format!("cannot build the distance grid of {}", args.input))?;
     let sampling = sampled.elapsed().as_secs_f64();
     let sidecar = npy::save_npy(&grid, &args.out)?;
@@ -68,11 +80,17 @@ pub fn run(args: &SdfArgs) -> anyhow::Result<()> {
 
 /// The signed distance grid (positive inside) of `input` over `bounds` with
 /// `res` nodes along the longest edge: a mesh through the exact lattice
-/// distance (winding-number sign); a built-in shape sampled from its field
-/// where that is an exact distance, else scan converted (Breen & Whitaker
-/// §6.1: closest points in a band, then fast marching).
-fn distance_grid(input: &Input, bounds: &Aabb, res: u32) -> anyhow::Result<Grid3<f32>> {
+/// distance (winding-number sign), everywhere or in a `band` of voxels and
+/// marched beyond; a built-in shape sampled from its field where that is an
+/// exact distance, else scan converted (Breen & Whitaker §6.1: closest
+/// points in a band, then fast marching).
+fn distance_grid(input: &Input, bounds: &Aabb, res: u32, band: Option<f32>) -> anyhow::Result<Grid3<f32>> {
     Ok(match input {
+        Input::Mesh(mesh, _) if let Some(voxels) = band => {
+            let width = voxels * bounds.size().max_element() / (res - 1).max(1) as f32;
+            let settings = SdfSettings::default().with_volume(VolumeMode::NarrowBand { width });
+            MeshSdf::with_settings(mesh, settings)?.sample_grid(bounds, res)?
+        }
         Input::Mesh(_, sdf) => sdf.sample_grid(bounds, res)?,
         Input::Builtin(shape) if shape.is_exact_distance() => Grid3::sample_box(shape, bounds, res)?,
         Input::Builtin(shape) => scan_convert(shape, bounds, res, &FastMarchingSettings::default())?,

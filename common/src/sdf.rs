@@ -31,6 +31,22 @@
 //! open mesh the winding number is not constant on such balls and is
 //! evaluated at every node.
 //!
+//! With [`VolumeMode::NarrowBand`] only the nodes within a band around the
+//! surface get the exact distance (blocks of nodes entirely beyond it are
+//! skipped after one tree query); closest-point fast marching fills the
+//! rest from the band's nearest surface points, with the sign of the band
+//! region that reaches each node. The mesh's exact closest points are
+//! propagated as points (not as tangent discs, which would cut its creases
+//! and corners). Accuracy, as tested on the bunny at 64³ with a two-voxel
+//! band: exact to `1e-5` of the box size in the band, and beyond it within
+//! the closest-point propagation's error: at most 0.35 voxel, at nodes next
+//! to the medial axis whose true closest point did not travel through their
+//! neighbours (tested below 0.4 voxel; see [`crate::fast_marching`]).
+//! Exact everywhere stays the default: the block-wise lattice search is so
+//! cheap that it is also the faster mode here (`isomorph sdf bunny --res
+//! 128`: 1.15 s exact, 2.3 s with `--band 2`, both measured on a loaded
+//! 2-core machine).
+//!
 //! # Example
 //! ```
 //! use isomorph_common::sdf::{MeshSdf, SdfSettings, mesh_sdf_grid};
@@ -52,11 +68,12 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+use crate::fast_marching::{FastMarchingError, FastMarchingSettings, Seed, Update, march_with_discs};
 use crate::grid::lattice_for_box;
 use crate::mesh::bvh::{ClosestPoint, Lattice, TriangleBvh};
 use crate::mesh::winding::{DEFAULT_BETA, WindingNumber};
 use crate::{Aabb, Field3, Grid3, GridError, TriMesh};
-use glam::Vec3;
+use glam::{UVec3, Vec3};
 use rayon::prelude::*;
 use std::collections::HashMap;
 
@@ -73,6 +90,12 @@ pub enum SdfError {
     /// The output grid could not be set up.
     #[error(transparent)]
     Grid(#[from] GridError),
+    /// Filling the grid beyond the narrow band failed.
+    #[error(transparent)]
+    FastMarching(#[from] FastMarchingError),
+    /// A narrow-band width that is not finite and positive.
+    #[error("narrow band width {0} is not finite and positive")]
+    BadBand(f32),
 }
 
 /// How [`MeshSdf`] decides inside from outside (see the [module docs](self)).
@@ -97,15 +120,39 @@ pub struct SdfSettings {
     /// ([`WindingNumber::with_accuracy`]); only the threshold at ½ matters,
     /// so the default [`DEFAULT_BETA`] is ample.
     pub winding_accuracy: f32,
+    /// How [`MeshSdf::sample_grid`] fills a volume: exact everywhere (the
+    /// default) or exact in a narrow band and marched beyond it.
+    pub volume: VolumeMode,
+}
+
+/// How a distance volume is filled (see the [module docs](self)).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum VolumeMode {
+    /// The exact signed distance at every node.
+    #[default]
+    Exact,
+    /// The exact signed distance at every node within `width` (world units)
+    /// of the surface, then closest-point fast marching
+    /// ([`crate::fast_marching`]) from those nodes over the rest of the grid.
+    NarrowBand {
+        /// Half-width of the exact band, world units.
+        width: f32,
+    },
 }
 
 impl Default for SdfSettings {
     fn default() -> Self {
-        Self { sign: SignMode::default(), winding_accuracy: DEFAULT_BETA }
+        Self { sign: SignMode::default(), winding_accuracy: DEFAULT_BETA, volume: VolumeMode::default() }
     }
 }
 
 impl SdfSettings {
+    /// These settings with the volume mode `volume`.
+    pub fn with_volume(mut self, volume: VolumeMode) -> Self {
+        self.volume = volume;
+        self
+    }
+
     /// These settings with the inside test `sign`.
     pub fn with_sign(mut self, sign: SignMode) -> Self {
         self.sign = sign;
@@ -181,6 +228,7 @@ pub struct MeshSdf {
     sign: Sign,
     closed: bool,
     bounds: Aabb,
+    volume: VolumeMode,
 }
 
 impl MeshSdf {
@@ -208,7 +256,13 @@ impl MeshSdf {
             }
             SignMode::Pseudonormal => Sign::Pseudonormal(Pseudonormals::new(mesh)),
         };
-        Ok(Self { bvh: TriangleBvh::new(mesh), sign, closed: is_closed(mesh), bounds: mesh.bounds() })
+        Ok(Self {
+            bvh: TriangleBvh::new(mesh),
+            sign,
+            closed: is_closed(mesh),
+            bounds: mesh.bounds(),
+            volume: settings.volume,
+        })
     }
 
     /// The inside test in use.
@@ -313,9 +367,37 @@ impl MeshSdf {
         let (dims, origin, spacing) = lattice_for_box(bounds, res)?;
         // Allocate (and check the memory limit) before the work.
         let mut grid = Grid3::new(dims, origin, spacing, 0.0f32)?;
-        let values = self.sample_lattice(&Lattice { dims, origin, step: Vec3::splat(spacing) });
-        grid.data_mut().copy_from_slice(&values);
+        let lattice = Lattice { dims, origin, step: Vec3::splat(spacing) };
+        match self.volume {
+            VolumeMode::Exact => grid.data_mut().copy_from_slice(&self.sample_lattice(&lattice)),
+            VolumeMode::NarrowBand { width } => grid = self.sample_band(&lattice, width)?,
+        }
         Ok(grid)
+    }
+
+    /// The exact signed distance within `width` of the surface, marched
+    /// beyond (closest-point propagation from the band's nearest points).
+    fn sample_band(&self, lattice: &Lattice, width: f32) -> Result<Grid3<f32>, SdfError> {
+        if !(width.is_finite() && width > 0.0) {
+            return Err(SdfError::BadBand(width));
+        }
+        let hits = self.bvh.nearest_on_lattice_within(lattice, width).ok_or(SdfError::EmptyMesh)?;
+        let (nx, ny) = (lattice.dims.x as usize, lattice.dims.y as usize);
+        let seeds: Vec<Seed> = hits
+            .par_iter()
+            .enumerate()
+            .filter(|(_, hit)| hit.distance <= width)
+            .filter_map(|(n, hit)| {
+                let node = UVec3::new((n % nx) as u32, ((n / nx) % ny) as u32, (n / (nx * ny)) as u32);
+                let p = lattice.origin + lattice.step * node.as_vec3();
+                let closest = self.bvh.closest_point_of(p, hit)?;
+                let distance = self.signed(p, &closest);
+                Some(Seed { node, distance, closest_point: Some(closest.point) })
+            })
+            .collect();
+        drop(hits);
+        let settings = FastMarchingSettings { update: Update::ClosestPoint, max_distance: None };
+        Ok(march_with_discs(lattice.dims, lattice.origin, lattice.step.x, &seeds, &settings, false)?)
     }
 }
 
@@ -446,6 +528,36 @@ mod tests {
     fn box_sd(p: Vec3) -> f32 {
         let q = p.abs() - Vec3::ONE;
         -(q.max(Vec3::ZERO).length() + q.max_element().min(0.0))
+    }
+
+    #[test]
+    fn narrow_band_volume_is_exact_in_the_band_and_close_beyond() {
+        let mesh = bunny();
+        let bounds = mesh.bounds().padded(0.1);
+        let exact = mesh_sdf_grid(&mesh, &bounds, 64, SdfSettings::default()).unwrap();
+        let h = exact.spacing();
+        let width = 2.0 * h;
+        let settings = SdfSettings::default().with_volume(VolumeMode::NarrowBand { width });
+        let banded = mesh_sdf_grid(&mesh, &bounds, 64, settings).unwrap();
+        assert!(banded.same_lattice(&exact));
+        let size = bounds.size().max_element();
+        let (mut in_band, mut worst_band, mut worst_far) = (0, 0.0f32, 0.0f32);
+        for (&b, &e) in banded.data().iter().zip(exact.data()) {
+            assert_eq!(b > 0.0, e > 0.0, "sign differs: band {b}, exact {e}");
+            if e.abs() <= width {
+                in_band += 1;
+                worst_band = worst_band.max((b - e).abs());
+            } else {
+                worst_far = worst_far.max((b - e).abs());
+            }
+        }
+        assert!(in_band > 10_000, "{in_band} band nodes");
+        assert!(worst_band <= 1e-5 * size, "band error {worst_band} > 1e-5 · {size}");
+        // Closest-point propagation: measured 0.35 voxel at worst (inside,
+        // next to the medial axis), 6 of ~200k far nodes above 0.3.
+        assert!(worst_far < 0.4 * h, "beyond the band: {} voxels", worst_far / h);
+        let bad = SdfSettings::default().with_volume(VolumeMode::NarrowBand { width: -1.0 });
+        assert_eq!(mesh_sdf_grid(&mesh, &bounds, 16, bad).unwrap_err(), SdfError::BadBand(-1.0));
     }
 
     #[test]

@@ -195,6 +195,21 @@ pub fn march(
     seeds: &[Seed],
     settings: &FastMarchingSettings,
 ) -> Result<Grid3<f32>, FastMarchingError> {
+    march_with_discs(dims, origin, spacing, seeds, settings, true)
+}
+
+/// [`march`], with closest points standing for tangent discs (`discs`, the
+/// public behaviour: right for smooth surfaces sampled about a voxel apart)
+/// or for themselves only (exact closest points of a mesh, whose creases
+/// and corners a disc would cut).
+pub(crate) fn march_with_discs(
+    dims: UVec3,
+    origin: Vec3,
+    spacing: f32,
+    seeds: &[Seed],
+    settings: &FastMarchingSettings,
+    discs: bool,
+) -> Result<Grid3<f32>, FastMarchingError> {
     // Validate the lattice first (a grid constructor reports bad geometry).
     Grid3::new(UVec3::ONE, origin, spacing, 0u8)?;
     let (limit, unreached) = limits(settings, spacing)?;
@@ -211,7 +226,10 @@ pub fn march(
         let index = n.x + dims.x * (n.y + dims.y * n.z);
         let inside = (seed.distance != 0.0).then_some(seed.distance > 0.0);
         let closest = seed.closest_point.map(|c| (c - origin) / spacing);
-        let disc = closest.and_then(|c| (n.as_vec3() - c).try_normalize()).map(|n| (n, march::DISC_RADIUS));
+        let disc = closest
+            .filter(|_| discs)
+            .and_then(|c| (n.as_vec3() - c).try_normalize())
+            .map(|n| (n, march::DISC_RADIUS));
         let band = BandSeed { index, distance: seed.distance.abs() / spacing, inside, closest, disc };
         marcher.add_seed(band, number)?;
     }

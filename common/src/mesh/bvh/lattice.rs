@@ -270,6 +270,18 @@ impl TriangleBvh {
     /// If the lattice has more than `u32::MAX` nodes along an axis product
     /// that does not fit memory (allocation failure).
     pub fn nearest_on_lattice(&self, lattice: &Lattice) -> Option<Vec<LatticeHit>> {
+        self.nearest_on_lattice_within(lattice, f32::INFINITY)
+    }
+
+    /// As [`TriangleBvh::nearest_on_lattice`], but blocks of nodes all
+    /// farther than `max_distance` from the surface are skipped: their
+    /// nodes get a NaN distance (and no triangle). Every node within
+    /// `max_distance` gets its exact nearest triangle; some farther nodes
+    /// (in blocks that reach into the band) do too.
+    ///
+    /// # Panics
+    /// As [`TriangleBvh::nearest_on_lattice`].
+    pub fn nearest_on_lattice_within(&self, lattice: &Lattice, max_distance: f32) -> Option<Vec<LatticeHit>> {
         if self.is_empty() {
             return None;
         }
@@ -288,7 +300,7 @@ impl TriangleBvh {
                     for i0 in (0..lattice.dims.x).step_by(BLOCK as usize) {
                         let lo = UVec3::new(i0, j0, k0);
                         let n = (lattice.dims - lo).min(UVec3::new(BLOCK, BLOCK, kn));
-                        self.block(lattice, lo, n, scratch, |i, j, k, hit| {
+                        self.block(lattice, lo, n, max_distance, scratch, |i, j, k, hit| {
                             hits[i as usize + nx * (j as usize + ny * (k - k0) as usize)] = hit;
                         });
                     }
@@ -308,12 +320,14 @@ impl TriangleBvh {
     }
 
     /// Solves the block of `n` nodes starting at node `lo`, handing each
-    /// node's hit to `emit`, using the thread's scratch space.
+    /// node's hit to `emit`, using the thread's scratch space; a block whose
+    /// nodes are all farther than `max_distance` is left as it is.
     fn block(
         &self,
         lattice: &Lattice,
         lo: UVec3,
         n: UVec3,
+        max_distance: f32,
         scratch: &mut Scratch,
         mut emit: impl FnMut(u32, u32, u32, LatticeHit),
     ) {
@@ -331,6 +345,10 @@ impl TriangleBvh {
         };
         let nearest = self.search(center, start);
         scratch.previous = nearest.slot;
+        // Every node is within `span` of the centre: d(x) ≥ d(c) − span.
+        if nearest.d2.sqrt() - span > max_distance * (1.0 + SLACK) + SLACK * span {
+            return;
+        }
         let reach = (nearest.d2.sqrt() + 2.0 * span) * (1.0 + SLACK) + SLACK * span;
         self.gather(center, reach, &mut scratch.candidates);
         sort_candidates(&mut scratch.candidates);
