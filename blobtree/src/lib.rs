@@ -1,7 +1,20 @@
 //! Skeletal implicit BlobTrees and their metamorphosis after Galin, Leclercq &
 //! Akkouche, *Morphing the BlobTree*, Computer Graphics Forum 19(4), 2000.
-//!
-//! **Status: not implemented yet.** This crate is a placeholder in the
-//! workspace layout; the method is tracked by its own issue (skeletal
-//! primitives, correspondence, decomposition, generic time-varying tree). It
-//! builds on [`isomorph_common`].
+
+pub mod error;
+pub mod hull;
+pub mod kernel;
+pub mod node;
+pub mod skeleton;
+pub mod tree;
+pub mod warp;
+
+pub use error::{BlobError, MorphError, NodePath, NodeProblem, Side};
+pub use kernel::Kernel;
+pub use node::{NaryOp, Node, Primitive};
+pub use skeleton::{Polytope, Skeleton};
+pub use tree::BlobTree;
+pub use warp::Warp;
+
+#[cfg(test)]
+mod testutil;
