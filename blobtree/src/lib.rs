@@ -5,6 +5,7 @@ pub mod error;
 pub mod hull;
 pub mod kernel;
 pub mod node;
+pub mod scene;
 pub mod skeleton;
 pub mod tree;
 pub mod warp;
