@@ -1,6 +1,7 @@
 //! Skeletal implicit BlobTrees and their metamorphosis after Galin, Leclercq &
 //! Akkouche, *Morphing the BlobTree*, Computer Graphics Forum 19(4), 2000.
 
+pub mod correspond;
 pub mod error;
 pub mod hull;
 pub mod kernel;
@@ -10,6 +11,7 @@ pub mod skeleton;
 pub mod tree;
 pub mod warp;
 
+pub use correspond::{Correspondence, Heuristic, Link, Origin, Pair, decompose};
 pub use error::{BlobError, MorphError, NodePath, NodeProblem, Side};
 pub use kernel::Kernel;
 pub use node::{NaryOp, Node, Primitive};

@@ -327,6 +327,7 @@ fn to_raw(node: &Node) -> RawNode {
                 Skeleton::Segment(x, y) => ("segment", vec![a(*x), a(*y)]),
                 Skeleton::Polygon(v) => ("polygon", v.iter().map(|v| a(*v)).collect()),
                 Skeleton::Polyhedron(v) => ("polyhedron", v.iter().map(|v| a(*v)).collect()),
+                Skeleton::Generic(poly) => (p.skeleton.kind(), poly.vertices().iter().map(|v| a(*v)).collect()),
             };
             RawNode {
                 kind: kind.into(),

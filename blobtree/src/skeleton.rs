@@ -26,6 +26,9 @@ pub enum Skeleton {
     Polygon(Vec<Vec3>),
     /// A convex polyhedron: the convex hull of vertices spanning 3D (≥ 4).
     Polyhedron(Vec<Vec3>),
+    /// A polytope whose structure is already known (an instant of a
+    /// Minkowski interpolation, §3.4.1): used as is, no hull is rebuilt.
+    Generic(Polytope),
 }
 
 impl Skeleton {
@@ -49,6 +52,7 @@ impl Skeleton {
             Skeleton::Segment(..) => "segment",
             Skeleton::Polygon(_) => "polygon",
             Skeleton::Polyhedron(_) => "polyhedron",
+            Skeleton::Generic(p) => ["point", "segment", "polygon", "polyhedron"][p.dimension()],
         }
     }
 
@@ -58,6 +62,7 @@ impl Skeleton {
             Skeleton::Point(p) => vec![*p],
             Skeleton::Segment(a, b) => vec![*a, *b],
             Skeleton::Polygon(v) | Skeleton::Polyhedron(v) => v.clone(),
+            Skeleton::Generic(p) => p.vertices().to_vec(),
         }
     }
 
@@ -74,6 +79,9 @@ impl Skeleton {
     /// coordinates, or a dimension that does not match the kind.
     pub fn polytope(&self) -> Result<Polytope, crate::NodeProblem> {
         use crate::NodeProblem as P;
+        if let Skeleton::Generic(p) = self {
+            return if p.vertices().iter().all(|v| v.is_finite()) { Ok(p.clone()) } else { Err(P::NotFinite("vertices")) };
+        }
         let v = self.vertices();
         if v.iter().any(|p| !p.is_finite()) {
             return Err(P::NotFinite("vertices"));
@@ -82,7 +90,7 @@ impl Skeleton {
             Skeleton::Point(_) => (0, 1),
             Skeleton::Segment(..) => (1, 2),
             Skeleton::Polygon(_) => (2, 3),
-            Skeleton::Polyhedron(_) => (3, 4),
+            Skeleton::Polyhedron(_) | Skeleton::Generic(_) => (3, 4),
         };
         if v.len() < min {
             let expected = if min == 3 { "≥ 3" } else { "≥ 4" };
@@ -189,6 +197,11 @@ impl Polytope {
 
     pub(crate) fn structure(&self) -> &Structure {
         &self.structure
+    }
+
+    /// The same structure with moved vertices (same count and order).
+    pub(crate) fn moved(&self, vertices: Vec<Vec3>) -> Self {
+        Self::with_structure(vertices, self.structure.clone())
     }
 
     /// The affine dimension: 0 point, 1 segment, 2 polygon, 3 polyhedron.
