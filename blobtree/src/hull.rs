@@ -54,7 +54,7 @@ impl HullShape {
 }
 
 /// The convex hull of `points` (must be non-empty and finite). Points within
-/// `1e-9 ×` the set's diameter of a lower-dimensional flat are treated as lying on it.
+/// `1e-6 ×` (about ten f32 roundings) the set's diameter of a lower-dimensional flat are treated as lying on it.
 pub fn convex_hull(points: &[DVec3]) -> HullShape {
     let far_from = |q: DVec3| -> (usize, f64) {
         points
@@ -64,7 +64,7 @@ pub fn convex_hull(points: &[DVec3]) -> HullShape {
             .fold((0, -1.0), |best, c| if c.1 > best.1 { c } else { best })
     };
     let (i1, diam) = far_from(points[0]);
-    let eps = 1e-9 * diam.max(1e-30);
+    let eps = 1e-6 * diam.max(1e-30);
     if diam <= 1e-12 {
         return HullShape::Point(0);
     }
@@ -108,7 +108,7 @@ fn polygon_hull(points: &[DVec3], origin: DVec3, u: DVec3, normal: DVec3, eps: f
         let iter: Box<dyn Iterator<Item = &(DVec2, usize)>> =
             if pass == 0 { Box::new(pts.iter()) } else { Box::new(pts.iter().rev()) };
         for &p in iter {
-            while ring.len() >= start + 2 && cross(ring[ring.len() - 2].0, ring[ring.len() - 1].0, p.0) <= eps * eps * 1e9 {
+            while ring.len() >= start + 2 && cross(ring[ring.len() - 2].0, ring[ring.len() - 1].0, p.0) <= eps * eps * 1e6 {
                 ring.pop();
             }
             ring.push(p);

@@ -195,10 +195,6 @@ impl Polytope {
         &self.vertices
     }
 
-    pub(crate) fn structure(&self) -> &Structure {
-        &self.structure
-    }
-
     /// The same structure with moved vertices (same count and order).
     pub(crate) fn moved(&self, vertices: Vec<Vec3>) -> Self {
         Self::with_structure(vertices, self.structure.clone())
