@@ -9,6 +9,7 @@ pub mod kernel;
 pub mod minkowski;
 pub mod node;
 pub mod scene;
+pub mod scenes;
 pub mod skeleton;
 pub mod tree;
 pub mod warp;
