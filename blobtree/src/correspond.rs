@@ -132,7 +132,9 @@ impl Pair {
                 right: Box::new(right.side(side)),
                 level: pick(side, a, b),
             },
-            Pair::Warp { a, b, child, .. } => Node::Warp { warp: pick(side, a, b), child: Box::new(child.side(side)) },
+            Pair::Warp { a, b, child, .. } => {
+                Node::Warp { warp: pick(side, a, b), child: Box::new(child.side(side)) }
+            }
         }
     }
 
@@ -190,8 +192,12 @@ pub fn decompose(a: &Node, ta: f32, b: &Node, tb: f32, corr: &Correspondence) ->
             return Err(MorphError::NoSuchNode { side: Side::Target, path: l.b.clone() });
         }
     }
-    let mut ctx =
-        Ctx { links: &corr.links, used: vec![false; corr.links.len()], heuristic: corr.heuristic, thresholds: (ta, tb) };
+    let mut ctx = Ctx {
+        links: &corr.links,
+        used: vec![false; corr.links.len()],
+        heuristic: corr.heuristic,
+        thresholds: (ta, tb),
+    };
     let root = NodePath::root();
     consume(&mut ctx, &root, &root);
     let pair = pair(a, Some(&root), b, Some(&root), &mut ctx);
@@ -230,7 +236,12 @@ fn pair(a: &Node, pa: Option<&NodePath>, b: &Node, pb: Option<&NodePath>, ctx: &
                 Pair::Warp { a: *wa, b: *wb, child: Box::new(inner), origin }
             } else {
                 // Fig. 16: (ω_A → Id) ∘ (Id → ω_B).
-                let lower = Pair::Warp { a: wb.identity_like(), b: *wb, child: Box::new(inner), origin: origin.clone() };
+                let lower = Pair::Warp {
+                    a: wb.identity_like(),
+                    b: *wb,
+                    child: Box::new(inner),
+                    origin: origin.clone(),
+                };
                 Pair::Warp { a: *wa, b: wa.identity_like(), child: Box::new(lower), origin }
             }
         }
@@ -242,7 +253,10 @@ fn pair(a: &Node, pa: Option<&NodePath>, b: &Node, pb: Option<&NodePath>, ctx: &
             let inner = pair(a, pa, cb, child(pb, 0).as_ref(), ctx);
             Pair::Warp { a: wb.identity_like(), b: *wb, child: Box::new(inner), origin }
         }
-        (Node::Difference { left: la, right: ra, level: ca }, Node::Difference { left: lb, right: rb, level: cb }) => {
+        (
+            Node::Difference { left: la, right: ra, level: ca },
+            Node::Difference { left: lb, right: rb, level: cb },
+        ) => {
             let (la_p, lb_p, ra_p, rb_p) = (child(pa, 0), child(pb, 0), child(pa, 1), child(pb, 1));
             structural(ctx, &la_p, &lb_p);
             structural(ctx, &ra_p, &rb_p);
@@ -277,7 +291,9 @@ type Kid<'a> = (&'a Node, Option<NodePath>);
 /// is a one-child node of the partner's kind (its child keeps its own path).
 fn commutative<'a>(n: &'a Node, p: Option<&NodePath>) -> (NaryOp, Vec<Kid<'a>>) {
     match n {
-        Node::Nary { op, children } => (*op, children.iter().enumerate().map(|(i, c)| (c, child(p, i))).collect()),
+        Node::Nary { op, children } => {
+            (*op, children.iter().enumerate().map(|(i, c)| (c, child(p, i))).collect())
+        }
         Node::Mix { from, children, s, to } => {
             // An instantiated mix with s ∈ {0, 1} is a plain node; otherwise
             // its children are matched and the dominant operator used.
@@ -299,7 +315,10 @@ fn match_children(
 ) -> (NaryOp, NaryOp, Vec<Pair>) {
     // A wrapped primitive takes the partner's operator (a one-child node of
     // any commutative kind equals its child).
-    let (op_a, op_b) = match (kids_a.len() == 1 && kids_a[0].1.as_ref() == pa, kids_b.len() == 1 && kids_b[0].1.as_ref() == pb) {
+    let (op_a, op_b) = match (
+        kids_a.len() == 1 && kids_a[0].1.as_ref() == pa,
+        kids_b.len() == 1 && kids_b[0].1.as_ref() == pb,
+    ) {
         (true, false) => (op_b, op_b),
         (false, true) => (op_a, op_a),
         _ => (op_a, op_b),
@@ -307,7 +326,11 @@ fn match_children(
     let centres_a: Vec<_> = kids_a.iter().map(|(n, _)| n.centre()).collect();
     let centres_b: Vec<_> = kids_b.iter().map(|(n, _)| n.centre()).collect();
     let nearest = |c: glam::Vec3, others: &[glam::Vec3]| {
-        others.iter().enumerate().min_by(|x, y| (*x.1 - c).length().total_cmp(&(*y.1 - c).length())).map(|(i, _)| i)
+        others
+            .iter()
+            .enumerate()
+            .min_by(|x, y| (*x.1 - c).length().total_cmp(&(*y.1 - c).length()))
+            .map(|(i, _)| i)
     };
     // User links at this level.
     let mut edges: Vec<(Option<usize>, Option<usize>)> = Vec::new();
@@ -337,25 +360,25 @@ fn match_children(
                     }
                 }
                 for (j, c) in centres_b.iter().enumerate() {
-                    if let Some(i) = nearest(*c, &centres_a) {
-                        if !edges.contains(&(Some(i), Some(j))) {
-                            edges.push((Some(i), Some(j)));
-                        }
+                    if let Some(i) = nearest(*c, &centres_a)
+                        && !edges.contains(&(Some(i), Some(j)))
+                    {
+                        edges.push((Some(i), Some(j)));
                     }
                 }
             }
         }
     } else {
         // Unlinked children: phantoms, or the nearest child under an intersection.
-        for i in 0..kids_a.len() {
+        for (i, c) in centres_a.iter().enumerate() {
             if !edges.iter().any(|e| e.0 == Some(i)) {
-                let j = if op_b == NaryOp::Intersection { nearest(centres_a[i], &centres_b) } else { None };
+                let j = if op_b == NaryOp::Intersection { nearest(*c, &centres_b) } else { None };
                 edges.push((Some(i), j));
             }
         }
-        for j in 0..kids_b.len() {
+        for (j, c) in centres_b.iter().enumerate() {
             if !edges.iter().any(|e| e.1 == Some(j)) {
-                let i = if op_a == NaryOp::Intersection { nearest(centres_b[j], &centres_a) } else { None };
+                let i = if op_a == NaryOp::Intersection { nearest(*c, &centres_a) } else { None };
                 edges.push((i, Some(j)));
             }
         }
@@ -373,8 +396,12 @@ fn match_children(
                 }
                 pair(&x, kids_a[i].1.as_ref(), &y, kids_b[j].1.as_ref(), ctx)
             }
-            (Some(i), None) => with_phantom(&split(kids_a[i].0, op_a, deg_a(i)), kids_a[i].1.clone(), Side::Source),
-            (None, Some(j)) => with_phantom(&split(kids_b[j].0, op_b, deg_b(j)), kids_b[j].1.clone(), Side::Target),
+            (Some(i), None) => {
+                with_phantom(&split(kids_a[i].0, op_a, deg_a(i)), kids_a[i].1.clone(), Side::Source)
+            }
+            (None, Some(j)) => {
+                with_phantom(&split(kids_b[j].0, op_b, deg_b(j)), kids_b[j].1.clone(), Side::Target)
+            }
             (None, None) => continue,
         };
         out.push(pair);
@@ -490,8 +517,10 @@ mod tests {
         assert_eq!(pair.leaf_count(), 4);
         let a2 = pair.side(Side::Source);
         let Node::Nary { children, .. } = &a2 else { panic!() };
-        let intensities: Vec<f32> =
-            children.iter().map(|c| if let Node::Primitive(p) = c { p.kernel.intensity } else { -1.0 }).collect();
+        let intensities: Vec<f32> = children
+            .iter()
+            .map(|c| if let Node::Primitive(p) = c { p.kernel.intensity } else { -1.0 })
+            .collect();
         assert_eq!(intensities, vec![0.5, 0.5, 1.0, 0.0]);
     }
 

@@ -124,7 +124,8 @@ impl MorphSpec {
     /// # Errors
     /// [`crate::BlobError::Parse`] (wrapped) for malformed text.
     pub fn from_json(text: &str) -> Result<Self, MorphError> {
-        serde_json::from_str(text).map_err(|e| crate::BlobError::Parse { format: "JSON", message: e.to_string() }.into())
+        serde_json::from_str(text)
+            .map_err(|e| crate::BlobError::Parse { format: "JSON", message: e.to_string() }.into())
     }
 }
 
@@ -174,8 +175,14 @@ fn build(pair: &Pair) -> Result<GNode, MorphError> {
     let origin = pair.origin().clone();
     let (kind, children) = match pair {
         Pair::Leaf { a, b, .. } => {
-            let pa = a.skeleton.polytope().map_err(|p| crate::BlobError::node(&origin.a.clone().unwrap_or_default(), p))?;
-            let pb = b.skeleton.polytope().map_err(|p| crate::BlobError::node(&origin.b.clone().unwrap_or_default(), p))?;
+            let pa = a
+                .skeleton
+                .polytope()
+                .map_err(|p| crate::BlobError::node(&origin.a.clone().unwrap_or_default(), p))?;
+            let pb = b
+                .skeleton
+                .polytope()
+                .map_err(|p| crate::BlobError::node(&origin.b.clone().unwrap_or_default(), p))?;
             let frame_a = frame_parts(a, &origin.a, &origin.b)?;
             let frame_b = frame_parts(b, &origin.a, &origin.b)?;
             let (oa, ob) = (frame_a.translation, frame_b.translation);
@@ -189,8 +196,12 @@ fn build(pair: &Pair) -> Result<GNode, MorphError> {
             };
             (GKind::Leaf(Box::new(leaf)), Vec::new())
         }
-        Pair::Nary { a, b, children, .. } => (GKind::Nary(*a, *b), children.iter().map(build).collect::<Result<_, _>>()?),
-        Pair::Difference { a, b, left, right, .. } => (GKind::Difference(*a, *b), vec![build(left)?, build(right)?]),
+        Pair::Nary { a, b, children, .. } => {
+            (GKind::Nary(*a, *b), children.iter().map(build).collect::<Result<_, _>>()?)
+        }
+        Pair::Difference { a, b, left, right, .. } => {
+            (GKind::Difference(*a, *b), vec![build(left)?, build(right)?])
+        }
         Pair::Warp { a, b, child, .. } => (GKind::Warp(*a, *b), vec![build(child)?]),
     };
     Ok(GNode { kind, speed: Speed::default(), origin, children })
@@ -318,7 +329,11 @@ impl GenericTree {
             }
             let speed = sc.speed;
             if for_matching(&mut root, &sc.a, &sc.b, &mut |n| n.speed = speed) == 0 {
-                return Err(MorphError::UnmatchedPair { what: "speed curve", a: sc.a.clone(), b: sc.b.clone() });
+                return Err(MorphError::UnmatchedPair {
+                    what: "speed curve",
+                    a: sc.a.clone(),
+                    b: sc.b.clone(),
+                });
             }
         }
         for tr in &spec.trajectories {
@@ -334,7 +349,11 @@ impl GenericTree {
                 }
             });
             if leaves == 0 {
-                return Err(MorphError::UnmatchedPair { what: "trajectory", a: tr.a.clone(), b: tr.b.clone() });
+                return Err(MorphError::UnmatchedPair {
+                    what: "trajectory",
+                    a: tr.a.clone(),
+                    b: tr.b.clone(),
+                });
             }
         }
         Ok(Self { root, thresholds: (a.threshold(), b.threshold()), pair })
@@ -467,7 +486,11 @@ mod tests {
         let a = BlobTree::from_ron(r#"(root: (kind: "point", vertices: [(0,0,0)], radius: 1))"#).unwrap();
         let b = BlobTree::from_ron(r#"(root: (kind: "point", vertices: [(1,0,0)], radius: 1))"#).unwrap();
         let spec = MorphSpec {
-            speeds: vec![SpeedCurve { a: NodePath::root(), b: NodePath::root(), speed: Speed { start: 0.5, end: 1.0, smooth: false } }],
+            speeds: vec![SpeedCurve {
+                a: NodePath::root(),
+                b: NodePath::root(),
+                speed: Speed { start: 0.5, end: 1.0, smooth: false },
+            }],
             ..MorphSpec::default()
         };
         let g = GenericTree::new(&a, &b, &spec).unwrap();

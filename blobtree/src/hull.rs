@@ -98,8 +98,11 @@ pub fn convex_hull(points: &[DVec3]) -> HullShape {
 /// Andrew's monotone chain in the plane through `origin` spanned by `u` and `normal × u`.
 fn polygon_hull(points: &[DVec3], origin: DVec3, u: DVec3, normal: DVec3, eps: f64) -> HullShape {
     let v = normal.cross(u);
-    let mut pts: Vec<(DVec2, usize)> =
-        points.iter().enumerate().map(|(i, p)| (DVec2::new((*p - origin).dot(u), (*p - origin).dot(v)), i)).collect();
+    let mut pts: Vec<(DVec2, usize)> = points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (DVec2::new((*p - origin).dot(u), (*p - origin).dot(v)), i))
+        .collect();
     pts.sort_by(|a, b| a.0.x.total_cmp(&b.0.x).then(a.0.y.total_cmp(&b.0.y)));
     let cross = |o: DVec2, a: DVec2, b: DVec2| (a - o).perp_dot(b - o);
     let mut ring: Vec<(DVec2, usize)> = Vec::new();
@@ -108,7 +111,9 @@ fn polygon_hull(points: &[DVec3], origin: DVec3, u: DVec3, normal: DVec3, eps: f
         let iter: Box<dyn Iterator<Item = &(DVec2, usize)>> =
             if pass == 0 { Box::new(pts.iter()) } else { Box::new(pts.iter().rev()) };
         for &p in iter {
-            while ring.len() >= start + 2 && cross(ring[ring.len() - 2].0, ring[ring.len() - 1].0, p.0) <= eps * eps * 1e6 {
+            while ring.len() >= start + 2
+                && cross(ring[ring.len() - 2].0, ring[ring.len() - 1].0, p.0) <= eps * eps * 1e6
+            {
                 ring.pop();
             }
             ring.push(p);
@@ -126,7 +131,8 @@ fn solid_hull(points: &[DVec3], seed: [usize; 4], eps: f64) -> Vec<[usize; 3]> {
         let n = (points[t[1]] - points[t[0]]).cross(points[t[2]] - points[t[0]]);
         if n.dot(points[t[0]] - centroid) < 0.0 { [t[0], t[2], t[1]] } else { t }
     };
-    let mut faces: Vec<[usize; 3]> = vec![orient([a, b, c]), orient([a, b, d]), orient([a, c, d]), orient([b, c, d])];
+    let mut faces: Vec<[usize; 3]> =
+        vec![orient([a, b, c]), orient([a, b, d]), orient([a, c, d]), orient([b, c, d])];
     let plane_distance = |f: &[usize; 3], p: DVec3| {
         let n = (points[f[1]] - points[f[0]]).cross(points[f[2]] - points[f[0]]);
         let len = n.length();
@@ -146,7 +152,8 @@ fn solid_hull(points: &[DVec3], seed: [usize; 4], eps: f64) -> Vec<[usize; 3]> {
                 edges.insert((f[e], f[(e + 1) % 3]));
             }
         }
-        let mut next: Vec<[usize; 3]> = faces.iter().zip(&visible).filter(|(_, v)| !**v).map(|(f, _)| *f).collect();
+        let mut next: Vec<[usize; 3]> =
+            faces.iter().zip(&visible).filter(|(_, v)| !**v).map(|(f, _)| *f).collect();
         for &(u, w) in &edges {
             if !edges.contains(&(w, u)) {
                 next.push([u, w, i]);

@@ -47,8 +47,10 @@ impl MinkowskiPath {
             .iter()
             .copied()
             .filter(|&k| {
-                let others: Vec<glam::Vec3> = first.iter().filter(|&&o| o != k).map(|&o| cand[o].as_vec3()).collect();
-                others.is_empty() || Polytope::hull(&others).distance(cand[k].as_vec3(), 2.0).0 as f64 > 1e-5 * diam
+                let others: Vec<glam::Vec3> =
+                    first.iter().filter(|&&o| o != k).map(|&o| cand[o].as_vec3()).collect();
+                others.is_empty()
+                    || Polytope::hull(&others).distance(cand[k].as_vec3(), 2.0).0 as f64 > 1e-5 * diam
             })
             .collect();
         let kept: Vec<glam::DVec3> = extreme.iter().map(|&k| cand[k]).collect();
@@ -95,9 +97,15 @@ mod tests {
             Skeleton::Segment(Vec3::new(0.0, -0.4, 0.2), Vec3::new(0.1, 0.4, -0.2)).polytope().unwrap(),
             Skeleton::Polygon(vec![Vec3::ZERO, Vec3::X, Vec3::new(0.2, 0.8, 0.0)]).polytope().unwrap(),
             Skeleton::cuboid(Vec3::new(0.3, 0.2, 0.1)).polytope().unwrap(),
-            Skeleton::Polyhedron(vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(0.3, 0.3, 0.9), Vec3::new(0.6, 0.7, 0.4)])
-                .polytope()
-                .unwrap(),
+            Skeleton::Polyhedron(vec![
+                Vec3::ZERO,
+                Vec3::X,
+                Vec3::Y,
+                Vec3::new(0.3, 0.3, 0.9),
+                Vec3::new(0.6, 0.7, 0.4),
+            ])
+            .polytope()
+            .unwrap(),
         ]
     }
 
@@ -136,7 +144,14 @@ mod tests {
                     }
                     for x in &probes {
                         let (d, e) = (s.distance(*x, 2.0).0, brute.distance(*x, 2.0).0);
-                        assert!((d - e).abs() < 1e-4, "t={t} at {x}: {d} vs brute {e}; dims {} {} {} {}", a.dimension(), b.dimension(), s.dimension(), brute.dimension());
+                        assert!(
+                            (d - e).abs() < 1e-4,
+                            "t={t} at {x}: {d} vs brute {e}; dims {} {} {} {}",
+                            a.dimension(),
+                            b.dimension(),
+                            s.dimension(),
+                            brute.dimension()
+                        );
                     }
                     if t > 0.0 && t < 1.0 {
                         assert_eq!(s.dimension(), brute.dimension());

@@ -65,7 +65,11 @@ impl Primitive {
             return Err(NodeProblem::NegativeStiffness(k.stiffness));
         }
         if p_invalid(self.p) {
-            return Err(if self.p.is_nan() { NodeProblem::NotFinite("p") } else { NodeProblem::ExponentBelowOne(self.p) });
+            return Err(if self.p.is_nan() {
+                NodeProblem::NotFinite("p")
+            } else {
+                NodeProblem::ExponentBelowOne(self.p)
+            });
         }
         isomorph_common::AffineParts::from_affine(&self.frame).map_err(NodeProblem::Transform)?;
         Ok(())
@@ -361,7 +365,11 @@ impl Node {
             }
             Node::Nary { op, children } | Node::Mix { from: op, children, .. } => {
                 if children.is_empty() {
-                    return Err(err(NodeProblem::WrongChildCount { kind: op.name(), expected: "≥ 1", got: 0 }));
+                    return Err(err(NodeProblem::WrongChildCount {
+                        kind: op.name(),
+                        expected: "≥ 1",
+                        got: 0,
+                    }));
                 }
                 let ops: Vec<NaryOp> = match self {
                     Node::Mix { to, s, .. } => {

@@ -144,8 +144,9 @@ impl BlobTree {
     /// # Errors
     /// [`BlobError::Parse`] for malformed RON; otherwise as [`BlobTree::from_scene`].
     pub fn from_ron(text: &str) -> Result<Self, BlobError> {
-        let file: SceneFile =
-            ron_options().from_str(text).map_err(|e| BlobError::Parse { format: "RON", message: e.to_string() })?;
+        let file: SceneFile = ron_options()
+            .from_str(text)
+            .map_err(|e| BlobError::Parse { format: "RON", message: e.to_string() })?;
         Self::from_scene(&file)
     }
 
@@ -154,8 +155,8 @@ impl BlobTree {
     /// # Errors
     /// [`BlobError::Parse`] for malformed JSON; otherwise as [`BlobTree::from_scene`].
     pub fn from_json(text: &str) -> Result<Self, BlobError> {
-        let file: SceneFile =
-            serde_json::from_str(text).map_err(|e| BlobError::Parse { format: "JSON", message: e.to_string() })?;
+        let file: SceneFile = serde_json::from_str(text)
+            .map_err(|e| BlobError::Parse { format: "JSON", message: e.to_string() })?;
         Self::from_scene(&file)
     }
 
@@ -215,10 +216,16 @@ fn from_raw(raw: &RawNode, path: &NodePath, threshold: f32) -> Result<Node, Blob
     Ok(match kind {
         "point" | "segment" | "polygon" | "polyhedron" | "box" => {
             if !raw.children.is_empty() {
-                return Err(err(NodeProblem::WrongChildCount { kind: kind_name(kind), expected: "0", got: raw.children.len() }));
+                return Err(err(NodeProblem::WrongChildCount {
+                    kind: kind_name(kind),
+                    expected: "0",
+                    got: raw.children.len(),
+                }));
             }
             let vs: Vec<Vec3> = raw.vertices.iter().map(v3).collect();
-            let count = |expected: &'static str| err(NodeProblem::WrongVertexCount { kind: kind_name(kind), expected, got: vs.len() });
+            let count = |expected: &'static str| {
+                err(NodeProblem::WrongVertexCount { kind: kind_name(kind), expected, got: vs.len() })
+            };
             let skeleton = match kind {
                 "point" if vs.len() == 1 => Skeleton::Point(vs[0]),
                 "point" => return Err(count("1")),
@@ -231,10 +238,18 @@ fn from_raw(raw: &RawNode, path: &NodePath, threshold: f32) -> Result<Node, Blob
             let p = match &raw.p {
                 None => 2.0,
                 Some(RawExponent::Number(p)) => *p,
-                Some(RawExponent::Text(t)) if matches!(t.to_ascii_lowercase().as_str(), "inf" | "infinity") => f32::INFINITY,
+                Some(RawExponent::Text(t))
+                    if matches!(t.to_ascii_lowercase().as_str(), "inf" | "infinity") =>
+                {
+                    f32::INFINITY
+                }
                 Some(RawExponent::Text(_)) => return Err(err(NodeProblem::NotFinite("p"))),
             };
-            let kernel = Kernel::new(raw.intensity.unwrap_or(1.0), need(raw.radius, "radius")?, raw.stiffness.unwrap_or(1.0));
+            let kernel = Kernel::new(
+                raw.intensity.unwrap_or(1.0),
+                need(raw.radius, "radius")?,
+                raw.stiffness.unwrap_or(1.0),
+            );
             let frame = match &raw.frame {
                 Some(f) => transform(f).map_err(err)?,
                 None => Affine3A::IDENTITY,
@@ -267,7 +282,10 @@ fn from_raw(raw: &RawNode, path: &NodePath, threshold: f32) -> Result<Node, Blob
                     min: need(raw.min, "min")?,
                     max: need(raw.max, "max")?,
                 },
-                _ => Warp::Affine(transform(raw.frame.as_ref().ok_or(err(NodeProblem::MissingField("frame")))?).map_err(err)?),
+                _ => Warp::Affine(
+                    transform(raw.frame.as_ref().ok_or(err(NodeProblem::MissingField("frame")))?)
+                        .map_err(err)?,
+                ),
             };
             Node::warp(warp, child)
         }
@@ -277,8 +295,20 @@ fn from_raw(raw: &RawNode, path: &NodePath, threshold: f32) -> Result<Node, Blob
 
 fn kind_name(kind: &str) -> &'static str {
     const KINDS: [&str; 14] = [
-        "point", "segment", "polygon", "polyhedron", "box", "blend", "union", "intersection", "superblend",
-        "difference", "twist", "taper", "bend", "affine",
+        "point",
+        "segment",
+        "polygon",
+        "polyhedron",
+        "box",
+        "blend",
+        "union",
+        "intersection",
+        "superblend",
+        "difference",
+        "twist",
+        "taper",
+        "bend",
+        "affine",
     ];
     KINDS.iter().find(|k| **k == kind).copied().unwrap_or("node")
 }
@@ -327,7 +357,9 @@ fn to_raw(node: &Node) -> RawNode {
                 Skeleton::Segment(x, y) => ("segment", vec![a(*x), a(*y)]),
                 Skeleton::Polygon(v) => ("polygon", v.iter().map(|v| a(*v)).collect()),
                 Skeleton::Polyhedron(v) => ("polyhedron", v.iter().map(|v| a(*v)).collect()),
-                Skeleton::Generic(poly) => (p.skeleton.kind(), poly.vertices().iter().map(|v| a(*v)).collect()),
+                Skeleton::Generic(poly) => {
+                    (p.skeleton.kind(), poly.vertices().iter().map(|v| a(*v)).collect())
+                }
             };
             RawNode {
                 kind: kind.into(),
@@ -335,7 +367,11 @@ fn to_raw(node: &Node) -> RawNode {
                 intensity: Some(p.kernel.intensity),
                 radius: Some(p.kernel.radius),
                 stiffness: Some(p.kernel.stiffness),
-                p: Some(if p.p.is_infinite() { RawExponent::Text("inf".into()) } else { RawExponent::Number(p.p) }),
+                p: Some(if p.p.is_infinite() {
+                    RawExponent::Text("inf".into())
+                } else {
+                    RawExponent::Number(p.p)
+                }),
                 frame: raw_transform(&p.frame),
                 ..RawNode::default()
             }
@@ -353,7 +389,8 @@ fn to_raw(node: &Node) -> RawNode {
             ..RawNode::default()
         },
         Node::Warp { warp, child } => {
-            let mut r = RawNode { kind: warp.kind().into(), children: vec![to_raw(child)], ..RawNode::default() };
+            let mut r =
+                RawNode { kind: warp.kind().into(), children: vec![to_raw(child)], ..RawNode::default() };
             match *warp {
                 Warp::Twist { rate } => r.rate = Some(rate),
                 Warp::Taper { slope } => r.slope = Some(slope),
@@ -381,7 +418,9 @@ mod tests {
 
     #[test]
     fn malformed_scenes_are_typed_errors_with_paths() {
-        let (p, e) = problem(r#"(root: (kind: "union", children: [(kind: "point", vertices: [(0,0,0)], radius: 1), (kind: "blob")]))"#);
+        let (p, e) = problem(
+            r#"(root: (kind: "union", children: [(kind: "point", vertices: [(0,0,0)], radius: 1), (kind: "blob")]))"#,
+        );
         assert_eq!((p, e), (vec![1], NodeProblem::UnknownKind("blob".into())));
         let (p, e) = problem(r#"(root: (kind: "twist", rate: 1, children: [(kind: "blend")]))"#);
         assert_eq!(p, vec![0]);
@@ -392,12 +431,19 @@ mod tests {
         assert_eq!(e, NodeProblem::NotFinite("radius"));
         let (_, e) = problem(r#"(root: (kind: "segment", vertices: [(0,0,0)], radius: 1))"#);
         assert!(matches!(e, NodeProblem::WrongVertexCount { got: 1, .. }));
-        let (p, e) = problem(r#"(root: (kind: "difference", children: [(kind: "box", half: (1,1,1), radius: 1), (kind: "point", vertices: [(0,0,0)])]))"#);
+        let (p, e) = problem(
+            r#"(root: (kind: "difference", children: [(kind: "box", half: (1,1,1), radius: 1), (kind: "point", vertices: [(0,0,0)])]))"#,
+        );
         assert_eq!((p, e), (vec![1], NodeProblem::MissingField("radius")));
-        assert!(matches!(BlobTree::from_ron("(root: (kind: 3))"), Err(BlobError::Parse { format: "RON", .. })));
+        assert!(matches!(
+            BlobTree::from_ron("(root: (kind: 3))"),
+            Err(BlobError::Parse { format: "RON", .. })
+        ));
         assert!(matches!(BlobTree::from_json("{\"root\": 1}"), Err(BlobError::Parse { format: "JSON", .. })));
         assert!(matches!(
-            BlobTree::from_json(r#"{"threshold": -1, "root": {"kind": "point", "vertices": [[0,0,0]], "radius": 1}}"#),
+            BlobTree::from_json(
+                r#"{"threshold": -1, "root": {"kind": "point", "vertices": [[0,0,0]], "radius": 1}}"#
+            ),
             Err(BlobError::InvalidThreshold(_))
         ));
     }
@@ -418,7 +464,8 @@ mod tests {
         let again = BlobTree::from_ron(&tree.to_ron().unwrap()).unwrap();
         let json = BlobTree::from_json(&tree.to_json().unwrap()).unwrap();
         for i in 0..200 {
-            let p = Vec3::new((i as f32 * 0.37).sin(), (i as f32 * 0.61).cos(), (i as f32 * 0.23).sin()) * 0.8;
+            let p =
+                Vec3::new((i as f32 * 0.37).sin(), (i as f32 * 0.61).cos(), (i as f32 * 0.23).sin()) * 0.8;
             assert!((tree.value(p) - again.value(p)).abs() < 1e-5);
             assert!((tree.value(p) - json.value(p)).abs() < 1e-5);
         }

@@ -25,7 +25,9 @@ pub const THRESHOLD: f32 = 0.5;
 pub const DEMOS: [&str; 4] = ["cube_sphere", "sphere_propeller", "rook_queen", "bear_bird"];
 
 fn prim(skeleton: Skeleton, radius: f32, at: Vec3) -> Node {
-    Node::Primitive(Primitive::new(skeleton, Kernel::new(1.0, radius, 1.0)).with_frame(Affine3A::from_translation(at)))
+    Node::Primitive(
+        Primitive::new(skeleton, Kernel::new(1.0, radius, 1.0)).with_frame(Affine3A::from_translation(at)),
+    )
 }
 
 fn ball(at: Vec3, radius: f32) -> Node {
@@ -103,7 +105,10 @@ pub fn rook() -> BlobTree {
 /// small spheres around its rim.
 pub fn queen() -> BlobTree {
     let base = disc(0.4, 8, -0.75, 0.3);
-    let body = Node::warp(Warp::Taper { slope: -0.35 }, seg(Vec3::new(0.0, 0.0, -0.7), Vec3::new(0.0, 0.0, 0.5), 0.46));
+    let body = Node::warp(
+        Warp::Taper { slope: -0.35 },
+        seg(Vec3::new(0.0, 0.0, -0.7), Vec3::new(0.0, 0.0, 0.5), 0.46),
+    );
     let crown = ball(Vec3::new(0.0, 0.0, 0.75), 0.9);
     let carvings = (0..8)
         .map(|i| {
@@ -111,7 +116,10 @@ pub fn queen() -> BlobTree {
             ball(Vec3::new(0.42 * a.cos(), 0.42 * a.sin(), 1.0), 0.36)
         })
         .collect();
-    tree(Node::union(vec![Node::blend(vec![base, body]), Node::difference(crown, Node::union(carvings), THRESHOLD)]))
+    tree(Node::union(vec![
+        Node::blend(vec![base, body]),
+        Node::difference(crown, Node::union(carvings), THRESHOLD),
+    ]))
 }
 
 /// A blob bear: body, head, ears, snout, arms and legs, all blended.
@@ -176,7 +184,8 @@ mod tests {
             let m = BlobMorph::new(&a, &b, &spec).unwrap();
             let (f0, f1) = (m.frame(0.0).unwrap().field, m.frame(1.0).unwrap().field);
             for i in 0..300 {
-                let p = Vec3::new((i as f32 * 0.37).sin(), (i as f32 * 0.61).cos(), (i as f32 * 0.23).sin()) * 1.1;
+                let p = Vec3::new((i as f32 * 0.37).sin(), (i as f32 * 0.61).cos(), (i as f32 * 0.23).sin())
+                    * 1.1;
                 assert!((f0.value(p) - a.value(p)).abs() < 1e-5, "{name} C(0) at {p}");
                 assert!((f1.value(p) - b.value(p)).abs() < 1e-5, "{name} C(1) at {p}");
             }

@@ -80,7 +80,11 @@ impl Skeleton {
     pub fn polytope(&self) -> Result<Polytope, crate::NodeProblem> {
         use crate::NodeProblem as P;
         if let Skeleton::Generic(p) = self {
-            return if p.vertices().iter().all(|v| v.is_finite()) { Ok(p.clone()) } else { Err(P::NotFinite("vertices")) };
+            return if p.vertices().iter().all(|v| v.is_finite()) {
+                Ok(p.clone())
+            } else {
+                Err(P::NotFinite("vertices"))
+            };
         }
         let v = self.vertices();
         if v.iter().any(|p| !p.is_finite()) {
@@ -110,9 +114,13 @@ pub(crate) enum Structure {
     Point,
     Segment,
     /// Ring order counter-clockwise about `normal`.
-    Polygon { normal: Vec3 },
+    Polygon {
+        normal: Vec3,
+    },
     /// Outward triangles.
-    Polyhedron { triangles: Vec<[u32; 3]> },
+    Polyhedron {
+        triangles: Vec<[u32; 3]>,
+    },
 }
 
 /// A convex polytope of dimension 0–3 ready for distance queries.
@@ -143,7 +151,9 @@ impl Polytope {
         let structure = match h {
             HullShape::Point(_) => (Structure::Point, Vec::new()),
             HullShape::Segment(i, j) => (Structure::Segment, vec![*i, *j]),
-            HullShape::Polygon { ring, normal } => (Structure::Polygon { normal: normal.as_vec3() }, ring.clone()),
+            HullShape::Polygon { ring, normal } => {
+                (Structure::Polygon { normal: normal.as_vec3() }, ring.clone())
+            }
             HullShape::Polyhedron { triangles } => (
                 Structure::Polyhedron { triangles: triangles.iter().map(|t| t.map(map)).collect() },
                 Vec::new(),
@@ -322,7 +332,13 @@ fn lp_norm_gradient(v: Vec3, p: f32) -> Vec3 {
     } else if p.is_infinite() {
         let a = v.abs();
         let m = a.max_element();
-        let k = if a.x == m { 0 } else if a.y == m { 1 } else { 2 };
+        let k = if a.x == m {
+            0
+        } else if a.y == m {
+            1
+        } else {
+            2
+        };
         let mut g = Vec3::ZERO;
         g[k] = v[k].signum();
         g
@@ -481,10 +497,21 @@ mod tests {
 
     #[test]
     fn euclidean_distances_match_brute_force() {
-        let tet = vec![Vec3::ZERO, Vec3::new(1.0, 0.2, 0.0), Vec3::new(0.3, 1.0, 0.1), Vec3::new(0.2, 0.3, 1.2)];
-        let quad = vec![Vec3::new(-1.0, 0.0, 0.0), Vec3::new(0.0, -1.0, 0.2), Vec3::new(1.0, 0.0, 0.4), Vec3::new(0.0, 1.0, 0.2)];
+        let tet =
+            vec![Vec3::ZERO, Vec3::new(1.0, 0.2, 0.0), Vec3::new(0.3, 1.0, 0.1), Vec3::new(0.2, 0.3, 1.2)];
+        let quad = vec![
+            Vec3::new(-1.0, 0.0, 0.0),
+            Vec3::new(0.0, -1.0, 0.2),
+            Vec3::new(1.0, 0.0, 0.4),
+            Vec3::new(0.0, 1.0, 0.2),
+        ];
         let seg = vec![Vec3::new(-1.0, 0.5, 0.0), Vec3::new(1.0, -0.5, 0.3)];
-        let xs = [Vec3::new(2.0, 0.5, 0.1), Vec3::new(-0.5, -0.6, 1.5), Vec3::new(0.3, 0.3, -1.0), Vec3::new(0.1, 0.1, 0.1)];
+        let xs = [
+            Vec3::new(2.0, 0.5, 0.1),
+            Vec3::new(-0.5, -0.6, 1.5),
+            Vec3::new(0.3, 0.3, -1.0),
+            Vec3::new(0.1, 0.1, 0.1),
+        ];
         for verts in [&tet, &quad, &seg] {
             let poly = Polytope::hull(verts);
             for &x in &xs {
@@ -524,7 +551,11 @@ mod tests {
     fn wrong_skeletons_are_rejected() {
         assert!(Skeleton::Segment(Vec3::ONE, Vec3::ONE).polytope().is_err());
         assert!(Skeleton::Polygon(vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z]).polytope().is_err());
-        assert!(Skeleton::Polyhedron(vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::ONE.with_z(0.0)]).polytope().is_err());
+        assert!(
+            Skeleton::Polyhedron(vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::ONE.with_z(0.0)])
+                .polytope()
+                .is_err()
+        );
         assert!(Skeleton::Point(Vec3::NAN).polytope().is_err());
         assert!(Skeleton::Polygon(vec![Vec3::ZERO, Vec3::X]).polytope().is_err());
     }

@@ -144,7 +144,13 @@ impl BlobTree {
         }
     }
 
-    fn nary<const G: bool>(&self, node: &Compiled, p: Vec3, op: NaryOp, mix: Option<(NaryOp, f32)>) -> (f32, Vec3) {
+    fn nary<const G: bool>(
+        &self,
+        node: &Compiled,
+        p: Vec3,
+        op: NaryOp,
+        mix: Option<(NaryOp, f32)>,
+    ) -> (f32, Vec3) {
         let n = node.children.len();
         let mut vs = [0.0f32; STACK_CHILDREN];
         let mut gs = [Vec3::ZERO; STACK_CHILDREN];
@@ -239,9 +245,9 @@ fn compile(node: &Node) -> Compiled {
 
 fn nary_bounds(op: NaryOp, children: &[Compiled]) -> Aabb {
     match op {
-        NaryOp::Intersection => children.iter().fold(Aabb::new(Vec3::splat(-f32::MAX), Vec3::splat(f32::MAX)), |b, c| {
-            b.intersection(&c.bounds)
-        }),
+        NaryOp::Intersection => children
+            .iter()
+            .fold(Aabb::new(Vec3::splat(-f32::MAX), Vec3::splat(f32::MAX)), |b, c| b.intersection(&c.bounds)),
         _ => children.iter().fold(Aabb::EMPTY, |b, c| b.union(&c.bounds)),
     }
 }
@@ -288,9 +294,13 @@ mod tests {
     fn euclidean(n: &Node) -> Node {
         match n {
             Node::Primitive(p) => Node::Primitive(p.clone().with_p(2.0)),
-            Node::Nary { op, children } => Node::Nary { op: *op, children: children.iter().map(euclidean).collect() },
+            Node::Nary { op, children } => {
+                Node::Nary { op: *op, children: children.iter().map(euclidean).collect() }
+            }
             Node::Mix { .. } => n.clone(),
-            Node::Difference { left, right, level } => Node::difference(euclidean(left), euclidean(right), *level),
+            Node::Difference { left, right, level } => {
+                Node::difference(euclidean(left), euclidean(right), *level)
+            }
             Node::Warp { warp, child } => Node::Warp { warp: *warp, child: Box::new(euclidean(child)) },
         }
     }
@@ -358,7 +368,10 @@ mod tests {
             e => panic!("{e}"),
         }
         assert!(matches!(BlobTree::new(Node::union(vec![]), 0.5), Err(BlobError::InvalidNode { .. })));
-        assert!(matches!(BlobTree::new(ball(Vec3::ZERO, 1.0), f32::NAN), Err(BlobError::InvalidThreshold(_))));
+        assert!(matches!(
+            BlobTree::new(ball(Vec3::ZERO, 1.0), f32::NAN),
+            Err(BlobError::InvalidThreshold(_))
+        ));
         let lp = Node::Primitive(Primitive::new(Skeleton::Point(Vec3::ZERO), Kernel::default()).with_p(0.5));
         assert!(matches!(
             BlobTree::new(lp, 0.5),

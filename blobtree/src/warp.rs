@@ -85,7 +85,9 @@ impl Warp {
                     Ok(())
                 }
             }
-            Warp::Affine(m) => isomorph_common::AffineParts::from_affine(&m).map(|_| ()).map_err(P::Transform),
+            Warp::Affine(m) => {
+                isomorph_common::AffineParts::from_affine(&m).map(|_| ()).map_err(P::Transform)
+            }
             _ => Ok(()),
         }
     }
@@ -186,11 +188,7 @@ impl Warp {
         }
         match *self {
             Warp::Twist { .. } => {
-                let rho = child
-                    .corners()
-                    .iter()
-                    .map(|c| c.truncate().length())
-                    .fold(0.0f32, f32::max);
+                let rho = child.corners().iter().map(|c| c.truncate().length()).fold(0.0f32, f32::max);
                 Aabb::new(Vec3::new(-rho, -rho, child.min.z), Vec3::new(rho, rho, child.max.z))
             }
             Warp::Taper { slope } => {
@@ -199,7 +197,10 @@ impl Warp {
                 let (lo, hi) = (r0.min(r1), r0.max(r1));
                 let range = |a: f32, b: f32| {
                     let c = [lo * a, lo * b, hi * a, hi * b];
-                    (c.iter().copied().fold(f32::INFINITY, f32::min), c.iter().copied().fold(f32::NEG_INFINITY, f32::max))
+                    (
+                        c.iter().copied().fold(f32::INFINITY, f32::min),
+                        c.iter().copied().fold(f32::NEG_INFINITY, f32::max),
+                    )
                 };
                 let (x0, x1) = range(child.min.x, child.max.x);
                 let (y0, y1) = range(child.min.y, child.max.y);
