@@ -128,10 +128,13 @@ pub(crate) enum Structure {
 pub struct Polytope {
     vertices: Vec<Vec3>,
     structure: Structure,
-    /// Outward unit normals and offsets of the solid's triangle planes (`n·x ≤ e` inside).
+    /// Outward unit normals and offsets of the solid's triangle planes
+    /// (`n·x ≤ e` inside), one per triangle; zero normal for a degenerate one.
     planes: Vec<(Vec3, f32)>,
     /// Polygon: in-plane inward edge normals and offsets.
     edge_planes: Vec<(Vec3, f32)>,
+    /// Set when the polyhedron is an axis-aligned box: closest points by clamping.
+    aabb: Option<(Vec3, Vec3)>,
 }
 
 impl Polytope {
@@ -174,7 +177,7 @@ impl Polytope {
 
     /// Rebuilds the derived planes for the given vertex positions.
     pub(crate) fn with_structure(vertices: Vec<Vec3>, structure: Structure) -> Self {
-        let mut p = Self { vertices, structure, planes: Vec::new(), edge_planes: Vec::new() };
+        let mut p = Self { vertices, structure, planes: Vec::new(), edge_planes: Vec::new(), aabb: None };
         match &p.structure {
             Structure::Polyhedron { triangles } => {
                 for t in triangles {
@@ -184,7 +187,14 @@ impl Polytope {
                     if len > 1e-12 {
                         let n = n / len;
                         p.planes.push((n, n.dot(a)));
+                    } else {
+                        p.planes.push((Vec3::ZERO, 0.0));
                     }
+                }
+                let (lo, hi) = (p.bounds().min, p.bounds().max);
+                let on_corner = |v: &Vec3| (0..3).all(|k| v[k] == lo[k] || v[k] == hi[k]);
+                if p.vertices.len() == 8 && p.vertices.iter().all(on_corner) {
+                    p.aabb = Some((lo, hi));
                 }
             }
             Structure::Polygon { normal } => {
@@ -248,12 +258,23 @@ impl Polytope {
                     .unwrap_or(v[0])
             }
             Structure::Polyhedron { triangles } => {
+                if let Some((lo, hi)) = self.aabb {
+                    return x.clamp(lo, hi);
+                }
                 if self.planes.iter().all(|(n, e)| n.dot(x) <= *e) {
                     return x;
                 }
+                // The closest point lies on a triangle whose plane has `x` in
+                // front (its normal cone contains x − q), and no triangle is
+                // closer than its plane: skip the others.
                 let mut best = v[0];
                 let mut best_d = f32::INFINITY;
-                for t in triangles {
+                for (t, (n, e)) in triangles.iter().zip(&self.planes) {
+                    let front = n.dot(x) - e;
+                    let degenerate = *n == Vec3::ZERO;
+                    if !degenerate && (front <= 0.0 || front * front >= best_d) {
+                        continue;
+                    }
                     let [a, b, c] = t.map(|i| v[i as usize]);
                     let q = closest_on_triangle(x, a, b, c);
                     let d = (q - x).length_squared();
