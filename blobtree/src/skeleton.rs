@@ -251,11 +251,23 @@ impl Polytope {
                 if self.edge_planes.iter().all(|(n, e)| n.dot(proj) >= *e - 1e-7) {
                     return proj;
                 }
+                // Outside: the closest point is on an edge whose half-plane
+                // excludes the projection (same normal-cone argument as below).
                 let m = v.len();
-                (0..m)
-                    .map(|i| closest_on_segment(x, v[i], v[(i + 1) % m]))
-                    .min_by(|a, b| (*a - x).length_squared().total_cmp(&(*b - x).length_squared()))
-                    .unwrap_or(v[0])
+                let mut best = v[0];
+                let mut best_d = f32::INFINITY;
+                for (i, (n, e)) in self.edge_planes.iter().enumerate() {
+                    if n.dot(proj) >= *e && *n != Vec3::ZERO {
+                        continue;
+                    }
+                    let q = closest_on_segment(x, v[i], v[(i + 1) % m]);
+                    let d = (q - x).length_squared();
+                    if d < best_d {
+                        best_d = d;
+                        best = q;
+                    }
+                }
+                best
             }
             Structure::Polyhedron { triangles } => {
                 if let Some((lo, hi)) = self.aabb {
@@ -336,7 +348,14 @@ pub fn lp_norm(v: Vec3, p: f32) -> f32 {
             return 0.0;
         }
         let s = a / m;
-        m * (s.x.powf(p) + s.y.powf(p) + s.z.powf(p)).powf(1.0 / p)
+        // Integer exponents (common: interpolating 2 → ∞ passes p = 4) use powi.
+        let sum = if p == p.round() && p <= 16.0 {
+            let k = p as i32;
+            s.x.powi(k) + s.y.powi(k) + s.z.powi(k)
+        } else {
+            s.x.powf(p) + s.y.powf(p) + s.z.powf(p)
+        };
+        m * sum.powf(1.0 / p)
     }
 }
 
