@@ -159,10 +159,11 @@ impl fmt::Display for Side {
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum MorphError {
-    /// `t` is NaN or outside `[0, 1]`.
-    #[error("time {0} is outside [0, 1]")]
-    InvalidTime(f32),
-    /// A grid could not be made.
+    /// A frame time is NaN or outside `[0, 1]`
+    /// ([`isomorph_common::morph::check_time`]), or another shared-core morph error.
+    #[error(transparent)]
+    Time(#[from] isomorph_common::morph::MorphError),
+    /// A grid could not be made (meshing a frame).
     #[error(transparent)]
     Grid(#[from] GridError),
     /// A source or target tree (or an instantiated frame) is invalid.

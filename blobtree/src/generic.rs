@@ -377,12 +377,10 @@ impl GenericTree {
     /// The evaluable BlobTree `C(t)`.
     ///
     /// # Errors
-    /// [`MorphError::InvalidTime`] for `t ∉ [0, 1]`; [`MorphError::Blob`] if
+    /// [`MorphError::Time`] for `t ∉ [0, 1]` or NaN; [`MorphError::Blob`] if
     /// an instantiated node is invalid (not expected for valid inputs).
     pub fn at(&self, t: f32) -> Result<BlobTree, MorphError> {
-        if !(0.0..=1.0).contains(&t) {
-            return Err(MorphError::InvalidTime(t));
-        }
+        let t = isomorph_common::morph::check_time(t)?;
         Ok(BlobTree::new(self.node_at(t), self.threshold_at(t))?)
     }
 }
@@ -476,8 +474,14 @@ mod tests {
         assert!(matches!(BlobMorph::new(&a, &a, &elsewhere), Err(MorphError::UnmatchedPair { .. })));
         let ok = spec("(speeds: [(a: [], b: [], speed: (start: 0.2, end: 0.6, smooth: true))])");
         let m = BlobMorph::new(&a, &a, &ok).unwrap();
-        assert!(matches!(m.frame(1.5), Err(MorphError::InvalidTime(_))));
-        assert!(matches!(m.frame(f32::NAN), Err(MorphError::InvalidTime(_))));
+        assert!(matches!(
+            m.frame(1.5),
+            Err(MorphError::Time(isomorph_common::morph::MorphError::InvalidTime(_)))
+        ));
+        assert!(matches!(
+            m.frame(f32::NAN),
+            Err(MorphError::Time(isomorph_common::morph::MorphError::InvalidTime(_)))
+        ));
         assert!(MorphSpec::from_ron("(links: 3)").is_err());
     }
 
