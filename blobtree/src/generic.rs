@@ -504,6 +504,56 @@ mod tests {
     }
 
     #[test]
+    fn trajectories_bend_the_path_but_keep_the_ends() {
+        let a = BlobTree::from_ron(r#"(root: (kind: "point", vertices: [(0,0,0)], radius: 1))"#).unwrap();
+        let b = BlobTree::from_ron(
+            r#"(root: (kind: "point", vertices: [(0,0,0)], radius: 1, frame: (translate: (1, 0, 0))))"#,
+        )
+        .unwrap();
+        let spec = MorphSpec::from_json(
+            r#"{"trajectories": [{"a": [], "b": [], "handles": [[0, 1, 0], [1, 1, 0]]}]}"#,
+        )
+        .unwrap();
+        let g = GenericTree::new(&a, &b, &spec).unwrap();
+        // Bézier midpoint: (P0 + 3 P1 + 3 P2 + P3) / 8 = (0.5, 0.75, 0).
+        let mid = g.at(0.5).unwrap();
+        assert!((mid.potential(Vec3::new(0.5, 0.75, 0.0)) - 1.0).abs() < 1e-5);
+        assert_eq!(g.at(1.0).unwrap().potential(Vec3::X), 1.0);
+        let bad = MorphSpec::from_json(
+            r#"{"trajectories": [{"a": [0], "b": [], "handles": [[0, 1, 0], [1, 1, 0]]}]}"#,
+        )
+        .unwrap();
+        assert!(matches!(
+            GenericTree::new(&a, &b, &bad),
+            Err(MorphError::UnmatchedPair { what: "trajectory", .. })
+        ));
+    }
+
+    #[test]
+    fn different_warps_compose_through_the_identity() {
+        // Fig. 16: twist ↔ bend becomes twist(→ id) ∘ bend(id →).
+        let a = BlobTree::from_ron(
+            r#"(root: (kind: "twist", rate: 2, children: [(kind: "segment", vertices: [(0.2,0,-0.5), (0.2,0,0.5)], radius: 0.5)]))"#,
+        )
+        .unwrap();
+        let b = BlobTree::from_ron(
+            r#"(root: (kind: "bend", rate: 0.8, min: -0.5, max: 0.5, children: [(kind: "segment", vertices: [(0,-0.5,0), (0,0.5,0)], radius: 0.5)]))"#,
+        )
+        .unwrap();
+        let g = GenericTree::new(&a, &b, &MorphSpec::default()).unwrap();
+        let n = g.node_at(0.5);
+        let Node::Warp { warp: Warp::Twist { rate }, child } = &n else { panic!("{n:?}") };
+        assert!((rate - 1.0).abs() < 1e-6);
+        assert!(
+            matches!(**child, Node::Warp { warp: Warp::Bend { rate, .. }, .. } if (rate - 0.4).abs() < 1e-6)
+        );
+        for p in testutil::points() {
+            assert!((g.at(0.0).unwrap().value(p) - a.value(p)).abs() < 1e-5);
+            assert!((g.at(1.0).unwrap().value(p) - b.value(p)).abs() < 1e-5);
+        }
+    }
+
+    #[test]
     fn frames_and_blend_union_transition() {
         use glam::Quat;
         // A blend of two segments → a union of the same segments, rotated frame.
