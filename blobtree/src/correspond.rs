@@ -62,9 +62,9 @@ pub enum Pair {
     /// Two matched primitives (one may be a phantom).
     Leaf {
         /// Source primitive.
-        a: Primitive,
+        a: Box<Primitive>,
         /// Target primitive.
-        b: Primitive,
+        b: Box<Primitive>,
         /// Original paths of the matched nodes (`None` for a phantom).
         origin: Origin,
     },
@@ -123,7 +123,7 @@ impl Pair {
             if side == Side::Source { a.clone() } else { b.clone() }
         }
         match self {
-            Pair::Leaf { a, b, .. } => Node::Primitive(pick(side, a, b)),
+            Pair::Leaf { a, b, .. } => Node::Primitive(*pick(side, a, b)),
             Pair::Nary { a, b, children, .. } => {
                 Node::Nary { op: pick(side, a, b), children: children.iter().map(|c| c.side(side)).collect() }
             }
@@ -275,7 +275,9 @@ fn pair(a: &Node, pa: Option<&NodePath>, b: &Node, pb: Option<&NodePath>, ctx: &
             let r = with_phantom(right, child(pb, 1), Side::Target);
             Pair::Difference { a: ctx.thresholds.0, b: *level, left: Box::new(l), right: Box::new(r), origin }
         }
-        (Node::Primitive(x), Node::Primitive(y)) => Pair::Leaf { a: x.clone(), b: y.clone(), origin },
+        (Node::Primitive(x), Node::Primitive(y)) => {
+            Pair::Leaf { a: Box::new(x.clone()), b: Box::new(y.clone()), origin }
+        }
         _ => {
             let (op_a, kids_a) = commutative(a, pa);
             let (op_b, kids_b) = commutative(b, pb);
@@ -435,7 +437,9 @@ fn with_phantom(node: &Node, path: Option<NodePath>, side: Side) -> Pair {
     let (x, y) = if side == Side::Source { (node, &phantom) } else { (&phantom, node) };
     let kids = |i: usize| with_phantom(node.children()[i], child(path.as_ref(), i), side);
     match (x, y) {
-        (Node::Primitive(a), Node::Primitive(b)) => Pair::Leaf { a: a.clone(), b: b.clone(), origin },
+        (Node::Primitive(a), Node::Primitive(b)) => {
+            Pair::Leaf { a: Box::new(a.clone()), b: Box::new(b.clone()), origin }
+        }
         (Node::Nary { op, children }, _) | (Node::Mix { from: op, children, .. }, _) => {
             Pair::Nary { a: *op, b: *op, children: (0..children.len()).map(kids).collect(), origin }
         }

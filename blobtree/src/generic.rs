@@ -187,8 +187,8 @@ fn build(pair: &Pair) -> Result<GNode, MorphError> {
             let frame_b = frame_parts(b, &origin.a, &origin.b)?;
             let (oa, ob) = (frame_a.translation, frame_b.translation);
             let leaf = GLeaf {
-                a: a.clone(),
-                b: b.clone(),
+                a: (**a).clone(),
+                b: (**b).clone(),
                 skeleton: MinkowskiPath::new(&pa, &pb),
                 frame_a,
                 frame_b,
