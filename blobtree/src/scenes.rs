@@ -207,6 +207,9 @@ mod tests {
         // Three crossing tunnels open the ball in six places: genus 6 − 1.
         assert_eq!(end.genus(), Some(5), "three orthogonal crossing holes");
         assert_eq!(end.connected_components(), 1);
+        // The same through the tree's own mesher.
+        assert_eq!(pierced_sphere().mesh(48).unwrap().genus(), Some(5));
+        assert_eq!(rounded_cube().mesh(24).unwrap().genus(), Some(0));
     }
 
     /// Every rook → queen frame is one piece (nothing pops out of thin air).

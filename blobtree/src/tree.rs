@@ -93,6 +93,15 @@ impl BlobTree {
         self.compiled.bounds
     }
 
+    /// Polygonizes the surface `potential = T` with marching cubes over the
+    /// support box (padded by 5 %), `res` samples along its longest edge.
+    ///
+    /// # Errors
+    /// As [`isomorph_common::marching_cubes::polygonize`] (grid too small or too large).
+    pub fn mesh(&self, res: u32) -> Result<isomorph_common::TriMesh, isomorph_common::GridError> {
+        isomorph_common::marching_cubes::polygonize(self, &self.support().padded(0.05), res, 0.0)
+    }
+
     /// The potential (before subtracting `T`) at `p`.
     pub fn potential(&self, p: Vec3) -> f32 {
         self.eval::<false>(&self.compiled, p).0
@@ -151,6 +160,21 @@ impl BlobTree {
         op: NaryOp,
         mix: Option<(NaryOp, f32)>,
     ) -> (f32, Vec3) {
+        if !G && mix.is_none() {
+            // Streaming value-only path for the plain operators (same order
+            // of operations as `NaryOp::apply`, so identical results).
+            let mut it = node.children.iter().map(|c| self.eval::<false>(c, p).0);
+            match op {
+                NaryOp::Blend => return (it.fold(0.0, |a, v| a + v), Vec3::ZERO),
+                NaryOp::Union => {
+                    return (it.fold(f32::NEG_INFINITY, |a, v| if v > a { v } else { a }), Vec3::ZERO);
+                }
+                NaryOp::Intersection => {
+                    return (it.fold(f32::INFINITY, |a, v| if v < a { v } else { a }), Vec3::ZERO);
+                }
+                NaryOp::SuperBlend(_) => {}
+            }
+        }
         let n = node.children.len();
         let mut vs = [0.0f32; STACK_CHILDREN];
         let mut gs = [Vec3::ZERO; STACK_CHILDREN];
