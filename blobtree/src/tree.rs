@@ -163,7 +163,7 @@ impl BlobTree {
         if !G && mix.is_none() {
             // Streaming value-only path for the plain operators (same order
             // of operations as `NaryOp::apply`, so identical results).
-            let mut it = node.children.iter().map(|c| self.eval::<false>(c, p).0);
+            let it = node.children.iter().map(|c| self.eval::<false>(c, p).0);
             match op {
                 NaryOp::Blend => return (it.fold(0.0, |a, v| a + v), Vec3::ZERO),
                 NaryOp::Union => {
