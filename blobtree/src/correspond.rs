@@ -25,6 +25,10 @@
 //!   gets the identity of the other's kind (Fig. 16); **warp ↔ other**: the
 //!   identity warp of the same kind is inserted above the other (Fig. 15).
 //!
+//! Inputs are user trees; an instantiated [`Node::Mix`] (a frame of another
+//! morph) is matched as its dominant operator, so for such inputs `A'` is
+//! only approximately `A`.
+//!
 //! Links are only followed under matched parents (§4: "nodes at a given
 //! level should not be matched unless their ancestor nodes have also been
 //! paired"); a link that is never reachable is an error.

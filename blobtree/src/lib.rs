@@ -63,20 +63,21 @@
 //!
 //! # Performance
 //!
-//! Measured under load (2 cores shared with other jobs, load average ≈ 8),
+//! Measured under load (2 cores shared with other jobs, load average ≈ 9),
 //! `cargo bench -p isomorph-benches --bench blobtree -- --warm-up-time 1
 //! --measurement-time 3 --sample-size 10`, on the rook → queen generic tree
-//! at `t = 0.5` (32³ query points):
+//! at `t = 0.5` (32³ query points per iteration):
 //!
 //! | bench | time | throughput |
 //! |---|---|---|
-//! | `eval/rook_queen/pruned` | 5.2 ms | 6.3 M evaluations/s |
-//! | `eval/rook_queen/unpruned` | 53 ms | 0.62 M evaluations/s |
-//! | `eval/rook_queen/parallel` | 6.9 ms | 4.7 M evaluations/s (no gain: cores busy) |
-//! | `polygonize/rook_queen/128` | 174 ms | 128³ samples + marching cubes |
+//! | `eval/rook_queen/pruned` | 5.7 ms | 5.7 M evaluations/s (one thread) |
+//! | `eval/rook_queen/unpruned` | 47 ms | 0.70 M evaluations/s |
+//! | `eval/rook_queen/parallel` | 4.9 ms | 6.7 M evaluations/s (rayon; cores busy) |
+//! | `polygonize/rook_queen/128` | 143 ms | 128³ samples + marching cubes |
 //!
-//! Bounding-box pruning gains 10×; the 100 ms target for 128³ was not
-//! reached under this load.
+//! Bounding-box pruning gains about 8×. The 100 ms target for one 128³
+//! frame was not met under this load (about a quarter of the machine was
+//! available to the bench).
 //!
 //! # Example
 //!
