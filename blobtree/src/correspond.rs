@@ -504,6 +504,34 @@ mod tests {
         }
     }
 
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+        /// With random user links between the roots' children (plus phantoms
+        /// for the unlinked ones) the decomposition stays exact.
+        #[test]
+        fn linked_decomposition_is_equivalent(
+            a in testutil::tree(),
+            b in testutil::tree(),
+            links in prop::collection::vec((0usize..3, 0usize..3), 1..4),
+        ) {
+            let (Node::Nary { children: ca, .. }, Node::Nary { children: cb, .. }) = (&a, &b) else {
+                return Ok(());
+            };
+            let links: Vec<Link> = links
+                .into_iter()
+                .filter(|(i, j)| *i < ca.len() && *j < cb.len())
+                .map(|(i, j)| Link { a: NodePath(vec![i]), b: NodePath(vec![j]) })
+                .collect();
+            let corr = Correspondence { links, heuristic: Heuristic::NearestCentre };
+            let pair = decompose(&a, 0.5, &b, 0.5, &corr).unwrap();
+            let (a2, b2) = (pair.side(Side::Source), pair.side(Side::Target));
+            prop_assert!(same_structure(&a2, &b2));
+            check_equivalent(&a, &a2)?;
+            check_equivalent(&b, &b2)?;
+        }
+    }
+
     fn ball(c: Vec3) -> Node {
         Node::Primitive(crate::Primitive::new(Skeleton::Point(c), Kernel::new(1.0, 0.6, 1.0)))
     }
