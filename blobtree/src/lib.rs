@@ -1,7 +1,131 @@
 //! Skeletal implicit BlobTrees and their metamorphosis after Galin, Leclercq &
-//! Akkouche, *Morphing the BlobTree*, Computer Graphics Forum 19(4), 2000.
+//! Akkouche, *Morphing the BlobTree*, Computer Graphics Forum 19(4), 2000
+//! (with the blob morphing of Galin & Akkouche, Eurographics 1996, it builds on).
 //!
-//! **Status: not implemented yet.** This crate is a placeholder in the
-//! workspace layout; the method is tracked by its own issue (skeletal
-//! primitives, correspondence, decomposition, generic time-varying tree). It
-//! builds on [`isomorph_common`].
+//! A BlobTree is a tree of skeletal primitives (leaves) combined by blending,
+//! Boolean and warping operators (nodes). The surface is where the potential
+//! equals the threshold `T`; [`BlobTree`] implements
+//! [`isomorph_common::Field3`] as `potential − T`, positive inside. A morph
+//! between two BlobTrees matches and decomposes them into overlapping
+//! equivalent trees and builds one *generic* tree `C(t)` whose parameters
+//! vary with time: `C(0) ≡ A`, `C(1) ≡ B` ([`BlobMorph`] implements
+//! [`isomorph_common::Morph`]).
+//!
+//! # Paper sections → modules
+//!
+//! | paper | module |
+//! |---|---|
+//! | §2 Blanc–Schlick field function `g(r)` (`I`, `R`, `k`) | [`kernel`] |
+//! | §2 convex skeletons, L^p distances | [`skeleton`], [`hull`] |
+//! | §2 blend, union (max), intersection (min), difference, super-elliptic blend, warps `f ∘ w⁻¹` | [`node`], [`warp`], [`tree`] |
+//! | scene files (RON / JSON) | [`scene`] |
+//! | §3.1–3.3, §4.1–4.3 correspondence, decomposition, phantoms | [`correspond`] |
+//! | §3.4.1 Minkowski-sum skeleton interpolation, generic topology | [`minkowski`] |
+//! | §3.4.2–3.5, §4.4 generic elements and nodes, frames, speed `s(t)`, `T(t)` | [`generic`] |
+//! | §5 sequences (cube → pierced sphere, sphere → propeller, rook → queen, bear → bird) | [`scenes`] |
+//!
+//! # Choices where the paper leaves details open
+//!
+//! - **Difference**: the paper does not print it. We use the BlobTree's
+//!   `min(f_L, 2c − f_R)` (the subtrahend reflected about the level `c = T`),
+//!   extended above `2c` so that a null (phantom) subtrahend is *exactly*
+//!   neutral — which the paper's difference insertion (Fig. 14) needs — and
+//!   clamped at 0 so that pruning stays exact. The level `c` is stored in the
+//!   node and scales with it, so `αN` is exactly `α` times `N` (§4.2).
+//! - **L^p distance** `min_q ‖x − q‖_p` is exact for points and segments and
+//!   for axis-aligned boxes; for oblique polygons/polyhedra with `p ≠ 2` it is
+//!   the L^p length of the Euclidean residual (an upper bound). The L^p axes
+//!   are the primitive's local axes. `p` is interpolated linearly (§3.4.3), or
+//!   through `1/p` when an end is `p = ∞`.
+//! - **Super-elliptic blend of a split child**: copies are weighted
+//!   `α^{1/n}` so their super-elliptic blend equals the original.
+//! - **Unlinked children under an intersection** are linked to the nearest
+//!   child instead of getting a phantom (a null field is not neutral for `min`).
+//! - **Trajectories**: the frame origin follows a cubic Bézier curve (default
+//!   handles give uniform straight motion); rotation by quaternion slerp,
+//!   stretch linearly ([`isomorph_common::AffineParts::lerp`]).
+//! - **Warps**: Barr twist and taper about the local z axis, bend in the y–z
+//!   plane (put them under an affine node for other axes); the taper scale is
+//!   clamped at 0.05 to stay invertible.
+//!
+//! # Guarantees
+//!
+//! - Pruning by per-subtree bounding boxes never changes a value (tested
+//!   bit-for-bit on random trees).
+//! - Decomposed trees have the same field as the inputs everywhere (proptest
+//!   on random trees), and `C(0)`, `C(1)` reproduce the inputs.
+//! - Invalid input — bad scene files, NaN, negative radii, `p < 1`, links
+//!   breaking the hierarchy, bad speed curves — is a typed error, never a panic.
+//!
+//! Not guaranteed: intermediate shapes keep the topology of either end
+//! (they do for the built-in rook → queen, which is tested); gradients under
+//! bends and of non-Euclidean polytope distances are central differences.
+//!
+//! # Performance
+//!
+//! Measured under load (2 cores shared with other jobs, load average ≈ 9),
+//! `cargo bench -p isomorph-benches --bench blobtree -- --warm-up-time 1
+//! --measurement-time 3 --sample-size 10`, on the rook → queen generic tree
+//! at `t = 0.5` (32³ query points per iteration):
+//!
+//! | bench | time | throughput |
+//! |---|---|---|
+//! | `eval/rook_queen/pruned` | 5.7 ms | 5.7 M evaluations/s (one thread) |
+//! | `eval/rook_queen/unpruned` | 47 ms | 0.70 M evaluations/s |
+//! | `eval/rook_queen/parallel` | 4.9 ms | 6.7 M evaluations/s (rayon; cores busy) |
+//! | `polygonize/rook_queen/128` | 143 ms | 128³ samples + marching cubes |
+//!
+//! Bounding-box pruning gains about 8×. The 100 ms target for one 128³
+//! frame was not met under this load (about a quarter of the machine was
+//! available to the bench).
+//!
+//! # Example
+//!
+//! ```
+//! use isomorph_blobtree::{BlobMorph, BlobTree, MorphSpec};
+//! use isomorph_common::{Field3, Morph};
+//! use glam::Vec3;
+//!
+//! let a = BlobTree::from_ron(r#"(root: (kind: "point", vertices: [(0, 0, 0)], radius: 1.0))"#)?;
+//! let b = BlobTree::from_ron(r#"(root: (kind: "union", children: [
+//!     (kind: "segment", vertices: [(-0.5, 0, 0), (0.5, 0, 0)], radius: 0.6),
+//!     (kind: "box", half: (0.1, 0.1, 0.4), radius: 0.4, p: "inf"),
+//! ]))"#)?;
+//! let morph = BlobMorph::new(&a, &b, &MorphSpec::default())?;
+//! // The ends are the inputs: the ball's surface is at distance R/2 = 0.5.
+//! let start = morph.frame(0.0)?.field;
+//! assert!(start.value(Vec3::new(0.49, 0.0, 0.0)) > 0.0);
+//! assert!(start.value(Vec3::new(0.51, 0.0, 0.0)) < 0.0);
+//! let end = morph.frame(1.0)?.field;
+//! assert!((end.value(Vec3::new(0.7, 0.0, 0.0)) - b.value(Vec3::new(0.7, 0.0, 0.0))).abs() < 1e-6);
+//! // In between, the shape is one blob that can be polygonized.
+//! let mesh = morph.frame_mesh(0.5, 32)?;
+//! assert_eq!(mesh.connected_components(), 1);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+pub mod correspond;
+pub mod error;
+pub mod generic;
+pub mod hull;
+pub mod kernel;
+pub mod minkowski;
+pub mod node;
+pub mod scene;
+pub mod scenes;
+pub mod skeleton;
+pub mod tree;
+pub mod warp;
+
+pub use correspond::{Correspondence, Heuristic, Link, Origin, Pair, decompose};
+pub use error::{BlobError, MorphError, NodePath, NodeProblem, Side};
+pub use generic::{BlobMorph, GenericTree, MorphSpec, Speed, SpeedCurve, Trajectory};
+pub use kernel::Kernel;
+pub use minkowski::MinkowskiPath;
+pub use node::{NaryOp, Node, Primitive};
+pub use skeleton::{Polytope, Skeleton};
+pub use tree::BlobTree;
+pub use warp::Warp;
+
+#[cfg(test)]
+mod testutil;

@@ -1,0 +1,68 @@
+//! Benchmarks of BlobTree evaluation on the rook → queen generic tree at
+//! t = 0.5: field evaluation with and without bounding-box pruning (single
+//! thread, and in parallel), and polygonizing one frame at 128³.
+//!
+//! `cargo bench -p isomorph-benches --bench blobtree -- eval/rook_queen/pruned`
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use glam::Vec3;
+use isomorph_blobtree::{BlobMorph, BlobTree, scenes};
+use isomorph_common::marching_cubes::polygonize;
+use isomorph_common::{Field3, Morph};
+use rayon::prelude::*;
+use std::hint::black_box;
+
+/// The rook → queen morph and its frame at t = 0.5.
+fn rook_queen() -> (BlobMorph, BlobTree) {
+    let (a, b, spec) = scenes::demo("rook_queen").expect("built-in demo");
+    let morph = BlobMorph::new(&a, &b, &spec).expect("valid demo");
+    let frame = morph.frame(0.5).expect("valid time").field;
+    (morph, frame)
+}
+
+/// A 32³ lattice of query points over the morph's bounds.
+fn points(morph: &BlobMorph) -> Vec<Vec3> {
+    let b = morph.bounds();
+    let n = 32;
+    let mut v = Vec::with_capacity(n * n * n);
+    for k in 0..n {
+        for j in 0..n {
+            for i in 0..n {
+                let t = Vec3::new(i as f32, j as f32, k as f32) / (n - 1) as f32;
+                v.push(b.min + (b.max - b.min) * t);
+            }
+        }
+    }
+    v
+}
+
+fn eval(c: &mut Criterion) {
+    let (morph, pruned) = rook_queen();
+    let mut unpruned = pruned.clone();
+    unpruned.set_pruning(false);
+    let pts = points(&morph);
+    let mut out = vec![0.0f32; pts.len()];
+    let mut group = c.benchmark_group("eval/rook_queen");
+    group.throughput(Throughput::Elements(pts.len() as u64));
+    group.bench_function("pruned", |b| b.iter(|| pruned.values(black_box(&pts), &mut out)));
+    group.bench_function("unpruned", |b| b.iter(|| unpruned.values(black_box(&pts), &mut out)));
+    group.bench_function("parallel", |b| {
+        b.iter(|| {
+            out.par_chunks_mut(1024)
+                .zip(pts.par_chunks(1024))
+                .for_each(|(o, p)| pruned.values(black_box(p), o))
+        })
+    });
+    group.finish();
+}
+
+fn polygonize_frame(c: &mut Criterion) {
+    let (morph, frame) = rook_queen();
+    let bounds = morph.bounds();
+    c.bench_function("polygonize/rook_queen/128", |b| {
+        b.iter(|| polygonize(black_box(&frame), &bounds, 128, 0.0).expect("grid fits"))
+    });
+}
+
+criterion_group!(benches, eval, polygonize_frame);
+criterion_main!(benches);

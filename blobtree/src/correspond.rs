@@ -1,0 +1,582 @@
+//! Correspondence and decomposition (§3.1–3.3, §4.2–4.3): turning two
+//! BlobTrees `A`, `B` into equivalent trees `A'`, `B'` that *overlap*
+//! (their nodes and leaves match bijectively).
+//!
+//! Starting from the roots, each matched pair of nodes gets links between
+//! its children — the animator's [`Link`]s when given for that pair,
+//! otherwise a [`Heuristic`] — and the children are decomposed so that the
+//! links become a bijection:
+//!
+//! - **commutative ↔ commutative** (`∪ ∩ + ` super-blend): a child with
+//!   `m` links is split into `m` copies: replicated under union and
+//!   intersection, `α`-weighted copies with `α = 1/m` (a partition of unity)
+//!   under a blend, and `α^{1/n}`-weighted under a super-elliptic blend of
+//!   order `n` (`Σ (α^{1/n} f)^n = f^n`). Unlinked children get a *phantom*
+//!   partner (§3.3: null intensity, skeleton, `R`, `k` copied) — except
+//!   under an intersection, where a null field is not neutral, so they are
+//!   linked to the nearest child instead.
+//! - **primitive ↔ commutative**: the primitive becomes the only child of a
+//!   node of the partner's operator (a one-child node equals its child), then
+//!   as above (the sphere of "sphere → propeller" splits into two).
+//! - **difference ↔ difference**: left ↔ left, right ↔ right.
+//! - **difference ↔ other**: a difference is inserted above the other node,
+//!   with a phantom of the partner's right child (Fig. 14).
+//! - **warp ↔ warp** of one kind: child ↔ child; of different kinds, each side
+//!   gets the identity of the other's kind (Fig. 16); **warp ↔ other**: the
+//!   identity warp of the same kind is inserted above the other (Fig. 15).
+//!
+//! Inputs are user trees; an instantiated [`Node::Mix`] (a frame of another
+//! morph) is matched as its dominant operator, so for such inputs `A'` is
+//! only approximately `A`.
+//!
+//! Links are only followed under matched parents (§4: "nodes at a given
+//! level should not be matched unless their ancestor nodes have also been
+//! paired"); a link that is never reachable is an error.
+
+use crate::error::{MorphError, NodePath, Side};
+use crate::node::{NaryOp, Node, Primitive};
+use crate::warp::Warp;
+use serde::{Deserialize, Serialize};
+
+/// An animator's link between a node of the source and a node of the target.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Link {
+    /// Source node path.
+    pub a: NodePath,
+    /// Target node path.
+    pub b: NodePath,
+}
+
+/// Automatic pairing of the children of two matched commutative nodes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Heuristic {
+    /// Match every child of `N_A` with every child of `N_B` (`n_A × n_B` pairs;
+    /// often featureless, §4.3).
+    AllChildren,
+    /// Link every child to the child of the other node whose skeleton centre
+    /// is nearest (both directions, so every child has a partner).
+    #[default]
+    NearestCentre,
+}
+
+/// The overlapping pair of trees: a tree of matched node pairs.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Pair {
+    /// Two matched primitives (one may be a phantom).
+    Leaf {
+        /// Source primitive.
+        a: Box<Primitive>,
+        /// Target primitive.
+        b: Box<Primitive>,
+        /// Original paths of the matched nodes (`None` for a phantom).
+        origin: Origin,
+    },
+    /// Two matched commutative nodes with bijectively matched children.
+    Nary {
+        /// Source operator.
+        a: NaryOp,
+        /// Target operator.
+        b: NaryOp,
+        /// Matched children.
+        children: Vec<Pair>,
+        /// Original paths.
+        origin: Origin,
+    },
+    /// Two matched differences.
+    Difference {
+        /// Source reference level.
+        a: f32,
+        /// Target reference level.
+        b: f32,
+        /// Left children.
+        left: Box<Pair>,
+        /// Right children.
+        right: Box<Pair>,
+        /// Original paths.
+        origin: Origin,
+    },
+    /// Two matched warps of one kind.
+    Warp {
+        /// Source warp.
+        a: Warp,
+        /// Target warp.
+        b: Warp,
+        /// Matched children.
+        child: Box<Pair>,
+        /// Original paths.
+        origin: Origin,
+    },
+}
+
+/// The original source and target nodes a pair came from (`None` where the
+/// node was inserted or is a phantom).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Origin {
+    /// Source node path.
+    pub a: Option<NodePath>,
+    /// Target node path.
+    pub b: Option<NodePath>,
+}
+
+impl Pair {
+    /// One side of the pair tree: `A'` for [`Side::Source`], `B'` for
+    /// [`Side::Target`]. Both are equivalent to the inputs (same field).
+    pub fn side(&self, side: Side) -> Node {
+        fn pick<T: Clone>(side: Side, a: &T, b: &T) -> T {
+            if side == Side::Source { a.clone() } else { b.clone() }
+        }
+        match self {
+            Pair::Leaf { a, b, .. } => Node::Primitive(*pick(side, a, b)),
+            Pair::Nary { a, b, children, .. } => {
+                Node::Nary { op: pick(side, a, b), children: children.iter().map(|c| c.side(side)).collect() }
+            }
+            Pair::Difference { a, b, left, right, .. } => Node::Difference {
+                left: Box::new(left.side(side)),
+                right: Box::new(right.side(side)),
+                level: pick(side, a, b),
+            },
+            Pair::Warp { a, b, child, .. } => {
+                Node::Warp { warp: pick(side, a, b), child: Box::new(child.side(side)) }
+            }
+        }
+    }
+
+    /// The original paths of this pair.
+    pub fn origin(&self) -> &Origin {
+        match self {
+            Pair::Leaf { origin, .. }
+            | Pair::Nary { origin, .. }
+            | Pair::Difference { origin, .. }
+            | Pair::Warp { origin, .. } => origin,
+        }
+    }
+
+    /// Number of matched leaf pairs.
+    pub fn leaf_count(&self) -> usize {
+        match self {
+            Pair::Leaf { .. } => 1,
+            Pair::Nary { children, .. } => children.iter().map(Pair::leaf_count).sum(),
+            Pair::Difference { left, right, .. } => left.leaf_count() + right.leaf_count(),
+            Pair::Warp { child, .. } => child.leaf_count(),
+        }
+    }
+}
+
+/// How to match two trees.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Correspondence {
+    /// Animator links (any level, one-to-many allowed).
+    pub links: Vec<Link>,
+    /// Pairing for matched commutative nodes without links.
+    pub heuristic: Heuristic,
+}
+
+struct Ctx<'a> {
+    links: &'a [Link],
+    used: Vec<bool>,
+    heuristic: Heuristic,
+    /// Threshold of each side (level of inserted difference nodes).
+    thresholds: (f32, f32),
+}
+
+/// Matches and decomposes `a` (threshold `ta`) and `b` (threshold `tb`) into
+/// a pair tree whose two sides overlap.
+///
+/// # Errors
+/// [`MorphError::NoSuchNode`] for links to missing nodes,
+/// [`MorphError::LinkBreaksHierarchy`] for links whose parents are never matched.
+pub fn decompose(a: &Node, ta: f32, b: &Node, tb: f32, corr: &Correspondence) -> Result<Pair, MorphError> {
+    for l in &corr.links {
+        if a.get(&l.a).is_none() {
+            return Err(MorphError::NoSuchNode { side: Side::Source, path: l.a.clone() });
+        }
+        if b.get(&l.b).is_none() {
+            return Err(MorphError::NoSuchNode { side: Side::Target, path: l.b.clone() });
+        }
+    }
+    let mut ctx = Ctx {
+        links: &corr.links,
+        used: vec![false; corr.links.len()],
+        heuristic: corr.heuristic,
+        thresholds: (ta, tb),
+    };
+    let root = NodePath::root();
+    consume(&mut ctx, &root, &root);
+    let pair = pair(a, Some(&root), b, Some(&root), &mut ctx);
+    if let Some(i) = ctx.used.iter().position(|u| !u) {
+        let l = &corr.links[i];
+        return Err(MorphError::LinkBreaksHierarchy { a: l.a.clone(), b: l.b.clone() });
+    }
+    Ok(pair)
+}
+
+fn consume(ctx: &mut Ctx<'_>, pa: &NodePath, pb: &NodePath) {
+    for (l, u) in ctx.links.iter().zip(ctx.used.iter_mut()) {
+        if &l.a == pa && &l.b == pb {
+            *u = true;
+        }
+    }
+}
+
+fn child(p: Option<&NodePath>, i: usize) -> Option<NodePath> {
+    p.map(|p| p.child(i))
+}
+
+fn pair(a: &Node, pa: Option<&NodePath>, b: &Node, pb: Option<&NodePath>, ctx: &mut Ctx<'_>) -> Pair {
+    let origin = Origin { a: pa.cloned(), b: pb.cloned() };
+    let structural = |ctx: &mut Ctx<'_>, ca: &Option<NodePath>, cb: &Option<NodePath>| {
+        if let (Some(x), Some(y)) = (ca, cb) {
+            consume(ctx, x, y);
+        }
+    };
+    match (a, b) {
+        (Node::Warp { warp: wa, child: ca }, Node::Warp { warp: wb, child: cb }) => {
+            let (qa, qb) = (child(pa, 0), child(pb, 0));
+            structural(ctx, &qa, &qb);
+            let inner = pair(ca, qa.as_ref(), cb, qb.as_ref(), ctx);
+            if wa.kind() == wb.kind() {
+                Pair::Warp { a: *wa, b: *wb, child: Box::new(inner), origin }
+            } else {
+                // Fig. 16: (ω_A → Id) ∘ (Id → ω_B).
+                let lower = Pair::Warp {
+                    a: wb.identity_like(),
+                    b: *wb,
+                    child: Box::new(inner),
+                    origin: origin.clone(),
+                };
+                Pair::Warp { a: *wa, b: wa.identity_like(), child: Box::new(lower), origin }
+            }
+        }
+        (Node::Warp { warp: wa, child: ca }, _) => {
+            let inner = pair(ca, child(pa, 0).as_ref(), b, pb, ctx);
+            Pair::Warp { a: *wa, b: wa.identity_like(), child: Box::new(inner), origin }
+        }
+        (_, Node::Warp { warp: wb, child: cb }) => {
+            let inner = pair(a, pa, cb, child(pb, 0).as_ref(), ctx);
+            Pair::Warp { a: wb.identity_like(), b: *wb, child: Box::new(inner), origin }
+        }
+        (
+            Node::Difference { left: la, right: ra, level: ca },
+            Node::Difference { left: lb, right: rb, level: cb },
+        ) => {
+            let (la_p, lb_p, ra_p, rb_p) = (child(pa, 0), child(pb, 0), child(pa, 1), child(pb, 1));
+            structural(ctx, &la_p, &lb_p);
+            structural(ctx, &ra_p, &rb_p);
+            let left = pair(la, la_p.as_ref(), lb, lb_p.as_ref(), ctx);
+            let right = pair(ra, ra_p.as_ref(), rb, rb_p.as_ref(), ctx);
+            Pair::Difference { a: *ca, b: *cb, left: Box::new(left), right: Box::new(right), origin }
+        }
+        (Node::Difference { left, right, level }, _) => {
+            // Fig. 14: B becomes difference(B, phantom of A's right child).
+            let l = pair(left, child(pa, 0).as_ref(), b, pb, ctx);
+            let r = with_phantom(right, child(pa, 1), Side::Source);
+            Pair::Difference { a: *level, b: ctx.thresholds.1, left: Box::new(l), right: Box::new(r), origin }
+        }
+        (_, Node::Difference { left, right, level }) => {
+            let l = pair(a, pa, left, child(pb, 0).as_ref(), ctx);
+            let r = with_phantom(right, child(pb, 1), Side::Target);
+            Pair::Difference { a: ctx.thresholds.0, b: *level, left: Box::new(l), right: Box::new(r), origin }
+        }
+        (Node::Primitive(x), Node::Primitive(y)) => {
+            Pair::Leaf { a: Box::new(x.clone()), b: Box::new(y.clone()), origin }
+        }
+        _ => {
+            let (op_a, kids_a) = commutative(a, pa);
+            let (op_b, kids_b) = commutative(b, pb);
+            let (op_a, op_b, children) = match_children(op_a, &kids_a, op_b, &kids_b, pa, pb, ctx);
+            Pair::Nary { a: op_a, b: op_b, children, origin }
+        }
+    }
+}
+
+type Kid<'a> = (&'a Node, Option<NodePath>);
+
+/// A commutative node's operator and children with their paths; a primitive
+/// is a one-child node of the partner's kind (its child keeps its own path).
+fn commutative<'a>(n: &'a Node, p: Option<&NodePath>) -> (NaryOp, Vec<Kid<'a>>) {
+    match n {
+        Node::Nary { op, children } => {
+            (*op, children.iter().enumerate().map(|(i, c)| (c, child(p, i))).collect())
+        }
+        Node::Mix { from, children, s, to } => {
+            // An instantiated mix with s ∈ {0, 1} is a plain node; otherwise
+            // its children are matched and the dominant operator used.
+            let op = if *s < 0.5 { *from } else { *to };
+            (op, children.iter().enumerate().map(|(i, c)| (c, child(p, i))).collect())
+        }
+        _ => (NaryOp::Union, vec![(n, p.cloned())]),
+    }
+}
+
+fn match_children(
+    op_a: NaryOp,
+    kids_a: &[Kid<'_>],
+    op_b: NaryOp,
+    kids_b: &[Kid<'_>],
+    pa: Option<&NodePath>,
+    pb: Option<&NodePath>,
+    ctx: &mut Ctx<'_>,
+) -> (NaryOp, NaryOp, Vec<Pair>) {
+    // A wrapped primitive takes the partner's operator (a one-child node of
+    // any commutative kind equals its child).
+    let (op_a, op_b) = match (
+        kids_a.len() == 1 && kids_a[0].1.as_ref() == pa,
+        kids_b.len() == 1 && kids_b[0].1.as_ref() == pb,
+    ) {
+        (true, false) => (op_b, op_b),
+        (false, true) => (op_a, op_a),
+        _ => (op_a, op_b),
+    };
+    let centres_a: Vec<_> = kids_a.iter().map(|(n, _)| n.centre()).collect();
+    let centres_b: Vec<_> = kids_b.iter().map(|(n, _)| n.centre()).collect();
+    let nearest = |c: glam::Vec3, others: &[glam::Vec3]| {
+        others
+            .iter()
+            .enumerate()
+            .min_by(|x, y| (*x.1 - c).length().total_cmp(&(*y.1 - c).length()))
+            .map(|(i, _)| i)
+    };
+    // User links at this level.
+    let mut edges: Vec<(Option<usize>, Option<usize>)> = Vec::new();
+    for (li, l) in ctx.links.iter().enumerate() {
+        let i = kids_a.iter().position(|(_, p)| p.as_ref() == Some(&l.a));
+        let j = kids_b.iter().position(|(_, p)| p.as_ref() == Some(&l.b));
+        if let (Some(i), Some(j)) = (i, j) {
+            ctx.used[li] = true;
+            if !edges.contains(&(Some(i), Some(j))) {
+                edges.push((Some(i), Some(j)));
+            }
+        }
+    }
+    if edges.is_empty() {
+        match ctx.heuristic {
+            Heuristic::AllChildren => {
+                for i in 0..kids_a.len() {
+                    for j in 0..kids_b.len() {
+                        edges.push((Some(i), Some(j)));
+                    }
+                }
+            }
+            Heuristic::NearestCentre => {
+                for (i, c) in centres_a.iter().enumerate() {
+                    if let Some(j) = nearest(*c, &centres_b) {
+                        edges.push((Some(i), Some(j)));
+                    }
+                }
+                for (j, c) in centres_b.iter().enumerate() {
+                    if let Some(i) = nearest(*c, &centres_a)
+                        && !edges.contains(&(Some(i), Some(j)))
+                    {
+                        edges.push((Some(i), Some(j)));
+                    }
+                }
+            }
+        }
+    } else {
+        // Unlinked children: phantoms, or the nearest child under an intersection.
+        for (i, c) in centres_a.iter().enumerate() {
+            if !edges.iter().any(|e| e.0 == Some(i)) {
+                let j = if op_b == NaryOp::Intersection { nearest(*c, &centres_b) } else { None };
+                edges.push((Some(i), j));
+            }
+        }
+        for (j, c) in centres_b.iter().enumerate() {
+            if !edges.iter().any(|e| e.1 == Some(j)) {
+                let i = if op_a == NaryOp::Intersection { nearest(*c, &centres_a) } else { None };
+                edges.push((i, Some(j)));
+            }
+        }
+    }
+    let deg_a = |i: usize| edges.iter().filter(|e| e.0 == Some(i)).count();
+    let deg_b = |j: usize| edges.iter().filter(|e| e.1 == Some(j)).count();
+    let mut out = Vec::with_capacity(edges.len());
+    for &(i, j) in &edges {
+        let pair = match (i, j) {
+            (Some(i), Some(j)) => {
+                let x = split(kids_a[i].0, op_a, deg_a(i));
+                let y = split(kids_b[j].0, op_b, deg_b(j));
+                if let (Some(p), Some(q)) = (&kids_a[i].1, &kids_b[j].1) {
+                    consume(ctx, p, q);
+                }
+                pair(&x, kids_a[i].1.as_ref(), &y, kids_b[j].1.as_ref(), ctx)
+            }
+            (Some(i), None) => {
+                with_phantom(&split(kids_a[i].0, op_a, deg_a(i)), kids_a[i].1.clone(), Side::Source)
+            }
+            (None, Some(j)) => {
+                with_phantom(&split(kids_b[j].0, op_b, deg_b(j)), kids_b[j].1.clone(), Side::Target)
+            }
+            (None, None) => continue,
+        };
+        out.push(pair);
+    }
+    (op_a, op_b, out)
+}
+
+/// One of `m` copies of `node` under `op` whose copies add up to `node`
+/// (§4.2): replication under `∪`/`∩`, `α = 1/m` under a blend, `α^{1/n}`
+/// under a super-elliptic blend of order `n`.
+pub fn split(node: &Node, op: NaryOp, m: usize) -> Node {
+    if m <= 1 {
+        return node.clone();
+    }
+    let alpha = 1.0 / m as f32;
+    match op {
+        NaryOp::Union | NaryOp::Intersection => node.clone(),
+        NaryOp::Blend => node.scaled(alpha),
+        NaryOp::SuperBlend(n) if n.is_infinite() => node.clone(),
+        NaryOp::SuperBlend(n) => node.scaled(alpha.powf(1.0 / n)),
+    }
+}
+
+/// Pairs `node` (on `side`) with its own phantom on the other side, node by node.
+fn with_phantom(node: &Node, path: Option<NodePath>, side: Side) -> Pair {
+    let phantom = node.phantom();
+    let origin = match side {
+        Side::Source => Origin { a: path.clone(), b: None },
+        Side::Target => Origin { a: None, b: path.clone() },
+    };
+    let (x, y) = if side == Side::Source { (node, &phantom) } else { (&phantom, node) };
+    let kids = |i: usize| with_phantom(node.children()[i], child(path.as_ref(), i), side);
+    match (x, y) {
+        (Node::Primitive(a), Node::Primitive(b)) => {
+            Pair::Leaf { a: Box::new(a.clone()), b: Box::new(b.clone()), origin }
+        }
+        (Node::Nary { op, children }, _) | (Node::Mix { from: op, children, .. }, _) => {
+            Pair::Nary { a: *op, b: *op, children: (0..children.len()).map(kids).collect(), origin }
+        }
+        (Node::Difference { level: la, .. }, Node::Difference { level: lb, .. }) => {
+            Pair::Difference { a: *la, b: *lb, left: Box::new(kids(0)), right: Box::new(kids(1)), origin }
+        }
+        (Node::Warp { warp, .. }, _) => Pair::Warp { a: *warp, b: *warp, child: Box::new(kids(0)), origin },
+        _ => unreachable!("a phantom has the structure of its node"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testutil;
+    use crate::{BlobTree, Kernel, Skeleton};
+    use glam::Vec3;
+    use proptest::prelude::*;
+
+    fn same_structure(x: &Node, y: &Node) -> bool {
+        let kind = |n: &Node| match n {
+            Node::Primitive(_) => "leaf",
+            Node::Nary { .. } | Node::Mix { .. } => "nary",
+            Node::Difference { .. } => "difference",
+            Node::Warp { warp, .. } => warp.kind(),
+        };
+        kind(x) == kind(y)
+            && x.children().len() == y.children().len()
+            && x.children().iter().zip(y.children()).all(|(a, b)| same_structure(a, b))
+    }
+
+    fn check_equivalent(orig: &Node, dec: &Node) -> Result<(), TestCaseError> {
+        let t0 = BlobTree::new(orig.clone(), 0.5).unwrap();
+        let t1 = BlobTree::new(dec.clone(), 0.5).map_err(|e| TestCaseError::fail(e.to_string()))?;
+        for p in testutil::points() {
+            let (u, v) = (t0.potential(p), t1.potential(p));
+            prop_assert!((u - v).abs() <= 1e-5 * (1.0 + u.abs()), "at {}: {} vs {}", p, u, v);
+        }
+        Ok(())
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 40, ..ProptestConfig::default() })]
+
+        /// A' ≡ A and B' ≡ B (same field everywhere) and A', B' overlap, for
+        /// both heuristics.
+        #[test]
+        fn decomposition_is_equivalent_and_overlapping(a in testutil::tree(), b in testutil::tree(), all in any::<bool>()) {
+            let corr = Correspondence {
+                links: vec![],
+                heuristic: if all { Heuristic::AllChildren } else { Heuristic::NearestCentre },
+            };
+            let pair = decompose(&a, 0.5, &b, 0.5, &corr).unwrap();
+            let (a2, b2) = (pair.side(Side::Source), pair.side(Side::Target));
+            prop_assert!(same_structure(&a2, &b2));
+            check_equivalent(&a, &a2)?;
+            check_equivalent(&b, &b2)?;
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+        /// With random user links between the roots' children (plus phantoms
+        /// for the unlinked ones) the decomposition stays exact.
+        #[test]
+        fn linked_decomposition_is_equivalent(
+            a in testutil::tree(),
+            b in testutil::tree(),
+            links in prop::collection::vec((0usize..3, 0usize..3), 1..4),
+        ) {
+            let (Node::Nary { children: ca, .. }, Node::Nary { children: cb, .. }) = (&a, &b) else {
+                return Ok(());
+            };
+            let links: Vec<Link> = links
+                .into_iter()
+                .filter(|(i, j)| *i < ca.len() && *j < cb.len())
+                .map(|(i, j)| Link { a: NodePath(vec![i]), b: NodePath(vec![j]) })
+                .collect();
+            let corr = Correspondence { links, heuristic: Heuristic::NearestCentre };
+            let pair = decompose(&a, 0.5, &b, 0.5, &corr).unwrap();
+            let (a2, b2) = (pair.side(Side::Source), pair.side(Side::Target));
+            prop_assert!(same_structure(&a2, &b2));
+            check_equivalent(&a, &a2)?;
+            check_equivalent(&b, &b2)?;
+        }
+    }
+
+    fn ball(c: Vec3) -> Node {
+        Node::Primitive(crate::Primitive::new(Skeleton::Point(c), Kernel::new(1.0, 0.6, 1.0)))
+    }
+
+    #[test]
+    fn user_links_split_and_phantom() {
+        let a = Node::blend(vec![ball(Vec3::ZERO), ball(Vec3::X)]);
+        let b = Node::blend(vec![ball(Vec3::Y), ball(Vec3::Z), ball(-Vec3::X)]);
+        // Child 0 of A goes to children 0 and 1 of B; child 2 of B is unlinked.
+        let corr = Correspondence {
+            links: vec![
+                Link { a: NodePath(vec![0]), b: NodePath(vec![0]) },
+                Link { a: NodePath(vec![0]), b: NodePath(vec![1]) },
+            ],
+            heuristic: Heuristic::NearestCentre,
+        };
+        let pair = decompose(&a, 0.5, &b, 0.5, &corr).unwrap();
+        // 2 links + A's child 1 with a phantom + B's child 2 with a phantom.
+        assert_eq!(pair.leaf_count(), 4);
+        let a2 = pair.side(Side::Source);
+        let Node::Nary { children, .. } = &a2 else { panic!() };
+        let intensities: Vec<f32> = children
+            .iter()
+            .map(|c| if let Node::Primitive(p) = c { p.kernel.intensity } else { -1.0 })
+            .collect();
+        assert_eq!(intensities, vec![0.5, 0.5, 1.0, 0.0]);
+    }
+
+    #[test]
+    fn bad_links_are_errors() {
+        let a = Node::blend(vec![Node::union(vec![ball(Vec3::ZERO)]), ball(Vec3::X)]);
+        let b = Node::blend(vec![ball(Vec3::Y), ball(Vec3::Z)]);
+        let corr = |a: Vec<usize>, b: Vec<usize>| Correspondence {
+            links: vec![Link { a: NodePath(a), b: NodePath(b) }],
+            heuristic: Heuristic::NearestCentre,
+        };
+        assert!(matches!(
+            decompose(&a, 0.5, &b, 0.5, &corr(vec![5], vec![0])),
+            Err(MorphError::NoSuchNode { side: Side::Source, .. })
+        ));
+        // A grandchild of A linked with B's root: its parent is never matched with anything above B's root.
+        assert!(matches!(
+            decompose(&a, 0.5, &b, 0.5, &corr(vec![0, 0], vec![])),
+            Err(MorphError::LinkBreaksHierarchy { .. })
+        ));
+        assert!(decompose(&a, 0.5, &b, 0.5, &corr(vec![0], vec![1])).is_ok());
+    }
+}

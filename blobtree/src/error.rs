@@ -1,0 +1,231 @@
+//! Typed errors: scene validation (with the path of the offending node) and
+//! metamorphosis set-up.
+
+use isomorph_common::{GridError, TransformError};
+use std::fmt;
+
+/// The position of a node in a BlobTree: child indices from the root
+/// (`[]` is the root, `[1, 0]` the first child of the root's second child).
+#[derive(Debug, Clone, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize)]
+#[serde(transparent)]
+pub struct NodePath(pub Vec<usize>);
+
+impl NodePath {
+    /// The root's path.
+    pub fn root() -> Self {
+        Self(Vec::new())
+    }
+
+    /// The path of this node's child `i`.
+    pub fn child(&self, i: usize) -> Self {
+        let mut v = self.0.clone();
+        v.push(i);
+        Self(v)
+    }
+
+    /// The parent's path (`None` for the root).
+    pub fn parent(&self) -> Option<Self> {
+        let (_, rest) = self.0.split_last()?;
+        Some(Self(rest.to_vec()))
+    }
+}
+
+impl fmt::Display for NodePath {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("root")?;
+        for i in &self.0 {
+            write!(f, "/{i}")?;
+        }
+        Ok(())
+    }
+}
+
+/// What is wrong with one node of a BlobTree description.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum NodeProblem {
+    /// The `kind` string names no node or skeleton kind.
+    #[error("unknown kind {0:?}")]
+    UnknownKind(String),
+    /// A field required by this kind is missing.
+    #[error("missing field `{0}`")]
+    MissingField(&'static str),
+    /// A parameter is NaN or infinite.
+    #[error("parameter `{0}` is NaN or infinite")]
+    NotFinite(&'static str),
+    /// The radius of influence is zero or negative.
+    #[error("radius of influence must be positive, got {0}")]
+    NonPositiveRadius(f32),
+    /// The intensity is negative (zero is allowed: phantom element).
+    #[error("intensity must be ≥ 0, got {0}")]
+    NegativeIntensity(f32),
+    /// The Blanc–Schlick stiffness is negative (the kernel then has a pole).
+    #[error("stiffness must be ≥ 0, got {0}")]
+    NegativeStiffness(f32),
+    /// The L^p exponent is below 1 (not a metric).
+    #[error("L^p exponent must be in [1, ∞], got {0}")]
+    ExponentBelowOne(f32),
+    /// The super-elliptic blend order is below 1.
+    #[error("super-elliptic blend order must be ≥ 1, got {0}")]
+    OrderBelowOne(f32),
+    /// An operator node has no child (or a binary/unary node the wrong number).
+    #[error("{kind} node needs {expected} children, has {got}")]
+    WrongChildCount {
+        /// The node kind.
+        kind: &'static str,
+        /// What the kind needs (`"≥ 1"`, `"2"`, `"1"`).
+        expected: &'static str,
+        /// How many it has.
+        got: usize,
+    },
+    /// A skeleton has the wrong number of vertices for its kind.
+    #[error("{kind} skeleton needs {expected} vertices, has {got}")]
+    WrongVertexCount {
+        /// Skeleton kind.
+        kind: &'static str,
+        /// What the kind needs.
+        expected: &'static str,
+        /// How many were given.
+        got: usize,
+    },
+    /// The skeleton's vertices span fewer (or more) dimensions than its kind:
+    /// a segment of coincident points, a non-planar polygon, a flat polyhedron.
+    #[error("{0} skeleton has the wrong dimension (degenerate or not planar)")]
+    WrongDimension(&'static str),
+    /// A frame or affine node is singular, mirrored or not finite.
+    #[error("transform: {0}")]
+    Transform(TransformError),
+    /// A warp's parameters are out of range.
+    #[error("warp: {0}")]
+    Warp(&'static str),
+    /// A difference level must be ≥ 0.
+    #[error("difference level must be ≥ 0, got {0}")]
+    NegativeLevel(f32),
+}
+
+/// Errors of building, loading or saving a BlobTree.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum BlobError {
+    /// One node is invalid; `path` says which.
+    #[error("node {path}: {problem}")]
+    InvalidNode {
+        /// Where the node is.
+        path: NodePath,
+        /// What is wrong.
+        problem: NodeProblem,
+    },
+    /// The iso threshold `T` must be finite and positive.
+    #[error("threshold must be finite and > 0, got {0}")]
+    InvalidThreshold(f32),
+    /// The file is not valid RON / JSON for a scene.
+    #[error("cannot parse the {format} scene: {message}")]
+    Parse {
+        /// `"RON"` or `"JSON"`.
+        format: &'static str,
+        /// The parser's message (with line and column).
+        message: String,
+    },
+    /// Serialization failed.
+    #[error("cannot write the scene: {0}")]
+    Write(String),
+}
+
+impl BlobError {
+    pub(crate) fn node(path: &NodePath, problem: NodeProblem) -> Self {
+        Self::InvalidNode { path: path.clone(), problem }
+    }
+}
+
+/// Which of the two shapes of a morph.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Side {
+    /// The source `A`.
+    Source,
+    /// The target `B`.
+    Target,
+}
+
+impl fmt::Display for Side {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Side::Source => "source",
+            Side::Target => "target",
+        })
+    }
+}
+
+/// Errors of setting up or evaluating a BlobTree metamorphosis.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum MorphError {
+    /// A frame time is NaN or outside `[0, 1]`
+    /// ([`isomorph_common::morph::check_time`]), or another shared-core morph error.
+    #[error(transparent)]
+    Time(#[from] isomorph_common::morph::MorphError),
+    /// A grid could not be made (meshing a frame).
+    #[error(transparent)]
+    Grid(#[from] GridError),
+    /// A source or target tree (or an instantiated frame) is invalid.
+    #[error(transparent)]
+    Blob(#[from] BlobError),
+    /// A link names a node that does not exist.
+    #[error("link names {side} node {path}, which does not exist")]
+    NoSuchNode {
+        /// Which tree.
+        side: Side,
+        /// The path given.
+        path: NodePath,
+    },
+    /// A link is not compatible with the tree hierarchy: its nodes' parents
+    /// are never matched, so it can never be used (§4: nodes at a level are
+    /// matched only when their ancestors are).
+    #[error("link {a} ↔ {b} breaks the hierarchy: the parents of its nodes are not matched")]
+    LinkBreaksHierarchy {
+        /// Source node.
+        a: NodePath,
+        /// Target node.
+        b: NodePath,
+    },
+    /// A speed curve is malformed (NaN, outside `[0, 1]`, or empty interval).
+    #[error("speed curve for {a} ↔ {b}: start {start} and end {end} must satisfy 0 ≤ start < end ≤ 1")]
+    InvalidSpeed {
+        /// Source node.
+        a: NodePath,
+        /// Target node.
+        b: NodePath,
+        /// Start time.
+        start: f32,
+        /// End time.
+        end: f32,
+    },
+    /// A speed curve or trajectory names a pair of nodes that the
+    /// correspondence never matched.
+    #[error("{what} for {a} ↔ {b}: these nodes are not matched with each other")]
+    UnmatchedPair {
+        /// `"speed curve"` or `"trajectory"`.
+        what: &'static str,
+        /// Source node.
+        a: NodePath,
+        /// Target node.
+        b: NodePath,
+    },
+    /// A trajectory handle is NaN or infinite.
+    #[error("trajectory for {a} ↔ {b} has a non-finite handle")]
+    InvalidTrajectory {
+        /// Source node.
+        a: NodePath,
+        /// Target node.
+        b: NodePath,
+    },
+    /// Two matched affine nodes or frames cannot be interpolated (mirror).
+    #[error("affine maps at {a} ↔ {b} cannot be interpolated: {source}")]
+    Transform {
+        /// Source node.
+        a: NodePath,
+        /// Target node.
+        b: NodePath,
+        /// Why.
+        source: TransformError,
+    },
+}

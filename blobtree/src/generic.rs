@@ -1,0 +1,576 @@
+//! The generic BlobTree `C(t)` (§4.4) and its [`Morph`] implementation.
+//!
+//! Built from the overlapping pair tree of [`crate::decompose`]; every pair
+//! of nodes `N_A →s(t) N_B` becomes a time-varying node with its own speed
+//! curve `s(t)`:
+//!
+//! - same operator: kept;
+//! - blend ↔ union ↔ super-elliptic blend: one super-elliptic blend whose
+//!   `1/n` moves linearly from `1/n_A` to `1/n_B` (blend: `n = 1`, union:
+//!   `n = ∞`, reached exactly at `s = 1`);
+//! - other commutative pairs: `(1 − s) N_A + s N_B` on the shared children ([`Node::Mix`]);
+//! - difference → difference with interpolated reference level;
+//! - warps of one kind: interpolated parameters, affine maps as translation ·
+//!   slerped rotation · stretch ([`isomorph_common::AffineParts::lerp`]);
+//!   different kinds were already split into two warps through the identity (Fig. 16);
+//! - leaves: skeleton `(1 − s) S_A ⊕ s S_B` in the time-varying local frame
+//!   (origin on a cubic Bézier curve — uniform straight motion unless the
+//!   animator gives handles — orientation by quaternion slerp, stretch
+//!   linearly), generic topology built once ([`MinkowskiPath`]); `I, R, k`
+//!   linear; the L^p exponent linear (§3.4.3), or `1/p` linear when one end
+//!   is `p = ∞`.
+//!
+//! The threshold is `T(t) = (1 − t) T_A + t T_B`. At `t = 0` every node is
+//! exactly its source node and at `t = 1` its target node, so `C(0) ≡ A` and
+//! `C(1) ≡ B`.
+
+use crate::correspond::{Correspondence, Heuristic, Link, Origin, Pair, decompose};
+use crate::error::{MorphError, NodePath};
+use crate::minkowski::MinkowskiPath;
+use crate::node::{NaryOp, Node, Primitive};
+use crate::skeleton::Skeleton;
+use crate::tree::BlobTree;
+use crate::warp::Warp;
+use glam::{Affine3A, Vec3};
+use isomorph_common::morph::{Frame, Morph};
+use isomorph_common::{Aabb, AffineParts};
+use serde::{Deserialize, Serialize};
+
+/// A speed curve `s(t)`: 0 before `start`, 1 after `end`, in between linear
+/// or smooth (`3u² − 2u³`, zero speed at both ends).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Speed {
+    /// When the node starts to change.
+    pub start: f32,
+    /// When the node reaches its target.
+    pub end: f32,
+    /// Ease in and out.
+    pub smooth: bool,
+}
+
+impl Default for Speed {
+    /// `s(t) = t`.
+    fn default() -> Self {
+        Self { start: 0.0, end: 1.0, smooth: false }
+    }
+}
+
+impl Speed {
+    /// `s(t)`.
+    pub fn at(&self, t: f32) -> f32 {
+        let u = ((t - self.start) / (self.end - self.start)).clamp(0.0, 1.0);
+        if self.smooth { u * u * (3.0 - 2.0 * u) } else { u }
+    }
+
+    fn valid(&self) -> bool {
+        (0.0..=1.0).contains(&self.start) && (0.0..=1.0).contains(&self.end) && self.start < self.end
+    }
+}
+
+/// The speed curve of the generic node made from source node `a` and target node `b`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SpeedCurve {
+    /// Source node path.
+    pub a: NodePath,
+    /// Target node path.
+    pub b: NodePath,
+    /// The curve.
+    pub speed: Speed,
+}
+
+/// The trajectory of the frame origin of the generic leaf made from source
+/// primitive `a` and target primitive `b`: a cubic Bézier curve with these
+/// two inner control points.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Trajectory {
+    /// Source node path.
+    pub a: NodePath,
+    /// Target node path.
+    pub b: NodePath,
+    /// The two inner Bézier control points (world units).
+    pub handles: [[f32; 3]; 2],
+}
+
+/// Everything the animator controls (the `--links` file): links, heuristic,
+/// speed curves, trajectories.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MorphSpec {
+    /// Links between nodes.
+    pub links: Vec<Link>,
+    /// Pairing where no links are given.
+    pub heuristic: Heuristic,
+    /// Per-node speed curves.
+    pub speeds: Vec<SpeedCurve>,
+    /// Per-leaf origin trajectories.
+    pub trajectories: Vec<Trajectory>,
+}
+
+impl MorphSpec {
+    /// Reads a RON spec, e.g. `(links: [(a: [0], b: [1, 0])], speeds: [(a: [], b: [], speed: (start: 0.2, end: 0.8))])`.
+    ///
+    /// # Errors
+    /// [`crate::BlobError::Parse`] (wrapped) for malformed text.
+    pub fn from_ron(text: &str) -> Result<Self, MorphError> {
+        ron::Options::default()
+            .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+            .from_str(text)
+            .map_err(|e| crate::BlobError::Parse { format: "RON", message: e.to_string() }.into())
+    }
+
+    /// Reads a JSON spec.
+    ///
+    /// # Errors
+    /// [`crate::BlobError::Parse`] (wrapped) for malformed text.
+    pub fn from_json(text: &str) -> Result<Self, MorphError> {
+        serde_json::from_str(text)
+            .map_err(|e| crate::BlobError::Parse { format: "JSON", message: e.to_string() }.into())
+    }
+}
+
+#[derive(Debug, Clone)]
+struct GLeaf {
+    a: Primitive,
+    b: Primitive,
+    skeleton: MinkowskiPath,
+    frame_a: AffineParts,
+    frame_b: AffineParts,
+    handles: [Vec3; 2],
+}
+
+#[derive(Debug, Clone)]
+enum GKind {
+    Leaf(Box<GLeaf>),
+    Nary(NaryOp, NaryOp),
+    Difference(f32, f32),
+    Warp(Warp, Warp),
+}
+
+#[derive(Debug, Clone)]
+struct GNode {
+    kind: GKind,
+    speed: Speed,
+    origin: Origin,
+    children: Vec<GNode>,
+}
+
+/// The generic BlobTree: one fixed structure whose parameters depend on `t`.
+#[derive(Debug, Clone)]
+pub struct GenericTree {
+    root: GNode,
+    thresholds: (f32, f32),
+    pair: Pair,
+}
+
+fn frame_parts(p: &Primitive, a: &Option<NodePath>, b: &Option<NodePath>) -> Result<AffineParts, MorphError> {
+    AffineParts::from_affine(&p.frame).map_err(|source| MorphError::Transform {
+        a: a.clone().unwrap_or_default(),
+        b: b.clone().unwrap_or_default(),
+        source,
+    })
+}
+
+fn build(pair: &Pair) -> Result<GNode, MorphError> {
+    let origin = pair.origin().clone();
+    let (kind, children) = match pair {
+        Pair::Leaf { a, b, .. } => {
+            let pa = a
+                .skeleton
+                .polytope()
+                .map_err(|p| crate::BlobError::node(&origin.a.clone().unwrap_or_default(), p))?;
+            let pb = b
+                .skeleton
+                .polytope()
+                .map_err(|p| crate::BlobError::node(&origin.b.clone().unwrap_or_default(), p))?;
+            let frame_a = frame_parts(a, &origin.a, &origin.b)?;
+            let frame_b = frame_parts(b, &origin.a, &origin.b)?;
+            let (oa, ob) = (frame_a.translation, frame_b.translation);
+            let leaf = GLeaf {
+                a: (**a).clone(),
+                b: (**b).clone(),
+                skeleton: MinkowskiPath::new(&pa, &pb),
+                frame_a,
+                frame_b,
+                handles: [oa + (ob - oa) / 3.0, oa + (ob - oa) * (2.0 / 3.0)],
+            };
+            (GKind::Leaf(Box::new(leaf)), Vec::new())
+        }
+        Pair::Nary { a, b, children, .. } => {
+            (GKind::Nary(*a, *b), children.iter().map(build).collect::<Result<_, _>>()?)
+        }
+        Pair::Difference { a, b, left, right, .. } => {
+            (GKind::Difference(*a, *b), vec![build(left)?, build(right)?])
+        }
+        Pair::Warp { a, b, child, .. } => (GKind::Warp(*a, *b), vec![build(child)?]),
+    };
+    Ok(GNode { kind, speed: Speed::default(), origin, children })
+}
+
+/// Applies `f` to every node whose origin is `(a, b)`; returns how many matched.
+fn for_matching(node: &mut GNode, a: &NodePath, b: &NodePath, f: &mut dyn FnMut(&mut GNode)) -> usize {
+    let mut n = 0;
+    if node.origin.a.as_ref() == Some(a) && node.origin.b.as_ref() == Some(b) {
+        f(node);
+        n += 1;
+    }
+    for c in &mut node.children {
+        n += for_matching(c, a, b, f);
+    }
+    n
+}
+
+/// `1/n` of a member of the super-elliptic family (blend 1, union 0).
+fn ricci_inverse(op: NaryOp) -> Option<f32> {
+    match op {
+        NaryOp::Blend => Some(1.0),
+        NaryOp::Union => Some(0.0),
+        NaryOp::SuperBlend(n) => Some(1.0 / n),
+        NaryOp::Intersection => None,
+    }
+}
+
+fn lerp(a: f32, b: f32, s: f32) -> f32 {
+    a + (b - a) * s
+}
+
+impl GLeaf {
+    fn at(&self, s: f32) -> Primitive {
+        if s <= 0.0 {
+            return self.a.clone();
+        }
+        if s >= 1.0 {
+            return self.b.clone();
+        }
+        let (a, b) = (&self.a, &self.b);
+        let p = if a.p.is_finite() && b.p.is_finite() {
+            lerp(a.p, b.p, s)
+        } else {
+            let inv = lerp(1.0 / a.p, 1.0 / b.p, s);
+            if inv <= 0.0 { f32::INFINITY } else { 1.0 / inv }
+        };
+        let mut parts = self.frame_a.lerp(&self.frame_b, s);
+        let u = 1.0 - s;
+        let [h1, h2] = self.handles;
+        parts.translation = self.frame_a.translation * (u * u * u)
+            + h1 * (3.0 * u * u * s)
+            + h2 * (3.0 * u * s * s)
+            + self.frame_b.translation * (s * s * s);
+        Primitive {
+            skeleton: Skeleton::Generic(self.skeleton.at(s)),
+            kernel: a.kernel.lerp(&b.kernel, s),
+            p,
+            frame: parts.to_affine(),
+        }
+    }
+}
+
+impl GNode {
+    fn at(&self, t: f32) -> Node {
+        let s = self.speed.at(t);
+        let kids = || self.children.iter().map(|c| c.at(t)).collect::<Vec<Node>>();
+        match &self.kind {
+            GKind::Leaf(leaf) => Node::Primitive(leaf.at(s)),
+            GKind::Nary(a, b) => {
+                let op = if s <= 0.0 || a == b {
+                    Some(*a)
+                } else if s >= 1.0 {
+                    Some(*b)
+                } else if let (Some(ia), Some(ib)) = (ricci_inverse(*a), ricci_inverse(*b)) {
+                    let inv = lerp(ia, ib, s);
+                    Some(NaryOp::SuperBlend(if inv <= 0.0 { f32::INFINITY } else { (1.0 / inv).max(1.0) }))
+                } else {
+                    None
+                };
+                match op {
+                    Some(op) => Node::Nary { op, children: kids() },
+                    None => Node::Mix { from: *a, to: *b, s, children: kids() },
+                }
+            }
+            GKind::Difference(a, b) => {
+                let mut k = kids();
+                let right = k.pop().expect("two children");
+                let left = k.pop().expect("two children");
+                Node::difference(left, right, lerp(*a, *b, s))
+            }
+            GKind::Warp(a, b) => {
+                let w = if s <= 0.0 {
+                    *a
+                } else if s >= 1.0 {
+                    *b
+                } else {
+                    a.lerp(b, s).unwrap_or(*a)
+                };
+                Node::Warp { warp: w, child: Box::new(kids().pop().expect("one child")) }
+            }
+        }
+    }
+}
+
+impl GenericTree {
+    /// Matches, decomposes and builds the generic tree of `a → b`.
+    ///
+    /// # Errors
+    /// Link errors of [`decompose`]; [`MorphError::InvalidSpeed`],
+    /// [`MorphError::InvalidTrajectory`], [`MorphError::UnmatchedPair`] for
+    /// bad speed curves and trajectories.
+    pub fn new(a: &BlobTree, b: &BlobTree, spec: &MorphSpec) -> Result<Self, MorphError> {
+        let corr = Correspondence { links: spec.links.clone(), heuristic: spec.heuristic };
+        let pair = decompose(a.root(), a.threshold(), b.root(), b.threshold(), &corr)?;
+        let mut root = build(&pair)?;
+        for sc in &spec.speeds {
+            if !sc.speed.valid() {
+                return Err(MorphError::InvalidSpeed {
+                    a: sc.a.clone(),
+                    b: sc.b.clone(),
+                    start: sc.speed.start,
+                    end: sc.speed.end,
+                });
+            }
+            let speed = sc.speed;
+            if for_matching(&mut root, &sc.a, &sc.b, &mut |n| n.speed = speed) == 0 {
+                return Err(MorphError::UnmatchedPair {
+                    what: "speed curve",
+                    a: sc.a.clone(),
+                    b: sc.b.clone(),
+                });
+            }
+        }
+        for tr in &spec.trajectories {
+            let h = tr.handles.map(Vec3::from_array);
+            if !h.iter().all(|v| v.is_finite()) {
+                return Err(MorphError::InvalidTrajectory { a: tr.a.clone(), b: tr.b.clone() });
+            }
+            let mut leaves = 0;
+            for_matching(&mut root, &tr.a, &tr.b, &mut |n| {
+                if let GKind::Leaf(l) = &mut n.kind {
+                    l.handles = h;
+                    leaves += 1;
+                }
+            });
+            if leaves == 0 {
+                return Err(MorphError::UnmatchedPair {
+                    what: "trajectory",
+                    a: tr.a.clone(),
+                    b: tr.b.clone(),
+                });
+            }
+        }
+        Ok(Self { root, thresholds: (a.threshold(), b.threshold()), pair })
+    }
+
+    /// The overlapping decomposition `A'`, `B'` this tree interpolates.
+    pub fn pair(&self) -> &Pair {
+        &self.pair
+    }
+
+    /// The threshold `T(t)`.
+    pub fn threshold_at(&self, t: f32) -> f32 {
+        lerp(self.thresholds.0, self.thresholds.1, t)
+    }
+
+    /// The instantiated tree description at `t` (unchecked `t`).
+    pub fn node_at(&self, t: f32) -> Node {
+        self.root.at(t)
+    }
+
+    /// The evaluable BlobTree `C(t)`.
+    ///
+    /// # Errors
+    /// [`MorphError::Time`] for `t ∉ [0, 1]` or NaN; [`MorphError::Blob`] if
+    /// an instantiated node is invalid (not expected for valid inputs).
+    pub fn at(&self, t: f32) -> Result<BlobTree, MorphError> {
+        let t = isomorph_common::morph::check_time(t)?;
+        Ok(BlobTree::new(self.node_at(t), self.threshold_at(t))?)
+    }
+}
+
+/// The BlobTree metamorphosis as a [`Morph`]: frames are `C(t)` as fields
+/// (`potential − T(t)`, iso 0, identity placement).
+#[derive(Debug, Clone)]
+pub struct BlobMorph {
+    generic: GenericTree,
+    bounds: Aabb,
+}
+
+/// Instants sampled to bound the frames' supports.
+const BOUND_SAMPLES: usize = 33;
+
+impl BlobMorph {
+    /// The morph `a → b` under the animator's `spec`.
+    ///
+    /// # Errors
+    /// As [`GenericTree::new`].
+    pub fn new(a: &BlobTree, b: &BlobTree, spec: &MorphSpec) -> Result<Self, MorphError> {
+        let generic = GenericTree::new(a, b, spec)?;
+        let mut bounds = Aabb::EMPTY;
+        for i in 0..BOUND_SAMPLES {
+            let t = i as f32 / (BOUND_SAMPLES - 1) as f32;
+            bounds = bounds.union(&generic.at(t)?.support());
+        }
+        // Supports move continuously; pad by 5 % against motion between samples.
+        Ok(Self { generic, bounds: bounds.padded(0.05) })
+    }
+
+    /// The generic tree.
+    pub fn generic(&self) -> &GenericTree {
+        &self.generic
+    }
+}
+
+impl Morph for BlobMorph {
+    type Field = BlobTree;
+    type Error = MorphError;
+
+    fn method(&self) -> &str {
+        "blobtree"
+    }
+
+    fn frame(&self, t: f32) -> Result<Frame<BlobTree>, MorphError> {
+        Ok(Frame { field: self.generic.at(t)?, iso: 0.0, transform: Affine3A::IDENTITY })
+    }
+
+    /// The union of the supports of `C(t)` at 33 instants, padded by 5 %.
+    fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testutil;
+    use isomorph_common::Field3;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 32, ..ProptestConfig::default() })]
+
+        /// C(0) ≡ A and C(1) ≡ B, in-between frames are finite, for random trees.
+        #[test]
+        fn endpoints_reproduce_the_inputs(a in testutil::tree(), b in testutil::tree()) {
+            let (ta, tb) = (BlobTree::new(a, 0.5).unwrap(), BlobTree::new(b, 0.4).unwrap());
+            let g = GenericTree::new(&ta, &tb, &MorphSpec::default()).unwrap();
+            let (c0, c1) = (g.at(0.0).unwrap(), g.at(1.0).unwrap());
+            let mid = g.at(0.37).unwrap();
+            for p in testutil::points() {
+                prop_assert!((c0.value(p) - ta.value(p)).abs() < 1e-5 * (1.0 + ta.value(p).abs()), "C(0) at {}", p);
+                prop_assert!((c1.value(p) - tb.value(p)).abs() < 1e-5 * (1.0 + tb.value(p).abs()), "C(1) at {}", p);
+                prop_assert!(mid.value(p).is_finite());
+                prop_assert!(mid.gradient(p).is_finite());
+            }
+        }
+    }
+
+    #[test]
+    fn bad_speed_curves_are_errors() {
+        let a = BlobTree::from_ron(r#"(root: (kind: "point", vertices: [(0,0,0)], radius: 1))"#).unwrap();
+        let spec = |s: &str| MorphSpec::from_ron(s).unwrap();
+        let bad = spec("(speeds: [(a: [], b: [], speed: (start: 0.8, end: 0.2))])");
+        assert!(matches!(BlobMorph::new(&a, &a, &bad), Err(MorphError::InvalidSpeed { .. })));
+        let nan = spec("(speeds: [(a: [], b: [], speed: (start: NaN, end: 0.2))])");
+        assert!(matches!(BlobMorph::new(&a, &a, &nan), Err(MorphError::InvalidSpeed { .. })));
+        let elsewhere = spec("(speeds: [(a: [0], b: [], speed: (start: 0.1, end: 0.2))])");
+        assert!(matches!(BlobMorph::new(&a, &a, &elsewhere), Err(MorphError::UnmatchedPair { .. })));
+        let ok = spec("(speeds: [(a: [], b: [], speed: (start: 0.2, end: 0.6, smooth: true))])");
+        let m = BlobMorph::new(&a, &a, &ok).unwrap();
+        assert!(matches!(
+            m.frame(1.5),
+            Err(MorphError::Time(isomorph_common::morph::MorphError::InvalidTime(_)))
+        ));
+        assert!(matches!(
+            m.frame(f32::NAN),
+            Err(MorphError::Time(isomorph_common::morph::MorphError::InvalidTime(_)))
+        ));
+        assert!(MorphSpec::from_ron("(links: 3)").is_err());
+    }
+
+    #[test]
+    fn speed_curves_delay_a_node() {
+        let a = BlobTree::from_ron(r#"(root: (kind: "point", vertices: [(0,0,0)], radius: 1))"#).unwrap();
+        let b = BlobTree::from_ron(r#"(root: (kind: "point", vertices: [(1,0,0)], radius: 1))"#).unwrap();
+        let spec = MorphSpec {
+            speeds: vec![SpeedCurve {
+                a: NodePath::root(),
+                b: NodePath::root(),
+                speed: Speed { start: 0.5, end: 1.0, smooth: false },
+            }],
+            ..MorphSpec::default()
+        };
+        let g = GenericTree::new(&a, &b, &spec).unwrap();
+        // Nothing moves before t = 0.5; halfway through the window the point is at x = 0.5.
+        assert_eq!(g.at(0.4).unwrap().potential(Vec3::ZERO), 1.0);
+        assert!((g.at(0.75).unwrap().potential(Vec3::new(0.5, 0.0, 0.0)) - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn trajectories_bend_the_path_but_keep_the_ends() {
+        let a = BlobTree::from_ron(r#"(root: (kind: "point", vertices: [(0,0,0)], radius: 1))"#).unwrap();
+        let b = BlobTree::from_ron(
+            r#"(root: (kind: "point", vertices: [(0,0,0)], radius: 1, frame: (translate: (1, 0, 0))))"#,
+        )
+        .unwrap();
+        let spec = MorphSpec::from_json(
+            r#"{"trajectories": [{"a": [], "b": [], "handles": [[0, 1, 0], [1, 1, 0]]}]}"#,
+        )
+        .unwrap();
+        let g = GenericTree::new(&a, &b, &spec).unwrap();
+        // Bézier midpoint: (P0 + 3 P1 + 3 P2 + P3) / 8 = (0.5, 0.75, 0).
+        let mid = g.at(0.5).unwrap();
+        assert!((mid.potential(Vec3::new(0.5, 0.75, 0.0)) - 1.0).abs() < 1e-5);
+        assert_eq!(g.at(1.0).unwrap().potential(Vec3::X), 1.0);
+        let bad = MorphSpec::from_json(
+            r#"{"trajectories": [{"a": [0], "b": [], "handles": [[0, 1, 0], [1, 1, 0]]}]}"#,
+        )
+        .unwrap();
+        assert!(matches!(
+            GenericTree::new(&a, &b, &bad),
+            Err(MorphError::UnmatchedPair { what: "trajectory", .. })
+        ));
+    }
+
+    #[test]
+    fn different_warps_compose_through_the_identity() {
+        // Fig. 16: twist ↔ bend becomes twist(→ id) ∘ bend(id →).
+        let a = BlobTree::from_ron(
+            r#"(root: (kind: "twist", rate: 2, children: [(kind: "segment", vertices: [(0.2,0,-0.5), (0.2,0,0.5)], radius: 0.5)]))"#,
+        )
+        .unwrap();
+        let b = BlobTree::from_ron(
+            r#"(root: (kind: "bend", rate: 0.8, min: -0.5, max: 0.5, children: [(kind: "segment", vertices: [(0,-0.5,0), (0,0.5,0)], radius: 0.5)]))"#,
+        )
+        .unwrap();
+        let g = GenericTree::new(&a, &b, &MorphSpec::default()).unwrap();
+        let n = g.node_at(0.5);
+        let Node::Warp { warp: Warp::Twist { rate }, child } = &n else { panic!("{n:?}") };
+        assert!((rate - 1.0).abs() < 1e-6);
+        assert!(
+            matches!(**child, Node::Warp { warp: Warp::Bend { rate, .. }, .. } if (rate - 0.4).abs() < 1e-6)
+        );
+        for p in testutil::points() {
+            assert!((g.at(0.0).unwrap().value(p) - a.value(p)).abs() < 1e-5);
+            assert!((g.at(1.0).unwrap().value(p) - b.value(p)).abs() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn frames_and_blend_union_transition() {
+        use glam::Quat;
+        // A blend of two segments → a union of the same segments, rotated frame.
+        let seg = |x: f32| {
+            Node::Primitive(
+                Primitive::new(Skeleton::Segment(Vec3::ZERO, Vec3::Z), crate::Kernel::new(1.0, 0.8, 1.0))
+                    .with_frame(Affine3A::from_translation(Vec3::X * x)),
+            )
+        };
+        let a = BlobTree::new(Node::blend(vec![seg(-0.3), seg(0.3)]), 0.5).unwrap();
+        let rot = Affine3A::from_rotation_translation(Quat::from_rotation_y(1.0), Vec3::ZERO);
+        let b = BlobTree::new(Node::affine(rot, Node::union(vec![seg(-0.3), seg(0.3)])), 0.5).unwrap();
+        let g = GenericTree::new(&a, &b, &MorphSpec::default()).unwrap();
+        // Halfway: a super-elliptic blend of order 2 under a half rotation.
+        let n = g.node_at(0.5);
+        let Node::Warp { warp: Warp::Affine(m), child } = &n else { panic!("{n:?}") };
+        assert!(m.abs_diff_eq(Affine3A::from_rotation_y(0.5), 1e-5));
+        assert!(matches!(**child, Node::Nary { op: NaryOp::SuperBlend(n), .. } if (n - 2.0).abs() < 1e-6));
+    }
+}

@@ -1,0 +1,474 @@
+//! Scene files: BlobTrees as RON or JSON, validated into typed errors that
+//! carry the path of the offending node.
+//!
+//! Every node is a record with a `kind` and the fields that kind uses:
+//!
+//! | kind | fields |
+//! |---|---|
+//! | `point`, `segment`, `polygon`, `polyhedron` | `vertices` (1, 2, ≥ 3 coplanar, ≥ 4), `radius`, optional `intensity` (1), `stiffness` (1), `p` (2; a number ≥ 1 or `"inf"`), `frame` |
+//! | `box` | `half` (half extents) instead of `vertices`; a polyhedron skeleton |
+//! | `blend`, `union`, `intersection` | `children` (≥ 1) |
+//! | `superblend` | `n` (≥ 1), `children` |
+//! | `difference` | `children` (2: left, right), optional `level` (the threshold) |
+//! | `twist`, `taper` | `rate` / `slope`, `children` (1) |
+//! | `bend` | `rate`, `centre`, `min`, `max`, `children` (1) |
+//! | `affine` | `frame`, `children` (1) |
+//!
+//! A `frame` is `(translate: (x, y, z), rotate: (axis: (x, y, z), degrees: a), scale: (x, y, z))`
+//! (all optional; applied as translate · rotate · scale) or `(matrix: (...12 numbers...))`,
+//! column-major 3×4. The file is `(threshold: 0.5, root: (...))`.
+//!
+//! ```
+//! use isomorph_blobtree::BlobTree;
+//! use isomorph_common::Field3;
+//!
+//! let scene = r#"(threshold: 0.5, root: (kind: "blend", children: [
+//!     (kind: "point", vertices: [(0, 0, 0)], radius: 1.0),
+//!     (kind: "segment", vertices: [(0.5, 0, 0), (1, 0, 0)], radius: 0.8, p: "inf"),
+//! ]))"#;
+//! let tree = BlobTree::from_ron(scene)?;
+//! assert!(tree.value(glam::Vec3::ZERO) > 0.0);
+//! let bad = r#"(root: (kind: "blend", children: [(kind: "point", vertices: [(0, 0, 0)], radius: -1)]))"#;
+//! let err = BlobTree::from_ron(bad).unwrap_err();
+//! assert_eq!(err.to_string(), "node root/0: radius of influence must be positive, got -1");
+//! # Ok::<(), isomorph_blobtree::BlobError>(())
+//! ```
+
+use crate::error::{BlobError, NodePath, NodeProblem};
+use crate::kernel::Kernel;
+use crate::node::{NaryOp, Node, Primitive};
+use crate::skeleton::Skeleton;
+use crate::tree::BlobTree;
+use crate::warp::Warp;
+use glam::{Affine3A, Quat, Vec3};
+use serde::{Deserialize, Serialize};
+
+/// The file's top level.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    /// The iso threshold `T` (default 0.5).
+    #[serde(default = "default_threshold")]
+    pub threshold: f32,
+    /// The tree.
+    pub root: RawNode,
+}
+
+fn default_threshold() -> f32 {
+    0.5
+}
+
+/// The L^p exponent as written: a number, or `"inf"`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum RawExponent {
+    /// A finite exponent.
+    Number(f32),
+    /// `"inf"` / `"infinity"`.
+    Text(String),
+}
+
+/// A rotation as axis and angle in degrees.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawRotation {
+    /// Rotation axis (normalized on reading).
+    pub axis: [f32; 3],
+    /// Angle in degrees.
+    pub degrees: f32,
+}
+
+/// A frame or affine map as written.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RawTransform {
+    /// Translation.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub translate: Option<[f32; 3]>,
+    /// Rotation.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rotate: Option<RawRotation>,
+    /// Per-axis scale.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scale: Option<[f32; 3]>,
+    /// Column-major 3×4 matrix (replaces the other fields).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub matrix: Option<[f32; 12]>,
+}
+
+/// One node as written (see the module docs for which fields each kind uses).
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawNode {
+    pub kind: String,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub children: Vec<RawNode>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub vertices: Vec<[f32; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub half: Option<[f32; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub intensity: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub radius: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stiffness: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub p: Option<RawExponent>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frame: Option<RawTransform>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub n: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub level: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rate: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub slope: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub centre: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub min: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max: Option<f32>,
+}
+
+fn ron_options() -> ron::Options {
+    ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+}
+
+impl BlobTree {
+    /// Reads a RON scene.
+    ///
+    /// # Errors
+    /// [`BlobError::Parse`] for malformed RON; otherwise as [`BlobTree::from_scene`].
+    pub fn from_ron(text: &str) -> Result<Self, BlobError> {
+        let file: SceneFile = ron_options()
+            .from_str(text)
+            .map_err(|e| BlobError::Parse { format: "RON", message: e.to_string() })?;
+        Self::from_scene(&file)
+    }
+
+    /// Reads a JSON scene.
+    ///
+    /// # Errors
+    /// [`BlobError::Parse`] for malformed JSON; otherwise as [`BlobTree::from_scene`].
+    pub fn from_json(text: &str) -> Result<Self, BlobError> {
+        let file: SceneFile = serde_json::from_str(text)
+            .map_err(|e| BlobError::Parse { format: "JSON", message: e.to_string() })?;
+        Self::from_scene(&file)
+    }
+
+    /// Builds a tree from a parsed scene.
+    ///
+    /// # Errors
+    /// [`BlobError::InvalidNode`] with the offending node's path (unknown
+    /// kinds, missing fields, negative radii, NaN, `p < 1`, empty nodes, …),
+    /// [`BlobError::InvalidThreshold`].
+    pub fn from_scene(file: &SceneFile) -> Result<Self, BlobError> {
+        if !(file.threshold.is_finite() && file.threshold > 0.0) {
+            return Err(BlobError::InvalidThreshold(file.threshold));
+        }
+        let root = from_raw(&file.root, &NodePath::root(), file.threshold)?;
+        BlobTree::new(root, file.threshold)
+    }
+
+    /// The tree as a scene description.
+    pub fn to_scene(&self) -> SceneFile {
+        SceneFile { threshold: self.threshold(), root: to_raw(self.root()) }
+    }
+
+    /// The scene as pretty RON.
+    ///
+    /// # Errors
+    /// [`BlobError::Write`] if serialization fails.
+    pub fn to_ron(&self) -> Result<String, BlobError> {
+        ron_options()
+            .to_string_pretty(&self.to_scene(), ron::ser::PrettyConfig::default())
+            .map_err(|e| BlobError::Write(e.to_string()))
+    }
+
+    /// The scene as pretty JSON (infinite exponents written as `"inf"`).
+    ///
+    /// # Errors
+    /// [`BlobError::Write`] if serialization fails.
+    pub fn to_json(&self) -> Result<String, BlobError> {
+        serde_json::to_string_pretty(&self.to_scene()).map_err(|e| BlobError::Write(e.to_string()))
+    }
+}
+
+fn from_raw(raw: &RawNode, path: &NodePath, threshold: f32) -> Result<Node, BlobError> {
+    let err = |p: NodeProblem| BlobError::node(path, p);
+    let need = |v: Option<f32>, name: &'static str| v.ok_or(err(NodeProblem::MissingField(name)));
+    let children = |expected: &'static str, ok: &dyn Fn(usize) -> bool| -> Result<Vec<Node>, BlobError> {
+        if !ok(raw.children.len()) {
+            return Err(err(NodeProblem::WrongChildCount {
+                kind: kind_name(&raw.kind),
+                expected,
+                got: raw.children.len(),
+            }));
+        }
+        raw.children.iter().enumerate().map(|(i, c)| from_raw(c, &path.child(i), threshold)).collect()
+    };
+    let v3 = |a: &[f32; 3]| Vec3::from_array(*a);
+    let kind = raw.kind.as_str();
+    Ok(match kind {
+        "point" | "segment" | "polygon" | "polyhedron" | "box" => {
+            if !raw.children.is_empty() {
+                return Err(err(NodeProblem::WrongChildCount {
+                    kind: kind_name(kind),
+                    expected: "0",
+                    got: raw.children.len(),
+                }));
+            }
+            let vs: Vec<Vec3> = raw.vertices.iter().map(v3).collect();
+            let count = |expected: &'static str| {
+                err(NodeProblem::WrongVertexCount { kind: kind_name(kind), expected, got: vs.len() })
+            };
+            let skeleton = match kind {
+                "point" if vs.len() == 1 => Skeleton::Point(vs[0]),
+                "point" => return Err(count("1")),
+                "segment" if vs.len() == 2 => Skeleton::Segment(vs[0], vs[1]),
+                "segment" => return Err(count("2")),
+                "polygon" => Skeleton::Polygon(vs),
+                "polyhedron" => Skeleton::Polyhedron(vs),
+                _ => Skeleton::cuboid(v3(&raw.half.ok_or(err(NodeProblem::MissingField("half")))?)),
+            };
+            let p = match &raw.p {
+                None => 2.0,
+                Some(RawExponent::Number(p)) => *p,
+                Some(RawExponent::Text(t))
+                    if matches!(t.to_ascii_lowercase().as_str(), "inf" | "infinity") =>
+                {
+                    f32::INFINITY
+                }
+                Some(RawExponent::Text(_)) => return Err(err(NodeProblem::NotFinite("p"))),
+            };
+            let kernel = Kernel::new(
+                raw.intensity.unwrap_or(1.0),
+                need(raw.radius, "radius")?,
+                raw.stiffness.unwrap_or(1.0),
+            );
+            let frame = match &raw.frame {
+                Some(f) => transform(f).map_err(err)?,
+                None => Affine3A::IDENTITY,
+            };
+            Node::Primitive(Primitive { skeleton, kernel, p, frame })
+        }
+        "blend" | "union" | "intersection" | "superblend" => {
+            let op = match kind {
+                "blend" => NaryOp::Blend,
+                "union" => NaryOp::Union,
+                "intersection" => NaryOp::Intersection,
+                _ => NaryOp::SuperBlend(need(raw.n, "n")?),
+            };
+            Node::Nary { op, children: children("≥ 1", &|n| n >= 1)? }
+        }
+        "difference" => {
+            let mut c = children("2", &|n| n == 2)?;
+            let right = c.pop().expect("two children");
+            let left = c.pop().expect("two children");
+            Node::difference(left, right, raw.level.unwrap_or(threshold))
+        }
+        "twist" | "taper" | "bend" | "affine" => {
+            let child = children("1", &|n| n == 1)?.pop().expect("one child");
+            let warp = match kind {
+                "twist" => Warp::Twist { rate: need(raw.rate, "rate")? },
+                "taper" => Warp::Taper { slope: need(raw.slope, "slope")? },
+                "bend" => Warp::Bend {
+                    rate: need(raw.rate, "rate")?,
+                    centre: raw.centre.unwrap_or(0.0),
+                    min: need(raw.min, "min")?,
+                    max: need(raw.max, "max")?,
+                },
+                _ => Warp::Affine(
+                    transform(raw.frame.as_ref().ok_or(err(NodeProblem::MissingField("frame")))?)
+                        .map_err(err)?,
+                ),
+            };
+            Node::warp(warp, child)
+        }
+        other => return Err(err(NodeProblem::UnknownKind(other.to_string()))),
+    })
+}
+
+fn kind_name(kind: &str) -> &'static str {
+    const KINDS: [&str; 14] = [
+        "point",
+        "segment",
+        "polygon",
+        "polyhedron",
+        "box",
+        "blend",
+        "union",
+        "intersection",
+        "superblend",
+        "difference",
+        "twist",
+        "taper",
+        "bend",
+        "affine",
+    ];
+    KINDS.iter().find(|k| **k == kind).copied().unwrap_or("node")
+}
+
+fn transform(t: &RawTransform) -> Result<Affine3A, NodeProblem> {
+    if let Some(m) = t.matrix {
+        if m.iter().any(|v| !v.is_finite()) {
+            return Err(NodeProblem::NotFinite("matrix"));
+        }
+        return Ok(Affine3A::from_cols_slice(&m));
+    }
+    let tr = Vec3::from_array(t.translate.unwrap_or([0.0; 3]));
+    let sc = Vec3::from_array(t.scale.unwrap_or([1.0; 3]));
+    let rot = match &t.rotate {
+        None => Quat::IDENTITY,
+        Some(r) => {
+            let axis = Vec3::from_array(r.axis);
+            if !axis.is_finite() || !r.degrees.is_finite() {
+                return Err(NodeProblem::NotFinite("rotate"));
+            }
+            let axis = axis.try_normalize().ok_or(NodeProblem::NotFinite("rotate.axis"))?;
+            Quat::from_axis_angle(axis, r.degrees.to_radians())
+        }
+    };
+    if !tr.is_finite() || !sc.is_finite() {
+        return Err(NodeProblem::NotFinite("frame"));
+    }
+    Ok(Affine3A::from_scale_rotation_translation(sc, rot, tr))
+}
+
+fn raw_transform(m: &Affine3A) -> Option<RawTransform> {
+    if *m == Affine3A::IDENTITY {
+        return None;
+    }
+    let mut cols = [0.0f32; 12];
+    m.write_cols_to_slice(&mut cols);
+    Some(RawTransform { matrix: Some(cols), ..RawTransform::default() })
+}
+
+fn to_raw(node: &Node) -> RawNode {
+    let a = |v: Vec3| v.to_array();
+    match node {
+        Node::Primitive(p) => {
+            let (kind, vertices) = match &p.skeleton {
+                Skeleton::Point(c) => ("point", vec![a(*c)]),
+                Skeleton::Segment(x, y) => ("segment", vec![a(*x), a(*y)]),
+                Skeleton::Polygon(v) => ("polygon", v.iter().map(|v| a(*v)).collect()),
+                Skeleton::Polyhedron(v) => ("polyhedron", v.iter().map(|v| a(*v)).collect()),
+                Skeleton::Generic(poly) => {
+                    (p.skeleton.kind(), poly.vertices().iter().map(|v| a(*v)).collect())
+                }
+            };
+            RawNode {
+                kind: kind.into(),
+                vertices,
+                intensity: Some(p.kernel.intensity),
+                radius: Some(p.kernel.radius),
+                stiffness: Some(p.kernel.stiffness),
+                p: Some(if p.p.is_infinite() {
+                    RawExponent::Text("inf".into())
+                } else {
+                    RawExponent::Number(p.p)
+                }),
+                frame: raw_transform(&p.frame),
+                ..RawNode::default()
+            }
+        }
+        Node::Nary { op, children } | Node::Mix { from: op, children, .. } => RawNode {
+            kind: op.name().into(),
+            n: if let NaryOp::SuperBlend(n) = op { Some(*n) } else { None },
+            children: children.iter().map(to_raw).collect(),
+            ..RawNode::default()
+        },
+        Node::Difference { left, right, level } => RawNode {
+            kind: "difference".into(),
+            level: Some(*level),
+            children: vec![to_raw(left), to_raw(right)],
+            ..RawNode::default()
+        },
+        Node::Warp { warp, child } => {
+            let mut r =
+                RawNode { kind: warp.kind().into(), children: vec![to_raw(child)], ..RawNode::default() };
+            match *warp {
+                Warp::Twist { rate } => r.rate = Some(rate),
+                Warp::Taper { slope } => r.slope = Some(slope),
+                Warp::Bend { rate, centre, min, max } => {
+                    (r.rate, r.centre, r.min, r.max) = (Some(rate), Some(centre), Some(min), Some(max))
+                }
+                Warp::Affine(m) => r.frame = raw_transform(&m).or(Some(RawTransform::default())),
+            }
+            r
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use isomorph_common::Field3;
+
+    fn problem(text: &str) -> (Vec<usize>, NodeProblem) {
+        match BlobTree::from_ron(text) {
+            Err(BlobError::InvalidNode { path, problem }) => (path.0, problem),
+            other => panic!("expected a node error, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn malformed_scenes_are_typed_errors_with_paths() {
+        let (p, e) = problem(
+            r#"(root: (kind: "union", children: [(kind: "point", vertices: [(0,0,0)], radius: 1), (kind: "blob")]))"#,
+        );
+        assert_eq!((p, e), (vec![1], NodeProblem::UnknownKind("blob".into())));
+        let (p, e) = problem(r#"(root: (kind: "twist", rate: 1, children: [(kind: "blend")]))"#);
+        assert_eq!(p, vec![0]);
+        assert!(matches!(e, NodeProblem::WrongChildCount { got: 0, .. }));
+        let (_, e) = problem(r#"(root: (kind: "point", vertices: [(0,0,0)], radius: 1, p: 0.5))"#);
+        assert_eq!(e, NodeProblem::ExponentBelowOne(0.5));
+        let (_, e) = problem(r#"(root: (kind: "point", vertices: [(0,0,0)], radius: NaN))"#);
+        assert_eq!(e, NodeProblem::NotFinite("radius"));
+        let (_, e) = problem(r#"(root: (kind: "segment", vertices: [(0,0,0)], radius: 1))"#);
+        assert!(matches!(e, NodeProblem::WrongVertexCount { got: 1, .. }));
+        let (p, e) = problem(
+            r#"(root: (kind: "difference", children: [(kind: "box", half: (1,1,1), radius: 1), (kind: "point", vertices: [(0,0,0)])]))"#,
+        );
+        assert_eq!((p, e), (vec![1], NodeProblem::MissingField("radius")));
+        assert!(matches!(
+            BlobTree::from_ron("(root: (kind: 3))"),
+            Err(BlobError::Parse { format: "RON", .. })
+        ));
+        assert!(matches!(BlobTree::from_json("{\"root\": 1}"), Err(BlobError::Parse { format: "JSON", .. })));
+        assert!(matches!(
+            BlobTree::from_json(
+                r#"{"threshold": -1, "root": {"kind": "point", "vertices": [[0,0,0]], "radius": 1}}"#
+            ),
+            Err(BlobError::InvalidThreshold(_))
+        ));
+    }
+
+    #[test]
+    fn scenes_round_trip_through_ron_and_json() {
+        let text = r#"(threshold: 0.4, root: (kind: "difference", children: [
+            (kind: "twist", rate: 0.7, children: [(kind: "superblend", n: 2, children: [
+                (kind: "box", half: (0.3, 0.2, 0.5), radius: 0.4, stiffness: 0.5, p: "inf"),
+                (kind: "segment", vertices: [(0,0,0), (0,0,0.6)], radius: 0.3,
+                 frame: (translate: (0.2, 0, 0), rotate: (axis: (0, 1, 0), degrees: 30))),
+            ])]),
+            (kind: "bend", rate: 0.5, min: -1, max: 1, children: [
+                (kind: "affine", frame: (scale: (1, 2, 1)), children: [
+                    (kind: "polygon", vertices: [(0,0,0.5), (0.3,0,0.5), (0,0.3,0.5)], radius: 0.2)])]),
+        ]))"#;
+        let tree = BlobTree::from_ron(text).unwrap();
+        let again = BlobTree::from_ron(&tree.to_ron().unwrap()).unwrap();
+        let json = BlobTree::from_json(&tree.to_json().unwrap()).unwrap();
+        for i in 0..200 {
+            let p =
+                Vec3::new((i as f32 * 0.37).sin(), (i as f32 * 0.61).cos(), (i as f32 * 0.23).sin()) * 0.8;
+            assert!((tree.value(p) - again.value(p)).abs() < 1e-5);
+            assert!((tree.value(p) - json.value(p)).abs() < 1e-5);
+        }
+        assert_eq!(again.threshold(), 0.4);
+    }
+}

@@ -1,0 +1,225 @@
+//! The paper's metamorphosis sequences (§5) as built-in scenes.
+//!
+//! All scenes use `I = 1` and `T = 0.5`, so an isolated primitive's surface
+//! lies at distance `R/2` from its skeleton (the Blanc–Schlick midpoint).
+//!
+//! | demo | source → target | what it exercises |
+//! |---|---|---|
+//! | `cube_sphere` | rounded cube → sphere minus three axis-aligned boxes (Fig. 17) | primitive ↔ difference: a difference with a phantom subtrahend is inserted; L^∞ box holes; change of genus |
+//! | `sphere_propeller` | sphere → twisted blend of two rounded rods (Fig. 19) | identity twist inserted, sphere split into two α-weighted copies |
+//! | `rook_queen` | rook → queen (Fig. 21) | difference ↔ difference (slots ↔ eight spherical carvings), identity taper inserted, polygon ↔ point skeletons |
+//! | `bear_bird` | blob bear → blob bird (Fig. 2) | nearest-centre matching of many blended primitives, segments ↔ polygons |
+
+use crate::generic::MorphSpec;
+use crate::kernel::Kernel;
+use crate::node::{Node, Primitive};
+use crate::skeleton::Skeleton;
+use crate::tree::BlobTree;
+use crate::warp::Warp;
+use glam::{Affine3A, Vec3};
+
+/// Threshold of every built-in scene.
+pub const THRESHOLD: f32 = 0.5;
+
+/// Names of the built-in morphs (see [`demo`]).
+pub const DEMOS: [&str; 4] = ["cube_sphere", "sphere_propeller", "rook_queen", "bear_bird"];
+
+fn prim(skeleton: Skeleton, radius: f32, at: Vec3) -> Node {
+    Node::Primitive(
+        Primitive::new(skeleton, Kernel::new(1.0, radius, 1.0)).with_frame(Affine3A::from_translation(at)),
+    )
+}
+
+fn ball(at: Vec3, radius: f32) -> Node {
+    prim(Skeleton::Point(Vec3::ZERO), radius, at)
+}
+
+fn seg(a: Vec3, b: Vec3, radius: f32) -> Node {
+    prim(Skeleton::Segment(a, b), radius, Vec3::ZERO)
+}
+
+fn box_node(half: Vec3, radius: f32, at: Vec3, p: f32) -> Node {
+    Node::Primitive(
+        Primitive::new(Skeleton::cuboid(half), Kernel::new(1.0, radius, 1.0))
+            .with_p(p)
+            .with_frame(Affine3A::from_translation(at)),
+    )
+}
+
+fn disc(radius: f32, sides: usize, z: f32, r: f32) -> Node {
+    let v = (0..sides)
+        .map(|i| {
+            let a = std::f32::consts::TAU * i as f32 / sides as f32;
+            Vec3::new(radius * a.cos(), radius * a.sin(), 0.0)
+        })
+        .collect();
+    prim(Skeleton::Polygon(v), r, Vec3::new(0.0, 0.0, z))
+}
+
+fn tree(root: Node) -> BlobTree {
+    BlobTree::new(root, THRESHOLD).expect("built-in scenes are valid")
+}
+
+/// A rounded cube: one box skeleton (half size 0.35) offset by 0.25.
+pub fn rounded_cube() -> BlobTree {
+    tree(box_node(Vec3::splat(0.35), 0.5, Vec3::ZERO, 2.0))
+}
+
+/// A sphere (radius 0.7) pierced by three orthogonal square holes
+/// (L^∞ offsets of thin boxes): `sphere − (box_x ∪ box_y ∪ box_z)`.
+pub fn pierced_sphere() -> BlobTree {
+    let hole = |half: Vec3| box_node(half, 0.2, Vec3::ZERO, f32::INFINITY);
+    tree(Node::difference(
+        ball(Vec3::ZERO, 1.4),
+        Node::union(vec![
+            hole(Vec3::new(1.0, 0.12, 0.12)),
+            hole(Vec3::new(0.12, 1.0, 0.12)),
+            hole(Vec3::new(0.12, 0.12, 1.0)),
+        ]),
+        THRESHOLD,
+    ))
+}
+
+/// A sphere of radius 0.6.
+pub fn sphere() -> BlobTree {
+    tree(ball(Vec3::ZERO, 1.2))
+}
+
+/// Two rounded rods blended and twisted about their common axis (a helix).
+pub fn propeller() -> BlobTree {
+    let rod = |x: f32| seg(Vec3::new(x, 0.0, -0.7), Vec3::new(x, 0.0, 0.7), 0.36);
+    tree(Node::warp(Warp::Twist { rate: 2.2 }, Node::blend(vec![rod(-0.2), rod(0.2)])))
+}
+
+/// A rook: base and body blended, under a top cut by two crossing slots.
+pub fn rook() -> BlobTree {
+    let base = disc(0.4, 8, -0.75, 0.3);
+    let body = seg(Vec3::new(0.0, 0.0, -0.7), Vec3::new(0.0, 0.0, 0.3), 0.5);
+    let top = disc(0.25, 8, 0.45, 0.5);
+    let slot = |half: Vec3| box_node(half, 0.2, Vec3::new(0.0, 0.0, 0.75), f32::INFINITY);
+    let cut = Node::union(vec![slot(Vec3::new(0.6, 0.06, 0.15)), slot(Vec3::new(0.06, 0.6, 0.15))]);
+    tree(Node::union(vec![Node::blend(vec![base, body]), Node::difference(top, cut, THRESHOLD)]))
+}
+
+/// A queen: base and tapered body blended, under a crown carved by eight
+/// small spheres around its rim.
+pub fn queen() -> BlobTree {
+    let base = disc(0.4, 8, -0.75, 0.3);
+    let body = Node::warp(
+        Warp::Taper { slope: -0.35 },
+        seg(Vec3::new(0.0, 0.0, -0.7), Vec3::new(0.0, 0.0, 0.5), 0.46),
+    );
+    let crown = ball(Vec3::new(0.0, 0.0, 0.75), 0.9);
+    let carvings = (0..8)
+        .map(|i| {
+            let a = std::f32::consts::TAU * (i as f32 + 0.5) / 8.0;
+            ball(Vec3::new(0.42 * a.cos(), 0.42 * a.sin(), 1.0), 0.36)
+        })
+        .collect();
+    tree(Node::union(vec![
+        Node::blend(vec![base, body]),
+        Node::difference(crown, Node::union(carvings), THRESHOLD),
+    ]))
+}
+
+/// A blob bear: body, head, ears, snout, arms and legs, all blended.
+pub fn bear() -> BlobTree {
+    let v = Vec3::new;
+    tree(Node::blend(vec![
+        ball(v(0.0, 0.0, 0.0), 1.1),
+        ball(v(0.0, 0.0, 0.62), 0.8),
+        ball(v(-0.22, 0.0, 0.9), 0.3),
+        ball(v(0.22, 0.0, 0.9), 0.3),
+        ball(v(0.0, -0.3, 0.58), 0.3),
+        seg(v(-0.35, 0.0, 0.2), v(-0.55, -0.15, -0.1), 0.35),
+        seg(v(0.35, 0.0, 0.2), v(0.55, -0.15, -0.1), 0.35),
+        seg(v(-0.2, 0.0, -0.35), v(-0.25, -0.05, -0.75), 0.4),
+        seg(v(0.2, 0.0, -0.35), v(0.25, -0.05, -0.75), 0.4),
+    ]))
+}
+
+/// A blob bird: ellipsoidal body, head, beak, triangular wings and tail, legs.
+pub fn bird() -> BlobTree {
+    let v = Vec3::new;
+    let tri = |a: Vec3, b: Vec3, c: Vec3, r: f32| prim(Skeleton::Polygon(vec![a, b, c]), r, Vec3::ZERO);
+    tree(Node::blend(vec![
+        seg(v(0.0, 0.15, 0.05), v(0.0, -0.15, -0.05), 0.9),
+        ball(v(0.0, -0.3, 0.5), 0.6),
+        seg(v(0.0, -0.5, 0.5), v(0.0, -0.75, 0.45), 0.18),
+        tri(v(-0.2, 0.1, 0.15), v(-0.8, 0.2, 0.3), v(-0.25, -0.2, 0.1), 0.2),
+        tri(v(0.2, 0.1, 0.15), v(0.8, 0.2, 0.3), v(0.25, -0.2, 0.1), 0.2),
+        tri(v(0.0, 0.4, 0.0), v(-0.15, 0.75, 0.1), v(0.15, 0.75, 0.1), 0.2),
+        seg(v(-0.12, 0.0, -0.3), v(-0.12, 0.0, -0.75), 0.15),
+        seg(v(0.12, 0.0, -0.3), v(0.12, 0.0, -0.75), 0.15),
+    ]))
+}
+
+/// A built-in morph by name (one of [`DEMOS`]): source, target and the
+/// animator's spec (default links, nearest-centre heuristic).
+pub fn demo(name: &str) -> Option<(BlobTree, BlobTree, MorphSpec)> {
+    let (a, b) = match name {
+        "cube_sphere" => (rounded_cube(), pierced_sphere()),
+        "sphere_propeller" => (sphere(), propeller()),
+        "rook_queen" => (rook(), queen()),
+        "bear_bird" => (bear(), bird()),
+        _ => return None,
+    };
+    Some((a, b, MorphSpec::default()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::BlobMorph;
+    use isomorph_common::{Field3, Morph};
+
+    fn components(m: &BlobMorph, t: f32, res: u32) -> usize {
+        m.frame_mesh(t, res).unwrap().connected_components()
+    }
+
+    #[test]
+    fn every_demo_builds_and_reproduces_its_ends() {
+        for name in DEMOS {
+            let (a, b, spec) = demo(name).unwrap();
+            let m = BlobMorph::new(&a, &b, &spec).unwrap();
+            let (f0, f1) = (m.frame(0.0).unwrap().field, m.frame(1.0).unwrap().field);
+            for i in 0..300 {
+                let p = Vec3::new((i as f32 * 0.37).sin(), (i as f32 * 0.61).cos(), (i as f32 * 0.23).sin())
+                    * 1.1;
+                assert!((f0.value(p) - a.value(p)).abs() < 1e-5, "{name} C(0) at {p}");
+                assert!((f1.value(p) - b.value(p)).abs() < 1e-5, "{name} C(1) at {p}");
+            }
+            for k in 0..=10 {
+                let f = m.frame(k as f32 / 10.0).unwrap().field;
+                assert!(f.value(Vec3::new(0.1, 0.2, 0.3)).is_finite(), "{name}");
+            }
+        }
+        assert!(demo("teapot").is_none());
+    }
+
+    #[test]
+    fn pierced_sphere_has_genus_five() {
+        let (a, b, spec) = demo("cube_sphere").unwrap();
+        let m = BlobMorph::new(&a, &b, &spec).unwrap();
+        let start = m.frame_mesh(0.0, 48).unwrap();
+        let end = m.frame_mesh(1.0, 48).unwrap();
+        assert_eq!(start.genus(), Some(0));
+        // Three crossing tunnels open the ball in six places: genus 6 − 1.
+        assert_eq!(end.genus(), Some(5), "three orthogonal crossing holes");
+        assert_eq!(end.connected_components(), 1);
+        // The same through the tree's own mesher.
+        assert_eq!(pierced_sphere().mesh(48).unwrap().genus(), Some(5));
+        assert_eq!(rounded_cube().mesh(24).unwrap().genus(), Some(0));
+    }
+
+    /// Every rook → queen frame is one piece (nothing pops out of thin air).
+    #[test]
+    fn rook_to_queen_frames_are_single_components() {
+        let (a, b, spec) = demo("rook_queen").unwrap();
+        let m = BlobMorph::new(&a, &b, &spec).unwrap();
+        for k in 0..=8 {
+            let t = k as f32 / 8.0;
+            assert_eq!(components(&m, t, 40), 1, "frame t = {t}");
+        }
+    }
+}

@@ -1,0 +1,461 @@
+//! The evaluable BlobTree: validated, with a bounding box per subtree,
+//! implementing [`Field3`] as `potential − T` (positive inside).
+//!
+//! **Pruning is exact.** Every primitive's field is exactly zero at distance
+//! ≥ `R` from its skeleton (the L^p ball of radius `R` lies in the L^∞ box
+//! of half-size `R`), every operator maps all-zero children to zero, so a
+//! subtree contributes exactly `0.0` outside its box and skipping it never
+//! changes a value ([`BlobTree::set_pruning`] switches it off for comparison).
+//! Boxes: union/blend of children, intersection of children for `∩`, the
+//! left child's for a difference, the image box for a warp.
+
+use crate::error::BlobError;
+use crate::kernel::Kernel;
+use crate::node::{NaryOp, Node};
+use crate::skeleton::Polytope;
+use crate::warp::Warp;
+use glam::{Affine3A, Mat3, Vec3};
+use isomorph_common::{Aabb, Field3};
+
+/// Children per node kept on the stack during evaluation; larger nodes fall
+/// back to a heap buffer.
+const STACK_CHILDREN: usize = 16;
+
+#[derive(Debug, Clone)]
+struct Leaf {
+    poly: Polytope,
+    kernel: Kernel,
+    p: f32,
+    to_local: Affine3A,
+    /// Transposed linear part of `to_local` (maps local gradients to world).
+    grad_map: Mat3,
+}
+
+#[derive(Debug, Clone)]
+enum Op {
+    Leaf(Box<Leaf>),
+    Nary(NaryOp),
+    Mix(NaryOp, NaryOp, f32),
+    Difference(f32),
+    Warp(Warp),
+}
+
+#[derive(Debug, Clone)]
+struct Compiled {
+    bounds: Aabb,
+    op: Op,
+    children: Vec<Compiled>,
+}
+
+/// An evaluable BlobTree with threshold `T`; its [`Field3`] value is
+/// `potential(p) − T`.
+#[derive(Debug, Clone)]
+pub struct BlobTree {
+    root: Node,
+    threshold: f32,
+    compiled: Compiled,
+    pruning: bool,
+}
+
+impl BlobTree {
+    /// Validates and compiles `root` with iso threshold `threshold`.
+    ///
+    /// # Errors
+    /// [`BlobError::InvalidThreshold`] unless `threshold` is finite and > 0;
+    /// [`BlobError::InvalidNode`] (with the node's path) for any invalid node.
+    pub fn new(root: Node, threshold: f32) -> Result<Self, BlobError> {
+        if !(threshold.is_finite() && threshold > 0.0) {
+            return Err(BlobError::InvalidThreshold(threshold));
+        }
+        root.validate()?;
+        let compiled = compile(&root);
+        Ok(Self { root, threshold, compiled, pruning: true })
+    }
+
+    /// The tree description.
+    pub fn root(&self) -> &Node {
+        &self.root
+    }
+
+    /// The iso threshold `T`.
+    pub fn threshold(&self) -> f32 {
+        self.threshold
+    }
+
+    /// Turns bounding-box pruning on (default) or off. Values are identical
+    /// either way; only the speed differs.
+    pub fn set_pruning(&mut self, on: bool) {
+        self.pruning = on;
+    }
+
+    /// The box outside of which the potential is exactly zero.
+    pub fn support(&self) -> Aabb {
+        self.compiled.bounds
+    }
+
+    /// Polygonizes the surface `potential = T` with marching cubes over the
+    /// support box (padded by 5 %), `res` samples along its longest edge.
+    ///
+    /// # Errors
+    /// As [`isomorph_common::marching_cubes::polygonize`] (grid too small or too large).
+    pub fn mesh(&self, res: u32) -> Result<isomorph_common::TriMesh, isomorph_common::GridError> {
+        isomorph_common::marching_cubes::polygonize(self, &self.support().padded(0.05), res, 0.0)
+    }
+
+    /// The potential (before subtracting `T`) at `p`.
+    pub fn potential(&self, p: Vec3) -> f32 {
+        self.eval::<false>(&self.compiled, p).0
+    }
+
+    /// The potential and its gradient at `p` (analytic except under bends).
+    pub fn potential_gradient(&self, p: Vec3) -> (f32, Vec3) {
+        self.eval::<true>(&self.compiled, p)
+    }
+
+    fn eval<const G: bool>(&self, node: &Compiled, p: Vec3) -> (f32, Vec3) {
+        if self.pruning && !node.bounds.contains(p) {
+            return (0.0, Vec3::ZERO);
+        }
+        match &node.op {
+            Op::Leaf(leaf) => {
+                let x = leaf.to_local.transform_point3(p);
+                if G {
+                    let (d, dgrad) = leaf.poly.distance(x, leaf.p);
+                    if d >= leaf.kernel.radius {
+                        return (0.0, Vec3::ZERO);
+                    }
+                    let (v, dv) = leaf.kernel.value_derivative(d);
+                    (v, leaf.grad_map * (dgrad * dv))
+                } else {
+                    let d = leaf.poly.lp_distance(x, leaf.p);
+                    if d >= leaf.kernel.radius {
+                        return (0.0, Vec3::ZERO);
+                    }
+                    (leaf.kernel.value(d), Vec3::ZERO)
+                }
+            }
+            Op::Nary(op) => self.nary::<G>(node, p, *op, None),
+            Op::Mix(a, b, s) => self.nary::<G>(node, p, *a, Some((*b, *s))),
+            Op::Difference(c) => {
+                let (fl, gl) = self.eval::<G>(&node.children[0], p);
+                let (fr, gr) = self.eval::<G>(&node.children[1], p);
+                difference::<G>(fl, gl, fr, gr, *c)
+            }
+            Op::Warp(w) => {
+                if G {
+                    let (q, jt) = w.inverse_with_jacobian_t(p);
+                    let (v, g) = self.eval::<G>(&node.children[0], q);
+                    (v, jt * g)
+                } else {
+                    self.eval::<G>(&node.children[0], w.inverse(p))
+                }
+            }
+        }
+    }
+
+    fn nary<const G: bool>(
+        &self,
+        node: &Compiled,
+        p: Vec3,
+        op: NaryOp,
+        mix: Option<(NaryOp, f32)>,
+    ) -> (f32, Vec3) {
+        if !G && mix.is_none() {
+            // Streaming value-only path for the plain operators (same order
+            // of operations as `NaryOp::apply`, so identical results).
+            let it = node.children.iter().map(|c| self.eval::<false>(c, p).0);
+            match op {
+                NaryOp::Blend => return (it.fold(0.0, |a, v| a + v), Vec3::ZERO),
+                NaryOp::Union => {
+                    return (it.fold(f32::NEG_INFINITY, |a, v| if v > a { v } else { a }), Vec3::ZERO);
+                }
+                NaryOp::Intersection => {
+                    return (it.fold(f32::INFINITY, |a, v| if v < a { v } else { a }), Vec3::ZERO);
+                }
+                NaryOp::SuperBlend(_) => {}
+            }
+        }
+        let n = node.children.len();
+        let mut vs = [0.0f32; STACK_CHILDREN];
+        let mut gs = [Vec3::ZERO; STACK_CHILDREN];
+        let (mut vh, mut gh) = (Vec::new(), Vec::new());
+        let (vals, grads): (&mut [f32], &mut [Vec3]) = if n <= STACK_CHILDREN {
+            (&mut vs[..n], &mut gs[..n])
+        } else {
+            vh.resize(n, 0.0);
+            gh.resize(n, Vec3::ZERO);
+            (&mut vh[..], &mut gh[..])
+        };
+        for (i, c) in node.children.iter().enumerate() {
+            let (v, g) = self.eval::<G>(c, p);
+            vals[i] = v;
+            grads[i] = g;
+        }
+        let mut ga = Vec3::ZERO;
+        let fa = op.apply(vals, if G { Some((grads, &mut ga)) } else { None });
+        match mix {
+            None => (fa, ga),
+            Some((to, s)) => {
+                let mut gb = Vec3::ZERO;
+                let fb = to.apply(vals, if G { Some((grads, &mut gb)) } else { None });
+                ((1.0 - s) * fa + s * fb, (1.0 - s) * ga + s * gb)
+            }
+        }
+    }
+}
+
+/// The difference operator with reference level `c` (see [`Node::Difference`]).
+#[inline]
+fn difference<const G: bool>(fl: f32, gl: Vec3, fr: f32, gr: Vec3, c: f32) -> (f32, Vec3) {
+    if c <= 0.0 {
+        // A fully phantom difference (all intensities and the level scaled to 0).
+        return (0.0, Vec3::ZERO);
+    }
+    let (cut, gcut) = if fl <= 2.0 * c {
+        (2.0 * c - fr, -gr)
+    } else {
+        let w = 1.0 - fr / c;
+        (c + (fl - c) * w, gl * w - gr * ((fl - c) / c))
+    };
+    let (v, g) = if fl <= cut { (fl, gl) } else { (cut, gcut) };
+    if v <= 0.0 { (0.0, Vec3::ZERO) } else { (v, if G { g } else { Vec3::ZERO }) }
+}
+
+fn compile(node: &Node) -> Compiled {
+    match node {
+        Node::Primitive(prim) => {
+            // Validated by the caller.
+            let poly = prim.skeleton.polytope().expect("validated skeleton");
+            let r = prim.kernel.radius;
+            let bounds = poly.bounds().expanded(r).transformed(&prim.frame);
+            let to_local = prim.frame.inverse();
+            let leaf = Leaf {
+                poly,
+                kernel: prim.kernel,
+                p: prim.p,
+                to_local,
+                grad_map: Mat3::from(to_local.matrix3).transpose(),
+            };
+            Compiled { bounds, op: Op::Leaf(Box::new(leaf)), children: Vec::new() }
+        }
+        Node::Nary { op, children } => {
+            let children: Vec<Compiled> = children.iter().map(compile).collect();
+            let bounds = nary_bounds(*op, &children);
+            Compiled { bounds, op: Op::Nary(*op), children }
+        }
+        Node::Mix { from, to, s, children } => {
+            let children: Vec<Compiled> = children.iter().map(compile).collect();
+            let a = nary_bounds(*from, &children);
+            let b = nary_bounds(*to, &children);
+            let bounds = if *s == 0.0 {
+                a
+            } else if *s == 1.0 {
+                b
+            } else {
+                a.union(&b)
+            };
+            Compiled { bounds, op: Op::Mix(*from, *to, *s), children }
+        }
+        Node::Difference { left, right, level } => {
+            let children = vec![compile(left), compile(right)];
+            Compiled { bounds: children[0].bounds, op: Op::Difference(*level), children }
+        }
+        Node::Warp { warp, child } => {
+            let c = compile(child);
+            Compiled { bounds: warp.image_bounds(&c.bounds), op: Op::Warp(*warp), children: vec![c] }
+        }
+    }
+}
+
+fn nary_bounds(op: NaryOp, children: &[Compiled]) -> Aabb {
+    match op {
+        NaryOp::Intersection => children
+            .iter()
+            .fold(Aabb::new(Vec3::splat(-f32::MAX), Vec3::splat(f32::MAX)), |b, c| b.intersection(&c.bounds)),
+        _ => children.iter().fold(Aabb::EMPTY, |b, c| b.union(&c.bounds)),
+    }
+}
+
+impl Field3 for BlobTree {
+    /// `potential(p) − T`: positive inside.
+    fn value(&self, p: Vec3) -> f32 {
+        self.potential(p) - self.threshold
+    }
+
+    /// The analytic gradient of the potential (bends by central differences).
+    fn gradient(&self, p: Vec3) -> Vec3 {
+        self.potential_gradient(p).1
+    }
+
+    /// Batch evaluation: when the whole batch misses the support box the
+    /// answer is `−T` everywhere without touching the tree.
+    fn values(&self, points: &[Vec3], out: &mut [f32]) {
+        assert_eq!(points.len(), out.len(), "values: points and out differ in length");
+        if self.pruning {
+            let batch = Aabb::from_points(points);
+            if batch.intersection(&self.compiled.bounds).is_empty() {
+                out.fill(-self.threshold);
+                return;
+            }
+        }
+        for (o, &p) in out.iter_mut().zip(points) {
+            *o = self.potential(p) - self.threshold;
+        }
+    }
+
+    fn bounds(&self) -> Option<Aabb> {
+        Some(self.compiled.bounds)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testutil;
+    use crate::{Kernel, Primitive, Skeleton};
+    use proptest::prelude::*;
+
+    fn euclidean(n: &Node) -> Node {
+        match n {
+            Node::Primitive(p) => Node::Primitive(p.clone().with_p(2.0)),
+            Node::Nary { op, children } => {
+                Node::Nary { op: *op, children: children.iter().map(euclidean).collect() }
+            }
+            Node::Mix { .. } => n.clone(),
+            Node::Difference { left, right, level } => {
+                Node::difference(euclidean(left), euclidean(right), *level)
+            }
+            Node::Warp { warp, child } => Node::Warp { warp: *warp, child: Box::new(euclidean(child)) },
+        }
+    }
+
+    fn ball(c: Vec3, r: f32) -> Node {
+        Node::Primitive(Primitive::new(Skeleton::Point(c), Kernel::new(1.0, r, 1.0)))
+    }
+
+    #[test]
+    fn primitive_fields_match_closed_forms() {
+        let k = Kernel::new(1.5, 2.0, 0.5);
+        let seg = Primitive::new(Skeleton::Segment(Vec3::ZERO, Vec3::Z), k)
+            .with_frame(Affine3A::from_translation(Vec3::new(1.0, 0.0, 0.0)));
+        let tree = BlobTree::new(Node::Primitive(seg), 0.5).unwrap();
+        // Distance from (1, 0.7, 0.5) to the translated segment is 0.7.
+        let v = tree.potential(Vec3::new(1.0, 0.7, 0.5));
+        assert!((v - k.value(0.7)).abs() < 1e-6);
+        assert!((tree.value(Vec3::new(1.0, 0.7, 0.5)) - (k.value(0.7) - 0.5)).abs() < 1e-6);
+        // Box skeleton with p = ∞: the field depends on the max-norm offset.
+        let cube = Primitive::new(Skeleton::cuboid(Vec3::splat(0.5)), k).with_p(f32::INFINITY);
+        let tree = BlobTree::new(Node::Primitive(cube), 0.5).unwrap();
+        assert!((tree.potential(Vec3::new(1.2, 0.9, -0.3)) - k.value(0.7)).abs() < 1e-6);
+        assert_eq!(tree.potential(Vec3::new(0.1, 0.2, 0.3)), 1.5);
+    }
+
+    #[test]
+    fn operators_combine_as_printed() {
+        let (a, b) = (ball(Vec3::ZERO, 1.0), ball(Vec3::X * 0.5, 1.0));
+        let p = Vec3::new(0.2, 0.3, 0.0);
+        let fa = BlobTree::new(a.clone(), 0.5).unwrap().potential(p);
+        let fb = BlobTree::new(b.clone(), 0.5).unwrap().potential(p);
+        let eval = |n: Node| BlobTree::new(n, 0.5).unwrap().potential(p);
+        assert!((eval(Node::blend(vec![a.clone(), b.clone()])) - (fa + fb)).abs() < 1e-6);
+        assert_eq!(eval(Node::union(vec![a.clone(), b.clone()])), fa.max(fb));
+        assert_eq!(eval(Node::intersection(vec![a.clone(), b.clone()])), fa.min(fb));
+        let n = 3.0;
+        let sb = (fa.powf(n) + fb.powf(n)).powf(1.0 / n);
+        assert!((eval(Node::super_blend(n, vec![a.clone(), b.clone()])) - sb).abs() < 1e-6);
+        assert!((eval(Node::super_blend(1.0, vec![a.clone(), b.clone()])) - (fa + fb)).abs() < 1e-6);
+        assert_eq!(eval(Node::super_blend(f32::INFINITY, vec![a.clone(), b.clone()])), fa.max(fb));
+        // Difference below 2T is the classical min(f_L, 2T − f_R).
+        let d = eval(Node::difference(a.clone(), b.clone(), 0.5));
+        assert!((d - fa.min(1.0 - fb).max(0.0)).abs() < 1e-6);
+        // A phantom right child is neutral.
+        assert_eq!(eval(Node::difference(a.clone(), b.phantom(), 0.5)), fa);
+        // Twist about z of a point on the axis changes nothing there.
+        let w = Node::warp(Warp::Twist { rate: 2.0 }, a.clone());
+        assert_eq!(eval(w), fa);
+        // Consecutive affine maps are concatenated into one node.
+        let m1 = Affine3A::from_translation(Vec3::X);
+        let m2 = Affine3A::from_scale(Vec3::splat(2.0));
+        let n = Node::affine(m1, Node::affine(m2, a));
+        assert!(matches!(&n, Node::Warp { child, .. } if matches!(**child, Node::Primitive(_))));
+    }
+
+    #[test]
+    fn invalid_nodes_report_their_path() {
+        let bad = Node::blend(vec![ball(Vec3::ZERO, 1.0), Node::union(vec![ball(Vec3::X, -1.0)])]);
+        let err = BlobTree::new(bad, 0.5).unwrap_err();
+        match err {
+            BlobError::InvalidNode { path, problem } => {
+                assert_eq!(path.0, vec![1, 0]);
+                assert!(matches!(problem, crate::NodeProblem::NonPositiveRadius(_)));
+            }
+            e => panic!("{e}"),
+        }
+        assert!(matches!(BlobTree::new(Node::union(vec![]), 0.5), Err(BlobError::InvalidNode { .. })));
+        assert!(matches!(
+            BlobTree::new(ball(Vec3::ZERO, 1.0), f32::NAN),
+            Err(BlobError::InvalidThreshold(_))
+        ));
+        let lp = Node::Primitive(Primitive::new(Skeleton::Point(Vec3::ZERO), Kernel::default()).with_p(0.5));
+        assert!(matches!(
+            BlobTree::new(lp, 0.5),
+            Err(BlobError::InvalidNode { problem: crate::NodeProblem::ExponentBelowOne(_), .. })
+        ));
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+
+        /// Pruning never changes a value (bit-identical), and the support box
+        /// really bounds the non-zero potential.
+        #[test]
+        fn pruned_equals_unpruned(node in testutil::tree()) {
+            let pruned = BlobTree::new(node, 0.5).unwrap();
+            let mut full = pruned.clone();
+            full.set_pruning(false);
+            let support = pruned.support();
+            for p in testutil::points() {
+                let (a, b) = (pruned.potential(p), full.potential(p));
+                prop_assert_eq!(a, b, "at {}", p);
+                if !support.contains(p) {
+                    prop_assert_eq!(b, 0.0);
+                }
+            }
+            let pts = testutil::points();
+            let mut out = vec![0.0; pts.len()];
+            pruned.values(&pts, &mut out);
+            for (o, p) in out.iter().zip(&pts) {
+                prop_assert_eq!(*o, full.value(*p));
+            }
+        }
+
+        /// Analytic gradients agree with central differences away from kinks
+        /// (Euclidean metric: the L^∞ and L^1 fields have kinks along ridges).
+        #[test]
+        fn gradients_match_differences(node in testutil::tree()) {
+            let tree = BlobTree::new(euclidean(&node), 0.5).unwrap();
+            let h = 1e-3f32;
+            let mut checked = 0;
+            for p in testutil::points().into_iter().step_by(7) {
+                let (v, g) = tree.potential_gradient(p);
+                if v <= 0.0 { continue; }
+                let fd = Vec3::new(
+                    tree.potential(p + Vec3::X * h) - tree.potential(p - Vec3::X * h),
+                    tree.potential(p + Vec3::Y * h) - tree.potential(p - Vec3::Y * h),
+                    tree.potential(p + Vec3::Z * h) - tree.potential(p - Vec3::Z * h),
+                ) / (2.0 * h);
+                // Skip points at kinks (min/max switches, skeleton edges):
+                // there one-sided slopes differ.
+                let fd2 = Vec3::new(
+                    tree.potential(p + Vec3::X * 2.0 * h) - tree.potential(p - Vec3::X * 2.0 * h),
+                    tree.potential(p + Vec3::Y * 2.0 * h) - tree.potential(p - Vec3::Y * 2.0 * h),
+                    tree.potential(p + Vec3::Z * 2.0 * h) - tree.potential(p - Vec3::Z * 2.0 * h),
+                ) / (4.0 * h);
+                if (fd - fd2).length() > 1e-2 * (1.0 + fd.length()) { continue; }
+                checked += 1;
+                prop_assert!((g - fd).length() < 3e-2 * (1.0 + fd.length()), "at {}: {} vs {}", p, g, fd);
+            }
+            let _ = checked;
+        }
+    }
+}
