@@ -30,6 +30,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         (Method::Baseline, "ball", "c-shape", Align::None, "baseline_ball_to_c"),
         (Method::LevelSet, "ball", "c-shape", Align::None, "level_set_ball_to_c"),
         (Method::LevelSet, "mug", "chain", Align::Auto, "level_set_mug_to_chain"),
+        (Method::Blobtree, "rook", "queen", Align::None, "blobtree_rook_to_queen"),
     ];
     for (method, source, target, align, folder) in demos {
         let morph_args = MorphArgs {
@@ -45,6 +46,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
             solver: Solver::Sparse,
             curvature: None,
             report: false,
+            links: None,
         };
         let report = morph(&morph_args)?;
         print_summary(&report, &morph_args);

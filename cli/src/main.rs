@@ -3,6 +3,7 @@
 //! lists the commands.
 
 mod align;
+mod blob;
 mod demo;
 mod info;
 mod inputs;
@@ -37,6 +38,8 @@ enum Command {
     /// Align a source onto a target by their moments: print the map as JSON
     /// and write the aligned source mesh.
     Align(align::AlignArgs),
+    /// Polygonize one BlobTree (scene file or built-in) and preview it.
+    Blob(blob::BlobArgs),
     /// Warp a shape or mesh with True's trivariate B-spline volume warp: drag
     /// surface points or move control points; writes the warped volume
     /// (.npy), meshes and a before/after PNG.
@@ -52,6 +55,7 @@ fn main() -> ExitCode {
         Command::Sdf(args) => sdf::run(&args),
         Command::Align(args) => align::run(&args),
         Command::Warp(args) => warp::run(&args),
+        Command::Blob(args) => blob::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

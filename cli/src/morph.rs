@@ -1,12 +1,14 @@
 //! `isomorph morph`: morph a source into a target with a chosen method.
 
+use crate::blob;
 use crate::inputs::{Input, morph_bounds};
 use crate::level_set::{self, Align, Solver};
 use crate::progress::FrameBar;
-use anyhow::Context;
+use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 use isomorph_common::export::{ExportSettings, Report, export_sequence};
 use isomorph_common::mesh::io::MeshFormat;
+use isomorph_blobtree::BlobMorph;
 use isomorph_common::morph::{DistanceBlend, Morph};
 use std::path::PathBuf;
 
@@ -19,6 +21,9 @@ pub enum Method {
     /// Breen & Whitaker's level-set morph: the source surface moves along
     /// its normals with the target's signed distance as speed.
     LevelSet,
+    /// Galin, Leclercq & Akkouche's BlobTree morph: source and target are
+    /// BlobTree scenes (.ron/.json files or built-in names).
+    Blobtree,
 }
 
 /// Mesh formats for the frames.
@@ -46,7 +51,9 @@ pub struct MorphArgs {
     #[arg(long, value_enum, default_value_t = Method::Baseline)]
     pub method: Method,
     /// Source: a built-in shape (sphere, torus, ball, c-shape, mug, chain,
-    /// cube) or a mesh file (.obj, .ply, .stl; closed and outward oriented).
+    /// cube, bunny) or a mesh file (.obj, .ply, .stl; closed and outward
+    /// oriented); for `--method blobtree`, a BlobTree scene (.ron, .json or a
+    /// built-in scene such as rook).
     #[arg(long)]
     pub source: String,
     /// Target: a built-in shape or a mesh file, as for --source.
@@ -73,6 +80,10 @@ pub struct MorphArgs {
     /// evolving surface away from the target (Yang & Jüttler's weighting).
     #[arg(long, value_parser = parse_weight)]
     pub curvature: Option<f32>,
+    /// BlobTree only: the animator's links, speed curves and trajectories
+    /// (a RON or JSON morph spec); automatic correspondence without it.
+    #[arg(long)]
+    pub links: Option<PathBuf>,
     /// Output folder for frames, contact_sheet.png and report.json.
     #[arg(long, default_value = "out/morph")]
     pub out: PathBuf,
@@ -105,22 +116,30 @@ pub fn run(args: &MorphArgs) -> anyhow::Result<()> {
 
 /// Builds the inputs, runs the morph and exports it; returns the report.
 pub fn morph(args: &MorphArgs) -> anyhow::Result<Report> {
-    let source = Input::parse(&args.source, !args.keep_scale)?;
-    let target = Input::parse(&args.target, !args.keep_scale)?;
-    let bounds = morph_bounds(&source, &target);
     let reference_res = (2 * args.res).min(256);
-    let settings = ExportSettings {
+    let mut settings = ExportSettings {
         frames: args.frames as usize,
         resolution: args.res,
         out_dir: args.out.clone(),
         format: args.format.into(),
-        source_reference: Some(source.reference(reference_res)?),
-        target_reference: Some(target.reference(reference_res)?),
         ..ExportSettings::default()
     };
     let label = format!("{:?}", args.method).to_lowercase();
+    if args.method == Method::Blobtree {
+        let (a, b) = (blob::load_tree(&args.source)?, blob::load_tree(&args.target)?);
+        let spec = blob::load_spec(args.links.as_deref())?;
+        settings.source_reference = Some(a.mesh(reference_res)?);
+        settings.target_reference = Some(b.mesh(reference_res)?);
+        let morph = BlobMorph::new(&a, &b, &spec).context("cannot set up the BlobTree morph")?;
+        return export(&morph, &settings, &label);
+    }
+    let source = Input::parse(&args.source, !args.keep_scale)?;
+    let target = Input::parse(&args.target, !args.keep_scale)?;
+    settings.source_reference = Some(source.reference(reference_res)?);
+    settings.target_reference = Some(target.reference(reference_res)?);
     match args.method {
         Method::Baseline => {
+            let bounds = morph_bounds(&source, &target);
             let morph = DistanceBlend::from_fields(source.field(), target.field(), &bounds, args.res)
                 .context("cannot set up the baseline morph")?;
             export(&morph, &settings, &label)
@@ -134,6 +153,7 @@ pub fn morph(args: &MorphArgs) -> anyhow::Result<Report> {
             };
             export(&level_set::build(&source, &target, &options)?, &settings, &label)
         }
+        Method::Blobtree => bail!("BlobTree morphs take BlobTree scenes"),
     }
 }
 
