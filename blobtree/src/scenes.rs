@@ -7,10 +7,12 @@
 //! |---|---|---|
 //! | `cube_sphere` | rounded cube → sphere minus three axis-aligned boxes (Fig. 17) | primitive ↔ difference: a difference with a phantom subtrahend is inserted; L^∞ box holes; change of genus |
 //! | `sphere_propeller` | sphere → twisted blend of two rounded rods (Fig. 19) | identity twist inserted, sphere split into two α-weighted copies |
-//! | `rook_queen` | rook → queen (Fig. 21) | difference ↔ difference (slots ↔ eight spherical carvings), identity taper inserted, polygon ↔ point skeletons |
+//! | `rook_queen` | rook → queen (Fig. 21) | difference ↔ difference (each slot linked to four of the eight spherical carvings, replicated under the union), identity taper inserted, polygon ↔ point skeletons, per-node speed curves |
 //! | `bear_bird` | blob bear → blob bird (Fig. 2) | nearest-centre matching of many blended primitives, segments ↔ polygons |
 
-use crate::generic::MorphSpec;
+use crate::correspond::Link;
+use crate::error::NodePath;
+use crate::generic::{MorphSpec, Speed, SpeedCurve};
 use crate::kernel::Kernel;
 use crate::node::{Node, Primitive};
 use crate::skeleton::Skeleton;
@@ -113,7 +115,7 @@ pub fn queen() -> BlobTree {
     let carvings = (0..8)
         .map(|i| {
             let a = std::f32::consts::TAU * (i as f32 + 0.5) / 8.0;
-            ball(Vec3::new(0.42 * a.cos(), 0.42 * a.sin(), 1.0), 0.36)
+            ball(Vec3::new(0.45 * a.cos(), 0.45 * a.sin(), 0.95), 0.3)
         })
         .collect();
     tree(Node::union(vec![
@@ -155,7 +157,9 @@ pub fn bird() -> BlobTree {
 }
 
 /// A built-in morph by name (one of [`DEMOS`]): source, target and the
-/// animator's spec (default links, nearest-centre heuristic).
+/// animator's spec (nearest-centre heuristic; `rook_queen` adds links from
+/// each slot to the four carvings along its axis, and speed curves that
+/// shape the carvings during the first half).
 pub fn demo(name: &str) -> Option<(BlobTree, BlobTree, MorphSpec)> {
     let (a, b) = match name {
         "cube_sphere" => (rounded_cube(), pierced_sphere()),
@@ -164,7 +168,21 @@ pub fn demo(name: &str) -> Option<(BlobTree, BlobTree, MorphSpec)> {
         "bear_bird" => (bear(), bird()),
         _ => return None,
     };
-    Some((a, b, MorphSpec::default()))
+    let mut spec = MorphSpec::default();
+    if name == "rook_queen" {
+        // Animator links: the slot along x splits into the four carvings
+        // nearest the x axis, the slot along y into the other four; the
+        // carvings take shape ahead of the rest (per-node speed curves, §4.4)
+        // so no cutter ever severs the crown's tip.
+        for (slot, carvings) in [(0usize, [0usize, 3, 4, 7]), (1, [1, 2, 5, 6])] {
+            for c in carvings {
+                let (a, b) = (NodePath(vec![1, 1, slot]), NodePath(vec![1, 1, c]));
+                spec.links.push(Link { a: a.clone(), b: b.clone() });
+                spec.speeds.push(SpeedCurve { a, b, speed: Speed { start: 0.0, end: 0.5, smooth: false } });
+            }
+        }
+    }
+    Some((a, b, spec))
 }
 
 #[cfg(test)]
@@ -217,8 +235,8 @@ mod tests {
     fn rook_to_queen_frames_are_single_components() {
         let (a, b, spec) = demo("rook_queen").unwrap();
         let m = BlobMorph::new(&a, &b, &spec).unwrap();
-        for k in 0..=8 {
-            let t = k as f32 / 8.0;
+        for k in 0..=40 {
+            let t = k as f32 / 40.0;
             assert_eq!(components(&m, t, 40), 1, "frame t = {t}");
         }
     }

@@ -29,6 +29,8 @@ pub enum Warp {
     /// Barr's bend in the y–z plane: the band `y ∈ [min, max]` bends around
     /// the axis at `z = 1/rate` with angle `rate · (y − centre)`; beyond the
     /// band the shape is carried rigidly. Requires `|rate|·(max − min) ≤ π`.
+    /// The inverse is exact for points whose pre-image lies on the near side
+    /// of the bend axis (`z < 1/rate`); keep the warped subtree there, as Barr does.
     Bend {
         /// Curvature (radians per unit length); negative bends towards −z.
         rate: f32,
