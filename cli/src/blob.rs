@@ -48,13 +48,30 @@ pub fn load_tree(spec: &str) -> anyhow::Result<BlobTree> {
     tree.with_context(|| format!("invalid scene {spec}"))
 }
 
+/// The built-in morphs of [`scenes::DEMOS`] by their source and target scene
+/// names.
+const DEMO_PAIRS: [(&str, &str, &str); 4] = [
+    ("rounded_cube", "pierced_sphere", "cube_sphere"),
+    ("sphere", "propeller", "sphere_propeller"),
+    ("rook", "queen", "rook_queen"),
+    ("bear", "bird", "bear_bird"),
+];
+
 /// The animator's morph spec (links, speed curves, trajectories) from a
-/// `.ron` or `.json` file, or the default (automatic correspondence).
+/// `.ron` or `.json` file; without one, the built-in spec of a built-in pair
+/// (e.g. rook → queen, whose links and speed curves keep it in one piece),
+/// else the default (automatic correspondence).
 ///
 /// # Errors
 /// Unreadable or malformed files.
-pub fn load_spec(path: Option<&Path>) -> anyhow::Result<MorphSpec> {
-    let Some(path) = path else { return Ok(MorphSpec::default()) };
+pub fn load_spec(path: Option<&Path>, source: &str, target: &str) -> anyhow::Result<MorphSpec> {
+    let Some(path) = path else {
+        let demo = DEMO_PAIRS.iter().find(|(a, b, _)| (*a, *b) == (source, target));
+        return Ok(demo
+            .and_then(|(_, _, name)| scenes::demo(name))
+            .map(|(_, _, spec)| spec)
+            .unwrap_or_default());
+    };
     let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
     let spec = match path.extension().and_then(|e| e.to_str()) {
         Some("json") => MorphSpec::from_json(&text),

@@ -6,9 +6,9 @@ use crate::level_set::{self, Align, Solver};
 use crate::progress::FrameBar;
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
+use isomorph_blobtree::BlobMorph;
 use isomorph_common::export::{ExportSettings, Report, export_sequence};
 use isomorph_common::mesh::io::MeshFormat;
-use isomorph_blobtree::BlobMorph;
 use isomorph_common::morph::{DistanceBlend, Morph};
 use std::path::PathBuf;
 
@@ -127,7 +127,7 @@ pub fn morph(args: &MorphArgs) -> anyhow::Result<Report> {
     let label = format!("{:?}", args.method).to_lowercase();
     if args.method == Method::Blobtree {
         let (a, b) = (blob::load_tree(&args.source)?, blob::load_tree(&args.target)?);
-        let spec = blob::load_spec(args.links.as_deref())?;
+        let spec = blob::load_spec(args.links.as_deref(), &args.source, &args.target)?;
         settings.source_reference = Some(a.mesh(reference_res)?);
         settings.target_reference = Some(b.mesh(reference_res)?);
         let morph = BlobMorph::new(&a, &b, &spec).context("cannot set up the BlobTree morph")?;

@@ -52,6 +52,13 @@ fn demo_writes_frames_sheet_and_report() {
     }
     assert!(level_set["endpoints"]["target"]["mean_voxels"].as_f64().unwrap() < 0.5);
     assert!(out.join("level_set_mug_to_chain/contact_sheet.png").is_file());
+    // The rook becomes the queen in one piece (its built-in links and speeds).
+    let blob: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("blobtree_rook_to_queen/report.json")).unwrap())
+            .unwrap();
+    for f in blob["frames"].as_array().unwrap() {
+        assert_eq!(f["components"], 1, "{f}");
+    }
     // The warped bunny: the ear tip was dragged up by 2.5 units.
     let ear = out.join("warp_bunny_ear");
     assert!(ear.join("before_after.png").is_file());
@@ -385,5 +392,61 @@ fn warp_takes_npy_and_raw_volumes() {
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("--raw-dims"));
     let o = isomorph(&[&args[..], &["--raw-dims", "24,24,23"]].concat());
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("bytes"));
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
+fn blob_polygonizes_a_scene_and_morph_takes_blobtrees() {
+    let out = scratch("blob");
+    std::fs::create_dir_all(&out).unwrap();
+    let scene = out.join("capsule.ron");
+    std::fs::write(
+        &scene,
+        r#"(root: (kind: "segment", vertices: [(-0.5, 0, 0), (0.5, 0, 0)], radius: 0.6))"#,
+    )
+    .unwrap();
+    let o = isomorph(&[
+        "blob",
+        scene.to_str().unwrap(),
+        "--res",
+        "32",
+        "--out",
+        out.join("one").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mesh = isomorph_common::mesh::io::read_mesh(out.join("one/surface.ply")).unwrap();
+    assert_eq!((mesh.connected_components(), mesh.genus()), (1, Some(0)));
+    assert!(out.join("one/preview.png").is_file());
+    // The capsule into the built-in rook, automatic correspondence.
+    let frames = out.join("morph");
+    let o = isomorph(&[
+        "morph",
+        "--method",
+        "blobtree",
+        "--source",
+        scene.to_str().unwrap(),
+        "--target",
+        "rook",
+        "--res",
+        "32",
+        "--frames",
+        "3",
+        "--report",
+        "--out",
+        frames.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(report["method"], "blobtree");
+    for end in ["source", "target"] {
+        let e = &report["endpoints"][end];
+        assert!(e["mean_voxels"].as_f64().unwrap() < 0.5, "{end}: {e}");
+    }
+    // A scene with a negative radius is one error line naming the node.
+    std::fs::write(&scene, r#"(root: (kind: "point", vertices: [(0, 0, 0)], radius: -1.0))"#).unwrap();
+    let o = isomorph(&["blob", scene.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("radius") && err.lines().count() == 1, "{err}");
     let _ = std::fs::remove_dir_all(&out);
 }
