@@ -1,8 +1,19 @@
 //! Shape transformation with variational implicit functions after Turk &
 //! O'Brien, *Shape Transformation Using Variational Implicit Functions*,
 //! SIGGRAPH 1999.
-//!
-//! **Status: not implemented yet.** This crate is a placeholder in the
-//! workspace layout; the method is tracked by its own issue (polyharmonic RBF
-//! interpolation in N+1 dimensions, influence shapes, contour reconstruction,
-//! warping). It builds on [`isomorph_common`].
+#![doc = "TODO"]
+
+pub mod error;
+pub mod interpolant;
+pub mod kernel;
+pub mod slice;
+
+mod duplicates;
+mod solve;
+
+pub use duplicates::DuplicatePolicy;
+pub use error::RbfError;
+pub use interpolant::{Constraint, FitReport, FitSettings, Interpolant};
+pub use kernel::Kernel;
+pub use slice::{Slice2, Slice3};
+pub use solve::Factorization;
