@@ -8,7 +8,9 @@ use isomorph_common::GridError;
 pub enum RbfError {
     /// Fewer constraints than the degree-one polynomial has coefficients
     /// (`D + 1` in `D` dimensions); the interpolant is not determined.
-    #[error("{got} constraints in {dim} dimensions; at least {needed} are needed (one more than the dimension)")]
+    #[error(
+        "{got} constraints in {dim} dimensions; at least {needed} are needed (one more than the dimension)"
+    )]
     TooFewConstraints {
         /// Constraints given (after merging duplicates).
         got: usize,
@@ -69,7 +71,9 @@ pub enum RbfError {
     #[error("invalid setting: {0}")]
     InvalidSetting(&'static str),
     /// A slice was asked for with the wrong number of fixed coordinates.
-    #[error("slicing a {dim}-dimensional interpolant to {slice_dim} dimensions needs {expected} fixed coordinates, got {got}")]
+    #[error(
+        "slicing a {dim}-dimensional interpolant to {slice_dim} dimensions needs {expected} fixed coordinates, got {got}"
+    )]
     SliceArity {
         /// Dimension of the interpolant.
         dim: usize,

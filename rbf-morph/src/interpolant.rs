@@ -164,8 +164,7 @@ impl<const D: usize> Interpolant<D> {
             .map(|c| std::array::from_fn(|k| (f64::from(c.position[k]) - shift[k]) * scale))
             .collect();
         let values: Vec<f64> = constraints.iter().map(|c| f64::from(c.value)).collect();
-        let (kept, values) =
-            dedup(&normalized, &values, settings.duplicate_tolerance, settings.duplicates)?;
+        let (kept, values) = dedup(&normalized, &values, settings.duplicate_tolerance, settings.duplicates)?;
         let centres: Vec<[f64; D]> = kept.iter().map(|&i| normalized[i]).collect();
         let flat: Vec<f64> = centres.iter().flatten().copied().collect();
         let sol = crate::solve::solve(&flat, D, &values, settings.kernel, settings.smoothing)?;
@@ -282,7 +281,12 @@ impl<const D: usize> Interpolant<D> {
     /// `S`-dimensional sum with a per-centre offset `w_j = |fixed − c_j,rest|²`.
     fn slice_eval<const S: usize>(&self, fixed: &[f32]) -> Result<SliceEval<S>, RbfError> {
         if D < S || fixed.len() != D - S {
-            return Err(RbfError::SliceArity { dim: D, slice_dim: S, expected: D.saturating_sub(S), got: fixed.len() });
+            return Err(RbfError::SliceArity {
+                dim: D,
+                slice_dim: S,
+                expected: D.saturating_sub(S),
+                got: fixed.len(),
+            });
         }
         if let Some(index) = fixed.iter().position(|v| !v.is_finite()) {
             return Err(RbfError::NonFinite { index, what: "position" });
@@ -331,7 +335,9 @@ mod tests {
 
     fn random_set<const D: usize>(n: usize, seed: u64) -> Vec<Constraint<D>> {
         let mut rng = Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
-        (0..n).map(|_| Constraint::new(std::array::from_fn(|_| rng.next() * 2.0 - 1.0), rng.next() * 4.0 - 2.0)).collect()
+        (0..n)
+            .map(|_| Constraint::new(std::array::from_fn(|_| rng.next() * 2.0 - 1.0), rng.next() * 4.0 - 2.0))
+            .collect()
     }
 
     fn assert_interpolates<const D: usize>(cs: &[Constraint<D>], settings: &FitSettings) -> Interpolant<D> {
@@ -412,16 +418,22 @@ mod tests {
         ));
         let mut nan = random_set::<3>(10, 1);
         nan[4].position[1] = f32::NAN;
-        assert!(matches!(Interpolant::fit(&nan, &s), Err(RbfError::NonFinite { index: 4, what: "position" })));
+        assert!(matches!(
+            Interpolant::fit(&nan, &s),
+            Err(RbfError::NonFinite { index: 4, what: "position" })
+        ));
         let mut nanv = random_set::<3>(10, 1);
         nanv[2].value = f32::INFINITY;
         assert!(matches!(Interpolant::fit(&nanv, &s), Err(RbfError::NonFinite { index: 2, what: "value" })));
         // All points on the plane z = 0.25 in 3D.
-        let flat: Vec<Constraint<3>> =
-            random_set::<3>(30, 3).into_iter().map(|c| Constraint::new([c.position[0], c.position[1], 0.25], c.value)).collect();
+        let flat: Vec<Constraint<3>> = random_set::<3>(30, 3)
+            .into_iter()
+            .map(|c| Constraint::new([c.position[0], c.position[1], 0.25], c.value))
+            .collect();
         assert!(matches!(Interpolant::fit(&flat, &s), Err(RbfError::NotUnisolvent { rank: 2, dim: 3 })));
         // Collinear in 2D.
-        let line: Vec<Constraint<2>> = (0..10).map(|i| Constraint::new([i as f32, 2.0 * i as f32], 0.0)).collect();
+        let line: Vec<Constraint<2>> =
+            (0..10).map(|i| Constraint::new([i as f32, 2.0 * i as f32], 0.0)).collect();
         assert!(matches!(Interpolant::fit(&line, &s), Err(RbfError::NotUnisolvent { rank: 1, dim: 2 })));
         let bad = FitSettings { smoothing: -1.0, ..FitSettings::default() };
         assert!(matches!(Interpolant::fit(&random_set::<2>(10, 1), &bad), Err(RbfError::InvalidSetting(_))));
@@ -453,7 +465,8 @@ mod tests {
     fn smoothing_trades_exactness_for_smoothness() {
         let cs = random_set::<2>(80, 21);
         let exact = Interpolant::fit(&cs, &FitSettings::default()).unwrap();
-        let smooth = Interpolant::fit(&cs, &FitSettings { smoothing: 1e-2, ..FitSettings::default() }).unwrap();
+        let smooth =
+            Interpolant::fit(&cs, &FitSettings { smoothing: 1e-2, ..FitSettings::default() }).unwrap();
         assert!(exact.report().max_residual.unwrap() < 1e-9);
         let r = smooth.report().max_residual.unwrap();
         assert!(r > 1e-4, "smoothing should leave a residual, got {r:e}");

@@ -3,10 +3,13 @@
 //! SIGGRAPH 1999.
 #![doc = "TODO"]
 
+pub mod constraints;
 pub mod error;
+pub mod image;
 pub mod interpolant;
 pub mod kernel;
 pub mod slice;
+pub mod transform;
 
 mod duplicates;
 mod solve;
@@ -17,3 +20,4 @@ pub use interpolant::{Constraint, FitReport, FitSettings, Interpolant};
 pub use kernel::Kernel;
 pub use slice::{Slice2, Slice3};
 pub use solve::Factorization;
+pub use transform::{ContourMorph, RbfMorph, TransformSettings};

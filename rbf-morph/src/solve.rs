@@ -24,8 +24,8 @@ use crate::error::RbfError;
 use crate::kernel::Kernel;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::{lblt as bunch_kaufman, llt};
-use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::linalg::matmul::matmul;
+use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::{Accum, Mat, MatMut, Par};
 use rayon::prelude::*;
 
@@ -219,7 +219,8 @@ pub(crate) fn solve(
         let norm1 = one_norm(b.rb());
         let par = Par::rayon(0);
         let llt_ok = {
-            let mut mem = MemBuffer::new(llt::factor::cholesky_in_place_scratch::<f64>(k, par, Default::default()));
+            let mut mem =
+                MemBuffer::new(llt::factor::cholesky_in_place_scratch::<f64>(k, par, Default::default()));
             llt::factor::cholesky_in_place(
                 b.rb_mut(),
                 Default::default(),
@@ -346,8 +347,10 @@ fn hager_inverse_norm(k: usize, solve: &dyn Fn(&mut [f64])) -> f64 {
         est = norm;
         let mut z: Vec<f64> = y.iter().map(|v| if *v >= 0.0 { 1.0 } else { -1.0 }).collect();
         solve(&mut z);
-        let (jmax, zmax) =
-            z.iter().enumerate().fold((0, 0.0f64), |acc, (j, v)| if v.abs() > acc.1 { (j, v.abs()) } else { acc });
+        let (jmax, zmax) = z
+            .iter()
+            .enumerate()
+            .fold((0, 0.0f64), |acc, (j, v)| if v.abs() > acc.1 { (j, v.abs()) } else { acc });
         let ztx: f64 = z.iter().zip(&x).map(|(a, b)| a * b).sum();
         if zmax <= ztx {
             break;
