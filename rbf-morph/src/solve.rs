@@ -235,7 +235,6 @@ pub(crate) fn solve(
         } else {
             // Rebuild the block (the failed factorization overwrote it) and
             // use the symmetric-indefinite factorization.
-            drop(b);
             build_projected(&mut a, positions, dim, kernel, smoothing, &qr);
             let am = MatMut::from_column_major_slice_mut(&mut a, n, n);
             let mut b = am.submatrix_mut(m, m, k, k);
@@ -302,7 +301,7 @@ pub(crate) fn solve(
         };
         (fact, rcond)
     };
-    if !(rcond > f64::EPSILON) || y2.iter().any(|v| !v.is_finite()) {
+    if rcond.is_nan() || rcond <= f64::EPSILON || y2.iter().any(|v| !v.is_finite()) {
         return Err(RbfError::Singular { rcond: if rcond.is_finite() { rcond } else { 0.0 } });
     }
     // d = Q [0; y2]

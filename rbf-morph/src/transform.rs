@@ -131,6 +131,29 @@ impl RbfMorph {
         Ok(Self { interpolant, separation: settings.separation, bounds })
     }
 
+    /// The reference case: a sphere (radius 0.3) at `t = 0` and a
+    /// torus (R = 0.3, r = 0.12, around z) at `t = 1`, each with
+    /// `points_per_shape` farthest-point samples of its surface (polygonized
+    /// at 64³ over `[-0.5, 0.5]³`) giving a boundary constraint and an inward
+    /// normal constraint at offset 0.01: `4 · points_per_shape` constraints
+    /// in 4D, with a degree-one polynomial.
+    ///
+    /// # Errors
+    /// As [`RbfMorph::new`].
+    pub fn sphere_torus(points_per_shape: usize, kernel: crate::Kernel) -> Result<Self, RbfError> {
+        use crate::constraints::{NormalOffset, Subsample, SurfaceSettings, field_constraints};
+        use isomorph_common::Shape;
+        let s = SurfaceSettings {
+            offset: NormalOffset::Absolute(0.01),
+            subsample: Subsample::FarthestPoint(points_per_shape),
+        };
+        let a = field_constraints(&Shape::sphere(0.3), &Aabb::cube(0.5), 64, &s)?;
+        let b = field_constraints(&Shape::torus(0.3, 0.12), &Aabb::cube(0.5), 64, &s)?;
+        let settings =
+            TransformSettings { fit: FitSettings::default().with_kernel(kernel), ..Default::default() };
+        Self::new(&a, &b, &settings)
+    }
+
     /// The 4D interpolant (its report tells the conditioning).
     pub fn interpolant(&self) -> &Interpolant<4> {
         &self.interpolant
@@ -258,20 +281,13 @@ impl ContourMorph {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::constraints::{NormalOffset, Subsample, SurfaceSettings, field_constraints};
     use crate::image::image_constraints;
     use isomorph_common::marching_cubes::polygonize;
     use isomorph_common::mesh::distance::surface_distance;
     use isomorph_common::{Field3, Shape};
 
     fn reference(n: usize, kernel: crate::Kernel) -> RbfMorph {
-        let s =
-            SurfaceSettings { offset: NormalOffset::Absolute(0.01), subsample: Subsample::FarthestPoint(n) };
-        let a = field_constraints(&Shape::sphere(0.3), &Aabb::cube(0.5), 24, &s).unwrap();
-        let b = field_constraints(&Shape::torus(0.3, 0.12), &Aabb::cube(0.5), 32, &s).unwrap();
-        let settings =
-            TransformSettings { fit: FitSettings::default().with_kernel(kernel), ..Default::default() };
-        RbfMorph::new(&a, &b, &settings).unwrap()
+        RbfMorph::sphere_torus(n, kernel).unwrap()
     }
 
     #[test]
