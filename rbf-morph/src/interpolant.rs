@@ -5,7 +5,7 @@
 //! diagonal before the solve (both kernels give the same interpolant under
 //! this map, since the weights annihilate degree-one polynomials; it only
 //! improves the conditioning of the polynomial block). The system is solved
-//! in f64 by the projected Cholesky method of [`crate::solve`].
+//! in f64 by the projected Cholesky method described in the crate docs.
 
 use crate::duplicates::{DuplicatePolicy, dedup};
 use crate::error::RbfError;

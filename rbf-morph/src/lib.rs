@@ -17,7 +17,7 @@
 //! | §4.2 constraints from points with normals / meshes | [`constraints`] |
 //! | §5.1, §5.2 shape transformation in N + 1 dimensions, §6.2 separation | [`transform`] ([`RbfMorph`], [`ContourMorph`]) |
 //! | §7 influence shapes (triangle in N + 2, tetrahedron in N + 3 dimensions) | [`influence`] ([`InfluenceShapes`], [`InfluencePath`]) |
-//! | fast evaluation of slices (what the paper's Bloomenthal polygonizer calls) | [`slice`] ([`Slice3`], [`Slice2`]) |
+//! | fast evaluation of slices (what the paper's Bloomenthal polygonizer calls) | [`slice`](mod@slice) ([`Slice3`], [`Slice2`]) |
 //!
 //! Not implemented yet: contour reconstruction from
 //! many parallel / non-parallel slices (§6, §6.1), warping (appendix), and a

@@ -72,6 +72,29 @@ fn fit_embedded<const N: usize, const M: usize>(
     Interpolant::fit(&all, fit)
 }
 
+/// Checks the settings, fits source at `t = 0` and target at `t = t_max`,
+/// and returns the interpolant with the inputs' box grown by the margin.
+fn fit_pair<const N: usize, const M: usize>(
+    source: &[Constraint<N>],
+    target: &[Constraint<N>],
+    settings: &TransformSettings,
+) -> Result<(Interpolant<M>, [f32; N], [f32; N]), RbfError> {
+    check_separation(settings)?;
+    let interpolant = fit_embedded::<N, M>(
+        &[(source, &[0.0], "source"), (target, &[settings.separation], "target")],
+        &settings.fit,
+    )?;
+    let (mut lo, mut hi) = ([f32::INFINITY; N], [f32::NEG_INFINITY; N]);
+    for c in source.iter().chain(target) {
+        for k in 0..N {
+            lo[k] = lo[k].min(c.position[k]);
+            hi[k] = hi[k].max(c.position[k]);
+        }
+    }
+    let margin = settings.margin * (0..N).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f32>().sqrt();
+    Ok((interpolant, lo.map(|v| v - margin), hi.map(|v| v + margin)))
+}
+
 fn check_separation(settings: &TransformSettings) -> Result<(), RbfError> {
     if !(settings.separation > 0.0 && settings.separation.is_finite()) {
         return Err(RbfError::InvalidSetting("the separation t_max must be positive and finite"));
@@ -120,14 +143,8 @@ impl RbfMorph {
         target: &[Constraint<3>],
         settings: &TransformSettings,
     ) -> Result<Self, RbfError> {
-        check_separation(settings)?;
-        let interpolant = fit_embedded::<3, 4>(
-            &[(source, &[0.0], "source"), (target, &[settings.separation], "target")],
-            &settings.fit,
-        )?;
-        let pts: Vec<Vec3> = source.iter().chain(target).map(|c| Vec3::from_array(c.position)).collect();
-        let bounds = Aabb::from_points(&pts);
-        let bounds = bounds.expanded(settings.margin * bounds.diagonal());
+        let (interpolant, lo, hi) = fit_pair::<3, 4>(source, target, settings)?;
+        let bounds = Aabb::new(Vec3::from_array(lo), Vec3::from_array(hi));
         Ok(Self { interpolant, separation: settings.separation, bounds })
     }
 
@@ -214,18 +231,9 @@ impl ContourMorph {
         target: &[Constraint<2>],
         settings: &TransformSettings,
     ) -> Result<Self, RbfError> {
-        check_separation(settings)?;
-        let interpolant = fit_embedded::<2, 3>(
-            &[(source, &[0.0], "source"), (target, &[settings.separation], "target")],
-            &settings.fit,
-        )?;
-        let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
-        for c in source.iter().chain(target) {
-            lo = lo.min(Vec2::from_array(c.position));
-            hi = hi.max(Vec2::from_array(c.position));
-        }
-        let margin = settings.margin * (hi - lo).length();
-        Ok(Self { interpolant, separation: settings.separation, lo: lo - margin, hi: hi + margin })
+        let (interpolant, lo, hi) = fit_pair::<2, 3>(source, target, settings)?;
+        let (lo, hi) = (Vec2::from_array(lo), Vec2::from_array(hi));
+        Ok(Self { interpolant, separation: settings.separation, lo, hi })
     }
 
     /// The 3D implicit `f(x, y, t)` (the space-time shape of Fig. 1).
