@@ -16,8 +16,10 @@
 /// kernel in 4D) grows slowly, so far-away constraints matter less and the
 /// in-between shapes stay slim; `r³` (the usual 3D variational kernel, the
 /// biharmonic spline of 3D) grows faster, giving rounder, more bloated
-/// intermediate shapes, and its system is roughly 100× worse conditioned at
-/// 8000 constraints. `r³` evaluates faster (no logarithm).
+/// intermediate shapes, and its system is worse conditioned (about 100× at
+/// 8000 constraints on the reference case, per the measurement; see
+/// [`FitReport::rcond`](crate::FitReport::rcond)). `r³` evaluates about 3×
+/// faster (no logarithm).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
 pub enum Kernel {
     /// `φ(r) = r² log r` (thin-plate spline, the paper's eq. 2 kernel). The default.

@@ -54,10 +54,30 @@
 //! bound on its distance to either input (that is the point of the method);
 //! fitting costs `O(n³)` time and `8 n²` bytes (2 GiB at 16000 constraints).
 //!
-//! # Cost (measured under load on 2 shared cores; see the benches in
-//! `benches/benches/rbf.rs`)
-//! See the crate's bench IDs `fit/sphere_torus_4d/{2000,4000,8000}`,
-//! `eval_grid/sphere_torus_4d/8000/64`, `eval_grid_r3/sphere_torus_4d/8000/64`.
+//! # Cost
+//! Fitting is `O(n³)` (the Cholesky factorization of the projected block)
+//! plus `O(n²)` for the matrix, the condition estimate and the residual check;
+//! evaluating a slice is `O(n)` per point. Measured **under heavy load** (2
+//! cores shared with three other builds, load average 7–9, so roughly a
+//! quarter of the machine) with
+//! `target/release/deps/rbf-* --bench --warm-up-time 1 --measurement-time 3 --sample-size 10`
+//! (the same as `cargo bench -p isomorph-benches --bench rbf -- …` with those
+//! options), reference case sphere → torus in 4D:
+//!
+//! | bench | time |
+//! |---|---|
+//! | `fit/sphere_torus_4d/2000` | 0.76 s |
+//! | `fit/sphere_torus_4d/4000` | 3.1 s |
+//! | `fit/sphere_torus_4d/8000` | 42 s |
+//! | `eval_grid/sphere_torus_4d/2000/64` (`r² log r`) | 2.6 s |
+//! | `eval_grid/sphere_torus_4d/8000/64` (`r² log r`) | 10.0 s |
+//! | `eval_grid_r3/sphere_torus_4d/2000/64` | 0.87 s |
+//! | `eval_grid_r3/sphere_torus_4d/8000/64` | 3.0 s |
+//! | `polygonize/sphere_torus_4d/8000/64` (full 64³ grid + marching cubes) | 8.4 s |
+//!
+//! Evaluation scales linearly in the number of constraints as expected; these
+//! figures are not comparable with idle-machine targets and should be
+//! re-measured on an idle machine.
 //!
 //! # Example: a 3D morph
 //! ```
