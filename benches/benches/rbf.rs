@@ -13,6 +13,7 @@ use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_m
 use isomorph_common::marching_cubes::{marching_cubes, polygonize};
 use isomorph_common::{Aabb, Grid3};
 use isomorph_rbf::constraints::{NormalOffset, Subsample, SurfaceSettings, field_constraints};
+use isomorph_rbf::polygonize::{SparseSettings, polygonize_near_surface};
 use isomorph_rbf::{FitSettings, Interpolant, Kernel, RbfMorph, transform::lift};
 use std::hint::black_box;
 
@@ -69,15 +70,20 @@ fn eval_grid(c: &mut Criterion) {
     }
 }
 
-/// The t = 0.5 frame as a mesh: the slice sampled on 64³ nodes and marching
-/// cubes (the full-grid path of `Morph::frame_mesh`).
+/// The t = 0.5 frame as a mesh on the 64³ lattice over [-0.5, 0.5]³: the
+/// near-surface polygonizer (`polygonize/…`), the full grid and marching
+/// cubes (`polygonize/…/full`), and marching cubes alone (`…/mc_only`).
 fn polygonize_slice(c: &mut Criterion) {
     let mut group = c.benchmark_group("polygonize/sphere_torus_4d");
     group.sample_size(10);
     let total = 8000usize;
     let morph = RbfMorph::sphere_torus(total / 4, Kernel::ThinPlate).unwrap();
     let slice = morph.slice(0.5).unwrap();
+    let settings = SparseSettings::default();
     group.bench_function(BenchmarkId::new(total.to_string(), 64), |b| {
+        b.iter(|| polygonize_near_surface(black_box(&slice), &Aabb::cube(0.5), 64, 0.0, &settings).unwrap())
+    });
+    group.bench_function(BenchmarkId::new(format!("{total}/full"), 64), |b| {
         b.iter(|| polygonize(black_box(&slice), &Aabb::cube(0.5), 64, 0.0).unwrap())
     });
     // Marching cubes alone on the sampled grid, for reference.

@@ -17,12 +17,11 @@
 //! | §4.2 constraints from points with normals / meshes | [`constraints`] |
 //! | §5.1, §5.2 shape transformation in N + 1 dimensions, §6.2 separation | [`transform`] ([`RbfMorph`], [`ContourMorph`]) |
 //! | §7 influence shapes (triangle in N + 2, tetrahedron in N + 3 dimensions) | [`influence`] ([`InfluenceShapes`], [`InfluencePath`]) |
+//! | §5.2 polygonizing only near the surface (the paper uses Bloomenthal's continuation polygonizer) | [`polygonize`] |
 //! | fast evaluation of slices (what the paper's Bloomenthal polygonizer calls) | [`slice`](mod@slice) ([`Slice3`], [`Slice2`]) |
 //!
-//! Not implemented yet: contour reconstruction from
-//! many parallel / non-parallel slices (§6, §6.1), warping (appendix), and a
-//! near-surface polygonizer; frames are polygonized on a full grid through
-//! [`isomorph_common::Morph::frame_mesh`].
+//! Not implemented yet: contour reconstruction from many parallel /
+//! non-parallel slices (§6, §6.1) and warping (appendix).
 //!
 //! # Choices where the paper leaves details open
 //! - **Kernel**: `r² log r` (eq. 2) is the default; `r³` is selectable
@@ -116,6 +115,7 @@ pub mod image;
 pub mod influence;
 pub mod interpolant;
 pub mod kernel;
+pub mod polygonize;
 pub mod slice;
 pub mod transform;
 
