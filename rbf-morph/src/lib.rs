@@ -72,7 +72,8 @@
 //! | `eval_grid/sphere_torus_4d/8000/64` (`r² log r`) | 10.0 s |
 //! | `eval_grid_r3/sphere_torus_4d/2000/64` | 0.87 s |
 //! | `eval_grid_r3/sphere_torus_4d/8000/64` | 3.0 s |
-//! | `polygonize/sphere_torus_4d/8000/64` (full 64³ grid + marching cubes) | 8.4 s |
+//! | full 64³ grid + marching cubes of that slice | 8.4 s |
+//! | `polygonize/sphere_torus_4d/8000/64` (near-surface, [`polygonize`], load average 6) | 2.0 s |
 //!
 //! Evaluation scales linearly in the number of constraints as expected; these
 //! figures are not comparable with idle-machine targets and should be
