@@ -1,0 +1,103 @@
+//! The crate's typed errors.
+
+use isomorph_common::GridError;
+
+/// What can go wrong when fitting, slicing or morphing a variational implicit.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum RbfError {
+    /// Fewer constraints than the degree-one polynomial has coefficients
+    /// (`D + 1` in `D` dimensions); the interpolant is not determined.
+    #[error(
+        "{got} constraints in {dim} dimensions; at least {needed} are needed (one more than the dimension)"
+    )]
+    TooFewConstraints {
+        /// Constraints given (after merging duplicates).
+        got: usize,
+        /// Constraints needed: `dim + 1`.
+        needed: usize,
+        /// The dimension of the constraint space.
+        dim: usize,
+    },
+    /// The constraint positions lie in a lower-dimensional affine subspace
+    /// (all coplanar in `D` dimensions), so the degree-one polynomial is not
+    /// determined (the points are not unisolvent). Add constraints off that
+    /// subspace, or fit in fewer dimensions.
+    #[error(
+        "the constraint positions span only {rank} of {dim} dimensions (coplanar / not unisolvent for a degree-one polynomial)"
+    )]
+    NotUnisolvent {
+        /// Numerical rank of the positions' affine hull.
+        rank: usize,
+        /// The dimension of the constraint space.
+        dim: usize,
+    },
+    /// A position or value is NaN or infinite.
+    #[error("constraint {index} has a NaN or infinite {what}")]
+    NonFinite {
+        /// Index of the offending constraint in the input.
+        index: usize,
+        /// `"position"` or `"value"`.
+        what: &'static str,
+    },
+    /// Two constraints are closer than the duplicate tolerance but ask for
+    /// different values (or the policy rejects all duplicates).
+    #[error(
+        "constraints {first} and {second} are {distance:e} apart (near-duplicates) with values {first_value} and {second_value}"
+    )]
+    NearDuplicate {
+        /// Index of the first constraint in the input.
+        first: usize,
+        /// Index of the second constraint in the input.
+        second: usize,
+        /// Their distance, in input units.
+        distance: f64,
+        /// The value asked for at `first`.
+        first_value: f32,
+        /// The value asked for at `second`.
+        second_value: f32,
+    },
+    /// The linear system is singular to working precision even with the
+    /// symmetric-indefinite fallback (e.g. near-duplicate constraints below
+    /// the merge tolerance). Raise the smoothing parameter or the duplicate
+    /// tolerance.
+    #[error("the interpolation system is singular to working precision (reciprocal condition {rcond:e})")]
+    Singular {
+        /// Reciprocal condition estimate of the projected system (0 when no
+        /// factorization succeeded).
+        rcond: f64,
+    },
+    /// A setting is out of range (negative smoothing, NaN tolerance, ...).
+    #[error("invalid setting: {0}")]
+    InvalidSetting(&'static str),
+    /// A slice was asked for with the wrong number of fixed coordinates.
+    #[error(
+        "slicing a {dim}-dimensional interpolant to {slice_dim} dimensions needs {expected} fixed coordinates, got {got}"
+    )]
+    SliceArity {
+        /// Dimension of the interpolant.
+        dim: usize,
+        /// Dimension of the slice (2 or 3).
+        slice_dim: usize,
+        /// Fixed coordinates needed: `dim - slice_dim`.
+        expected: usize,
+        /// Fixed coordinates given.
+        got: usize,
+    },
+    /// A shape yields no constraint (an image without any mid-gray
+    /// crossing, an empty point set).
+    #[error("the {0} shape has no boundary: no constraint could be made")]
+    EmptyShape(&'static str),
+    /// Points and normals differ in length, or a normal is zero.
+    #[error("invalid points/normals input: {0}")]
+    InvalidInput(String),
+    /// A PNG file could not be read or decoded.
+    #[error("PNG input: {0}")]
+    Image(String),
+    /// A morph time is NaN or outside `[0, 1]`.
+    #[error("time {0} is outside [0, 1]")]
+    InvalidTime(f32),
+    /// A grid could not be made (from a polygonizer or sampler).
+    #[error(transparent)]
+    Grid(#[from] GridError),
+}

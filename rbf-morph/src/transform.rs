@@ -1,0 +1,420 @@
+//! Shape transformation (paper §5): the constraints of shape A placed at
+//! `t = 0` and those of shape B at `t = t_max` in one higher dimension, one
+//! variational interpolation, and the in-between shapes as slices.
+//!
+//! The separation `t_max` is the user's local/global control (§6.2): small
+//! separations keep only features that nearly coincide in A and B, large
+//! ones let the global shape guide the in-between shapes (which then round
+//! off and bulge more, especially with the `r³` kernel).
+
+use crate::error::RbfError;
+use crate::interpolant::{Constraint, FitSettings, Interpolant};
+use crate::slice::{Slice2, Slice3};
+use glam::{UVec2, Vec2, Vec3};
+use isomorph_common::marching_squares::{Polyline2, marching_squares};
+use isomorph_common::morph::check_time;
+use isomorph_common::{Aabb, Frame, Grid2, Morph};
+
+/// Settings of a shape transformation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TransformSettings {
+    /// The fit (kernel, smoothing, duplicates).
+    pub fit: FitSettings,
+    /// The separation `t_max` of the two shapes along the new axis (default
+    /// 1, in the shapes' world units).
+    pub separation: f32,
+    /// Margin added around the union of the inputs' bounding boxes for
+    /// [`Morph::bounds`], as a fraction of its diagonal (default 0.1):
+    /// in-between shapes may bulge beyond both inputs.
+    pub margin: f32,
+}
+
+impl Default for TransformSettings {
+    fn default() -> Self {
+        Self { fit: FitSettings::default(), separation: 1.0, margin: 0.1 }
+    }
+}
+
+/// Constraints of `N` dimensions lifted to `M = N + extra.len()` dimensions
+/// by appending the coordinates `extra` (an embedding into a higher space).
+///
+/// # Panics
+/// If `M != N + extra.len()` (a programming error, not user input).
+pub fn lift<const N: usize, const M: usize>(
+    constraints: &[Constraint<N>],
+    extra: &[f32],
+) -> Vec<Constraint<M>> {
+    assert_eq!(M, N + extra.len(), "lift: {N} + {} coordinates do not make {M}", extra.len());
+    constraints
+        .iter()
+        .map(|c| {
+            Constraint::new(
+                std::array::from_fn(|k| if k < N { c.position[k] } else { extra[k - N] }),
+                c.value,
+            )
+        })
+        .collect()
+}
+
+/// Fits one `M`-dimensional interpolant through `N`-dimensional shapes
+/// placed at the given extra coordinates.
+fn fit_embedded<const N: usize, const M: usize>(
+    shapes: &[(&[Constraint<N>], &[f32], &'static str)],
+    fit: &FitSettings,
+) -> Result<Interpolant<M>, RbfError> {
+    let mut all = Vec::new();
+    for (cs, at, name) in shapes {
+        if cs.is_empty() {
+            return Err(RbfError::EmptyShape(name));
+        }
+        all.extend(lift::<N, M>(cs, at));
+    }
+    Interpolant::fit(&all, fit)
+}
+
+/// Checks the settings, fits source at `t = 0` and target at `t = t_max`,
+/// and returns the interpolant with the inputs' box grown by the margin.
+fn fit_pair<const N: usize, const M: usize>(
+    source: &[Constraint<N>],
+    target: &[Constraint<N>],
+    settings: &TransformSettings,
+) -> Result<(Interpolant<M>, [f32; N], [f32; N]), RbfError> {
+    check_separation(settings)?;
+    let interpolant = fit_embedded::<N, M>(
+        &[(source, &[0.0], "source"), (target, &[settings.separation], "target")],
+        &settings.fit,
+    )?;
+    let (mut lo, mut hi) = ([f32::INFINITY; N], [f32::NEG_INFINITY; N]);
+    for c in source.iter().chain(target) {
+        for k in 0..N {
+            lo[k] = lo[k].min(c.position[k]);
+            hi[k] = hi[k].max(c.position[k]);
+        }
+    }
+    let margin = settings.margin * (0..N).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f32>().sqrt();
+    Ok((interpolant, lo.map(|v| v - margin), hi.map(|v| v + margin)))
+}
+
+fn check_separation(settings: &TransformSettings) -> Result<(), RbfError> {
+    if !(settings.separation > 0.0 && settings.separation.is_finite()) {
+        return Err(RbfError::InvalidSetting("the separation t_max must be positive and finite"));
+    }
+    if !(settings.margin >= 0.0 && settings.margin.is_finite()) {
+        return Err(RbfError::InvalidSetting("the bounds margin must be finite and ≥ 0"));
+    }
+    Ok(())
+}
+
+/// Transformation between two 3D shapes through one 4D variational implicit
+/// (§5.2); implements [`Morph`] with [`Slice3`] frames (iso 0, positive
+/// inside).
+///
+/// ```
+/// use glam::Vec3;
+/// use isomorph_common::{Aabb, Field3, Morph, Shape};
+/// use isomorph_rbf::constraints::{field_constraints, NormalOffset, SurfaceSettings, Subsample};
+/// use isomorph_rbf::transform::{RbfMorph, TransformSettings};
+///
+/// let s = SurfaceSettings { offset: NormalOffset::Absolute(0.01), subsample: Subsample::FarthestPoint(60) };
+/// let a = field_constraints(&Shape::sphere(0.3), &Aabb::cube(0.5), 16, &s).unwrap();
+/// let b = field_constraints(&Shape::sphere(0.2).translated(Vec3::X * 0.1), &Aabb::cube(0.5), 16, &s).unwrap();
+/// let morph = RbfMorph::new(&a, &b, &TransformSettings::default()).unwrap();
+/// let start = morph.frame(0.0).unwrap().field;
+/// assert!(start.value(Vec3::new(0.3, 0.0, 0.0)).abs() < 0.05); // on the sphere
+/// assert!(start.value(Vec3::ZERO) > 0.0); // inside
+/// ```
+#[derive(Debug, Clone)]
+pub struct RbfMorph {
+    interpolant: Interpolant<4>,
+    separation: f32,
+    bounds: Aabb,
+}
+
+impl RbfMorph {
+    /// Fits the 4D implicit through `source` at `t = 0` and `target` at
+    /// `t = separation`.
+    ///
+    /// # Errors
+    /// [`RbfError::EmptyShape`] for an empty constraint set,
+    /// [`RbfError::InvalidSetting`] for a bad separation or margin, and the
+    /// errors of [`Interpolant::fit`].
+    pub fn new(
+        source: &[Constraint<3>],
+        target: &[Constraint<3>],
+        settings: &TransformSettings,
+    ) -> Result<Self, RbfError> {
+        let (interpolant, lo, hi) = fit_pair::<3, 4>(source, target, settings)?;
+        let bounds = Aabb::new(Vec3::from_array(lo), Vec3::from_array(hi));
+        Ok(Self { interpolant, separation: settings.separation, bounds })
+    }
+
+    /// The issue's reference case: a sphere (radius 0.3) at `t = 0` and a
+    /// torus (R = 0.3, r = 0.12, around z) at `t = 1`, each with
+    /// `points_per_shape` farthest-point samples of its surface (polygonized
+    /// at 64³ over `[-0.5, 0.5]³`) giving a boundary constraint and an inward
+    /// normal constraint at offset 0.01: `4 · points_per_shape` constraints
+    /// in 4D, with a degree-one polynomial.
+    ///
+    /// # Errors
+    /// As [`RbfMorph::new`].
+    pub fn sphere_torus(points_per_shape: usize, kernel: crate::Kernel) -> Result<Self, RbfError> {
+        use crate::constraints::{NormalOffset, Subsample, SurfaceSettings, field_constraints};
+        use isomorph_common::Shape;
+        let s = SurfaceSettings {
+            offset: NormalOffset::Absolute(0.01),
+            subsample: Subsample::FarthestPoint(points_per_shape),
+        };
+        let a = field_constraints(&Shape::sphere(0.3), &Aabb::cube(0.5), 64, &s)?;
+        let b = field_constraints(&Shape::torus(0.3, 0.12), &Aabb::cube(0.5), 64, &s)?;
+        let settings =
+            TransformSettings { fit: FitSettings::default().with_kernel(kernel), ..Default::default() };
+        Self::new(&a, &b, &settings)
+    }
+
+    /// The 4D interpolant (its report tells the conditioning).
+    pub fn interpolant(&self) -> &Interpolant<4> {
+        &self.interpolant
+    }
+
+    /// The separation `t_max`.
+    pub fn separation(&self) -> f32 {
+        self.separation
+    }
+
+    /// The slice at morph time `t ∈ [0, 1]` (4D coordinate `t · t_max`).
+    ///
+    /// # Errors
+    /// [`RbfError::InvalidTime`] for NaN or `t ∉ [0, 1]`.
+    pub fn slice(&self, t: f32) -> Result<Slice3, RbfError> {
+        let t = check_time(t).map_err(|_| RbfError::InvalidTime(t))?;
+        Ok(self.interpolant.slice3(&[t * self.separation])?.with_bounds(self.bounds))
+    }
+}
+
+impl Morph for RbfMorph {
+    type Field = Slice3;
+    type Error = RbfError;
+
+    fn method(&self) -> &str {
+        "rbf"
+    }
+
+    fn frame(&self, t: f32) -> Result<Frame<Slice3>, RbfError> {
+        Ok(Frame { field: self.slice(t)?, iso: 0.0, transform: glam::Affine3A::IDENTITY })
+    }
+
+    fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+}
+
+/// Transformation between two 2D shapes through one 3D variational implicit
+/// (§5.1, Fig. 1 and 3): slices are [`Slice2`] fields, contours come from
+/// marching squares, and the whole 3D implicit is available for the
+/// space-time surface.
+#[derive(Debug, Clone)]
+pub struct ContourMorph {
+    interpolant: Interpolant<3>,
+    separation: f32,
+    lo: Vec2,
+    hi: Vec2,
+}
+
+impl ContourMorph {
+    /// Fits the 3D implicit through `source` at `t = 0` and `target` at
+    /// `t = separation`.
+    ///
+    /// # Errors
+    /// As [`RbfMorph::new`].
+    pub fn new(
+        source: &[Constraint<2>],
+        target: &[Constraint<2>],
+        settings: &TransformSettings,
+    ) -> Result<Self, RbfError> {
+        let (interpolant, lo, hi) = fit_pair::<2, 3>(source, target, settings)?;
+        let (lo, hi) = (Vec2::from_array(lo), Vec2::from_array(hi));
+        Ok(Self { interpolant, separation: settings.separation, lo, hi })
+    }
+
+    /// The 3D implicit `f(x, y, t)` (the space-time shape of Fig. 1).
+    pub fn interpolant(&self) -> &Interpolant<3> {
+        &self.interpolant
+    }
+
+    /// The separation `t_max`.
+    pub fn separation(&self) -> f32 {
+        self.separation
+    }
+
+    /// The box (min, max corners) containing both inputs plus the margin.
+    pub fn bounds(&self) -> (Vec2, Vec2) {
+        (self.lo, self.hi)
+    }
+
+    /// The 2D field of the shape at morph time `t ∈ [0, 1]`.
+    ///
+    /// # Errors
+    /// [`RbfError::InvalidTime`] for NaN or `t ∉ [0, 1]`.
+    pub fn slice(&self, t: f32) -> Result<Slice2, RbfError> {
+        let t = check_time(t).map_err(|_| RbfError::InvalidTime(t))?;
+        self.interpolant.slice2(&[t * self.separation])
+    }
+
+    /// The shape at `t` sampled over [`ContourMorph::bounds`] with `res`
+    /// nodes along the longer edge.
+    ///
+    /// # Errors
+    /// [`RbfError::InvalidTime`]; [`RbfError::Grid`] for `res < 2`.
+    pub fn frame_grid(&self, t: f32, res: u32) -> Result<Grid2<f32>, RbfError> {
+        if res < 2 {
+            let dims = glam::UVec3::new(res, res, 1);
+            return Err(RbfError::Grid(isomorph_common::GridError::TooSmall { dims, min: 2 }));
+        }
+        let size = self.hi - self.lo;
+        let spacing = size.max_element() / (res - 1) as f32;
+        let dims = UVec2::new((size.x / spacing).ceil() as u32 + 1, (size.y / spacing).ceil() as u32 + 1);
+        Ok(self.slice(t)?.sample(dims, self.lo, spacing)?)
+    }
+
+    /// The contours (iso 0) of the shape at `t`, counter-clockwise around
+    /// inside regions (holes clockwise).
+    ///
+    /// # Errors
+    /// As [`ContourMorph::frame_grid`].
+    pub fn contours(&self, t: f32, res: u32) -> Result<Vec<Polyline2>, RbfError> {
+        Ok(marching_squares(&self.frame_grid(t, res)?, 0.0))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::image::image_constraints;
+    use isomorph_common::marching_cubes::polygonize;
+    use isomorph_common::mesh::distance::surface_distance;
+    use isomorph_common::{Field3, Shape};
+
+    fn reference(n: usize, kernel: crate::Kernel) -> RbfMorph {
+        RbfMorph::sphere_torus(n, kernel).unwrap()
+    }
+
+    #[test]
+    fn sphere_to_torus_endpoints_reproduce_the_inputs() {
+        for kernel in [crate::Kernel::ThinPlate, crate::Kernel::Cubic] {
+            let morph = reference(250, kernel);
+            assert!(morph.interpolant().report().max_residual.unwrap() < 1e-8);
+            let box_ = Aabb::cube(0.55);
+            for (t, shape) in [(0.0, Shape::sphere(0.3)), (1.0, Shape::torus(0.3, 0.12))] {
+                let got = morph.frame_mesh(t, 48).unwrap();
+                let want = polygonize(&shape, &box_, 96, 0.0).unwrap();
+                let d = surface_distance(&got, &want, 4000).unwrap();
+                // Grid spacing of the frame mesh is 0.021; 250 points per shape.
+                assert!(d.mean < 0.01 && d.hausdorff < 0.04, "{kernel:?} t={t}: {d:?}");
+                assert_eq!(got.connected_components(), 1);
+                assert_eq!(got.genus(), Some(if t == 0.0 { 0 } else { 1 }), "{kernel:?} t={t}");
+            }
+            // The middle frame is one closed piece between the two.
+            let mid = morph.frame_mesh(0.5, 40).unwrap();
+            assert_eq!(mid.connected_components(), 1);
+        }
+    }
+
+    #[test]
+    fn slice_batch_matches_exact_evaluation() {
+        let morph = reference(120, crate::Kernel::ThinPlate);
+        let slice = morph.slice(0.37).unwrap();
+        let pts: Vec<Vec3> = (0..333)
+            .map(|i| {
+                Vec3::new((i as f32 * 0.37).sin(), (i as f32 * 0.91).cos(), (i as f32 * 0.13).sin()) * 0.5
+            })
+            .collect();
+        let mut out = vec![0.0; pts.len()];
+        slice.values(&pts, &mut out);
+        for (p, v) in pts.iter().zip(&out) {
+            let exact = morph.interpolant().value_f64([p.x, p.y, p.z, 0.37].map(f64::from));
+            // f32 evaluation: about 1e-4 of the unit constraint value, i.e. 1e-6
+            // world units of surface position where |∇f| ≈ 1 / 0.01.
+            assert!((f64::from(*v) - exact).abs() < 2e-4 * (1.0 + exact.abs()), "at {p}: {v} vs {exact}");
+            assert_eq!(*v, slice.value(*p));
+        }
+        let p = Vec3::new(0.1, 0.2, 0.05);
+        let g = slice.gradient(p);
+        let e = morph.interpolant().gradient_f64([0.1, 0.2, 0.05, 0.37].map(|x: f32| f64::from(x)));
+        assert!((g - Vec3::new(e[0] as f32, e[1] as f32, e[2] as f32)).length() < 1e-3 * (1.0 + g.length()));
+        assert!(matches!(morph.slice(1.5), Err(RbfError::InvalidTime(_))));
+        assert!(matches!(morph.frame(f32::NAN), Err(RbfError::InvalidTime(_))));
+    }
+
+    /// Antialiased image of a signed distance (positive inside) on `n × n`
+    /// pixels over `[-0.5, 0.5]²`.
+    fn raster(n: u32, sd: impl Fn(Vec2) -> f32) -> Grid2<f32> {
+        let h = 1.0 / n as f32;
+        let o = Vec2::splat(-0.5 + 0.5 * h);
+        let data = (0..n * n)
+            .map(|k| (sd(o + h * Vec2::new((k % n) as f32, (k / n) as f32)) / h + 0.5).clamp(0.0, 1.0))
+            .collect();
+        Grid2::from_vec(UVec2::splat(n), o, h, data).unwrap()
+    }
+
+    /// The paper's X and O (Fig. 1 and 3).
+    fn x_and_o(n: u32) -> (Grid2<f32>, Grid2<f32>) {
+        let bar = |p: Vec2, d: Vec2| {
+            let along = p.dot(d).abs() - 0.33;
+            let across = p.perp_dot(d).abs() - 0.07;
+            -along.max(across)
+        };
+        let d1 = Vec2::new(1.0, 1.0).normalize();
+        let d2 = Vec2::new(1.0, -1.0).normalize();
+        let x = raster(n, |p| bar(p, d1).max(bar(p, d2)));
+        let o = raster(n, |p| 0.09 - (p.length() - 0.26).abs());
+        (x, o)
+    }
+
+    #[test]
+    fn x_to_o_changes_topology() {
+        let (x, o) = x_and_o(32);
+        let a = image_constraints(&x, 0.5).unwrap();
+        let b = image_constraints(&o, 0.5).unwrap();
+        let morph = ContourMorph::new(&a, &b, &TransformSettings::default()).unwrap();
+        let holes = |t: f32| {
+            let cs = morph.contours(t, 64).unwrap();
+            assert!(cs.iter().all(|c| c.closed), "open contour at t={t}");
+            let outer = cs.iter().filter(|c| c.signed_area() > 0.0).count();
+            let inner = cs.iter().filter(|c| c.signed_area() < 0.0).count();
+            (outer, inner)
+        };
+        assert_eq!(holes(0.0), (1, 0), "X: one piece without holes");
+        assert_eq!(holes(1.0), (1, 1), "O: one ring");
+        // Every frame is one piece (no pieces popping up); a hole opens on the way.
+        let mut opened = None;
+        for k in 0..=10 {
+            let t = k as f32 / 10.0;
+            let (outer, inner) = holes(t);
+            assert_eq!(outer, 1, "t={t}");
+            if inner > 0 && opened.is_none() {
+                opened = Some(t);
+            }
+        }
+        let opened = opened.unwrap();
+        assert!(opened > 0.0 && opened <= 1.0);
+        // The X's boundary constraints are on the t = 0 contour (f32 slice
+        // evaluation: 2e-3 of the unit value is 1e-4 world units here).
+        let s0 = morph.slice(0.0).unwrap();
+        let worst =
+            a.iter().step_by(2).map(|c| s0.value(Vec2::from_array(c.position)).abs()).fold(0.0, f32::max);
+        assert!(worst < 2e-3, "{worst}");
+    }
+
+    #[test]
+    fn bad_morph_input() {
+        let s = TransformSettings { separation: 0.0, ..Default::default() };
+        let a = vec![Constraint::new([0.0, 0.0], 0.0); 3];
+        assert!(matches!(ContourMorph::new(&a, &a, &s), Err(RbfError::InvalidSetting(_))));
+        assert!(matches!(
+            ContourMorph::new(&a, &[], &TransformSettings::default()),
+            Err(RbfError::EmptyShape("target"))
+        ));
+        let lifted: Vec<Constraint<4>> = lift(&[Constraint::new([1.0, 2.0], 3.0)], &[4.0, 5.0]);
+        assert_eq!(lifted[0], Constraint::new([1.0, 2.0, 4.0, 5.0], 3.0));
+    }
+}
