@@ -1,8 +1,15 @@
-//! 3D shape metamorphosis based on T-spline level sets after Yang & Jüttler,
-//! *3D shape metamorphosis based on T-spline level sets*, The Visual Computer
-//! 23, 2007.
-//!
-//! **Status: not implemented yet.** This crate is a placeholder in the
-//! workspace layout; the method is tracked by its own issue (octree T-mesh,
-//! least-squares fitting, curvature-regularised evolution). It builds on
-//! [`isomorph_common`].
+//! T-spline level-set metamorphosis (work in progress).
+
+mod basis;
+mod bspline;
+mod error;
+mod tmesh;
+mod tspline;
+
+pub use basis::Eval;
+pub use error::TsplineError;
+pub use tmesh::{MAX_DEPTH, TMesh, TMeshSettings};
+pub use tspline::TSpline;
+mod fit;
+mod lsq;
+pub use fit::{FitReport, FitSettings, fit};
