@@ -13,3 +13,6 @@ pub use tspline::TSpline;
 mod fit;
 mod lsq;
 pub use fit::{FitReport, FitSettings, fit};
+mod evolution;
+mod sampling;
+pub use evolution::{EvolveSettings, Evolution, Outcome, Speed, StepStats, evolve};

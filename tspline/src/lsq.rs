@@ -28,13 +28,6 @@ impl LeafRows {
         self.rhs.push(rhs);
     }
 
-    /// Appends another block of the same leaf.
-    pub fn append(&mut self, other: &LeafRows) {
-        self.rows.extend_from_slice(&other.rows);
-        self.weights.extend_from_slice(&other.weights);
-        self.rhs.extend_from_slice(&other.rhs);
-    }
-
     /// Number of rows.
     pub fn len(&self) -> usize {
         self.weights.len()

@@ -210,10 +210,6 @@ impl TMesh {
         total as f64 / self.leaves.len().max(1) as f64
     }
 
-    pub(crate) fn leaves(&self) -> &[Leaf] {
-        &self.leaves
-    }
-
     pub(crate) fn anchors(&self) -> &[Anchor] {
         &self.anchors
     }
@@ -538,7 +534,7 @@ mod tests {
             }
         }
         // Balanced: neighbours differ by at most one level.
-        assert!(unbalanced(m.leaves(), &m.lookup, m.resolution()).is_none());
+        assert!(unbalanced(&m.leaves, &m.lookup, m.resolution()).is_none());
     }
 
     #[test]
