@@ -12,11 +12,7 @@ pub(crate) type Sym3 = [f64; 6];
 
 /// Converts a [`Sym3`] to a full matrix.
 pub(crate) fn sym_to_mat(s: &Sym3) -> DMat3 {
-    DMat3::from_cols(
-        DVec3::new(s[0], s[3], s[4]),
-        DVec3::new(s[3], s[1], s[5]),
-        DVec3::new(s[4], s[5], s[2]),
-    )
+    DMat3::from_cols(DVec3::new(s[0], s[3], s[4]), DVec3::new(s[3], s[1], s[5]), DVec3::new(s[4], s[5], s[2]))
 }
 
 /// `B`, `∇B` and the Hessian of one anchor's blending function at `p`.

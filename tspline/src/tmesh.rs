@@ -38,7 +38,7 @@ pub struct TMeshSettings {
 
 impl Default for TMeshSettings {
     fn default() -> Self {
-        Self { max_samples_per_cell: 8, max_depth: 6, min_depth: 2, balance: true, sample_spacing: 0.05 }
+        Self { max_samples_per_cell: 12, max_depth: 6, min_depth: 2, balance: true, sample_spacing: 0.05 }
     }
 }
 
@@ -115,13 +115,7 @@ impl TMesh {
         };
         let cells: Vec<[i64; 3]> = samples.iter().filter_map(|&p| to_lattice(p)).collect();
         let mut leaves = Vec::new();
-        subdivide(
-            Leaf { min: [0; 3], size: res },
-            0,
-            cells,
-            settings,
-            &mut leaves,
-        );
+        subdivide(Leaf { min: [0; 3], size: res }, 0, cells, settings, &mut leaves);
         let mut lookup = build_lookup(&leaves, res);
         if settings.balance {
             while let Some(split) = unbalanced(&leaves, &lookup, res) {
@@ -247,9 +241,7 @@ impl TMesh {
     /// the upper domain faces belong to the last cells).
     pub(crate) fn locate(&self, p: DVec3) -> usize {
         let q = (p + DVec3::ONE) * 0.5 * self.res as f64;
-        let idx = |v: f64| -> i64 {
-            if v.is_nan() { 0 } else { (v.floor() as i64).clamp(0, self.res - 1) }
-        };
+        let idx = |v: f64| -> i64 { if v.is_nan() { 0 } else { (v.floor() as i64).clamp(0, self.res - 1) } };
         self.lookup_cell([idx(q.x), idx(q.y), idx(q.z)])
     }
 

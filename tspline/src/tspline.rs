@@ -254,7 +254,11 @@ mod tests {
                 d[a] = e;
                 let (fp, fm) = (f.eval(p + d), f.eval(p - d));
                 let g = (fp.value - fm.value) / (2.0 * e);
-                assert!((g - x.gradient[a]).abs() < 1e-5 * (1.0 + g.abs()), "grad {a} at {p}: {g} vs {}", x.gradient[a]);
+                assert!(
+                    (g - x.gradient[a]).abs() < 1e-5 * (1.0 + g.abs()),
+                    "grad {a} at {p}: {g} vs {}",
+                    x.gradient[a]
+                );
                 let h = (fp.gradient - fm.gradient) / (2.0 * e);
                 let col = x.hessian.col(a);
                 assert!((h - col).length() < 1e-4 * (1.0 + h.length()), "hess {a} at {p}: {h} vs {col}");
@@ -278,7 +282,15 @@ mod tests {
             let face = DVec3::new(hi.x, c.y + 0.13 * (hi.y - lo.y), c.z - 0.21 * (hi.z - lo.z));
             let (a, b) = (f.eval(face - DVec3::X * e), f.eval(face + DVec3::X * e));
             assert!((a.value - b.value).abs() < 1e-7);
-            assert!((a.gradient - b.gradient).length() < 1e-5, "leaf {leaf} {:?} at {face}: {} vs {} (leaves {} {})", m.leaf_box(leaf), a.gradient, b.gradient, m.locate(face - DVec3::X * e), m.locate(face + DVec3::X * e));
+            assert!(
+                (a.gradient - b.gradient).length() < 1e-5,
+                "leaf {leaf} {:?} at {face}: {} vs {} (leaves {} {})",
+                m.leaf_box(leaf),
+                a.gradient,
+                b.gradient,
+                m.locate(face - DVec3::X * e),
+                m.locate(face + DVec3::X * e)
+            );
             let jump = (a.hessian - b.hessian).to_cols_array().iter().fold(0.0f64, |m, v| m.max(v.abs()));
             let scale = a.hessian.to_cols_array().iter().fold(1.0f64, |m, v| m.max(v.abs()));
             assert!(jump < 1e-4 * scale, "leaf {leaf}: Hessian jump {jump} (scale {scale})");
