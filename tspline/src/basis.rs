@@ -69,8 +69,8 @@ impl LocalBasis {
             self.hb.push(h);
             self.d += b;
             self.dd += g;
-            for k in 0..6 {
-                self.hd[k] += h[k];
+            for (acc, v) in self.hd.iter_mut().zip(h) {
+                *acc += v;
             }
         }
     }
@@ -107,8 +107,8 @@ impl LocalBasis {
             let c = coeffs[i as usize];
             n += c * self.b[k];
             dn += c * self.db[k];
-            for j in 0..6 {
-                hn[j] += c * self.hb[k][j];
+            for (acc, v) in hn.iter_mut().zip(self.hb[k]) {
+                *acc += c * v;
             }
         }
         rational_derivatives(n, dn, &hn, self.d, self.dd, &self.hd)

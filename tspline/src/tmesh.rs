@@ -520,8 +520,8 @@ mod tests {
             let mirror = [r - a.pos[0], a.pos[1], a.pos[2]];
             if let Some(&j) = idx.get(&mirror) {
                 let kx = m.anchors()[j].knots[0];
-                for t in 0..5 {
-                    assert!((kx[t] + a.knots[0][4 - t]).abs() < 1e-12);
+                for (t, k) in kx.iter().enumerate() {
+                    assert!((k + a.knots[0][4 - t]).abs() < 1e-12);
                 }
             }
         }
