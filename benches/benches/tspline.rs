@@ -12,7 +12,7 @@
 //! `cargo bench -p isomorph-benches --bench tspline -- morph/sphere_holed_cube`
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 use isomorph_benches::data_path;
 use isomorph_common::marching_cubes::polygonize;
 use isomorph_common::mesh::io::read_mesh;
@@ -66,18 +66,6 @@ fn morphs(c: &mut Criterion) {
     group.finish();
 }
 
-/// Samples of a sphere of radius `r` about `c` (domain units).
-fn sphere_points(n: usize, r: f64, c: DVec3) -> Vec<DVec3> {
-    (0..n)
-        .map(|i| {
-            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
-            let s = (1.0 - z * z).sqrt();
-            let phi = i as f64 * 2.399_963_229_728_653;
-            c + r * DVec3::new(s * phi.cos(), s * phi.sin(), z)
-        })
-        .collect()
-}
-
 /// An adaptive T-mesh with about `n` coefficients around a source sphere
 /// (r = 0.5) and a target sphere (r = 0.6), found by adjusting the sample
 /// spacing.
@@ -87,8 +75,8 @@ fn mesh_with(n: usize) -> Arc<TMesh> {
     for _ in 0..20 {
         let spacing = (lo * hi).sqrt();
         let count = (4.0 * std::f64::consts::PI * 0.36 / (spacing * spacing)) as usize;
-        let mut pts = sphere_points(count, 0.5, DVec3::ZERO);
-        pts.extend(sphere_points(count, 0.6, DVec3::ZERO));
+        let mut pts = demo::sphere_samples(count, 0.5, DVec3::ZERO);
+        pts.extend(demo::sphere_samples(count, 0.6, DVec3::ZERO));
         let mut s = TMeshSettings::default();
         s.sample_spacing = spacing;
         s.min_depth = 1;
@@ -123,7 +111,6 @@ fn steps(c: &mut Criterion) {
         });
     }
     group.finish();
-    let _ = Vec3::ZERO;
 }
 
 criterion_group!(benches, morphs, steps);

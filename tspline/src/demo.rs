@@ -1,7 +1,7 @@
 //! The paper's example shapes that the shared models do not have, built from
 //! the shared CSG primitives or as parametric meshes.
 
-use glam::{Quat, Vec3};
+use glam::{DVec3, Quat, Vec3};
 use isomorph_common::{Shape, TriMesh};
 use std::f32::consts::{FRAC_PI_2, TAU};
 
@@ -45,6 +45,19 @@ pub fn petal_torus(major: f32, minor: f32, amplitude: f32, petals: u32, segments
         }
     }
     TriMesh { positions, triangles, ..TriMesh::default() }
+}
+
+/// `n` nearly uniform points on the sphere of radius `r` about `center`
+/// (Fibonacci spiral), e.g. to build a [`crate::TMesh`] in domain units.
+pub fn sphere_samples(n: usize, r: f64, center: DVec3) -> Vec<DVec3> {
+    (0..n)
+        .map(|i| {
+            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+            let s = (1.0 - z * z).sqrt();
+            let phi = i as f64 * 2.399_963_229_728_653;
+            center + r * DVec3::new(s * phi.cos(), s * phi.sin(), z)
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -397,19 +397,11 @@ mod tests {
     use crate::tmesh::{TMesh, TMeshSettings};
     use std::sync::Arc;
 
-    fn sphere_points(n: usize, r: f64) -> Vec<DVec3> {
-        (0..n)
-            .map(|i| {
-                let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
-                let s = (1.0 - z * z).sqrt();
-                let phi = i as f64 * 2.399_963_229_728_653;
-                r * DVec3::new(s * phi.cos(), s * phi.sin(), z)
-            })
-            .collect()
-    }
-
     fn run(r0: f64, r1: f64, speed: Speed) -> Evolution {
-        let (a, b) = (sphere_points(1500, r0), sphere_points(1500, r1));
+        let (a, b) = (
+            crate::demo::sphere_samples(1500, r0, DVec3::ZERO),
+            crate::demo::sphere_samples(1500, r1, DVec3::ZERO),
+        );
         let all: Vec<DVec3> = a.iter().chain(&b).copied().collect();
         let s = TMeshSettings { max_depth: 4, min_depth: 3, sample_spacing: 0.05, ..Default::default() };
         let mesh = Arc::new(TMesh::build(&all, &s).unwrap());

@@ -158,20 +158,9 @@ mod tests {
     use super::*;
     use crate::tmesh::TMeshSettings;
 
-    pub(crate) fn sphere_points(n: usize, r: f64) -> Vec<DVec3> {
-        (0..n)
-            .map(|i| {
-                let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
-                let s = (1.0 - z * z).sqrt();
-                let phi = i as f64 * 2.399_963_229_728_653;
-                r * DVec3::new(s * phi.cos(), s * phi.sin(), z)
-            })
-            .collect()
-    }
-
     #[test]
     fn fits_a_sphere_distance_closely() {
-        let pts = sphere_points(4000, 0.5);
+        let pts = crate::demo::sphere_samples(4000, 0.5, DVec3::ZERO);
         let s = TMeshSettings { max_depth: 5, max_samples_per_cell: 8, ..Default::default() };
         let mesh = Arc::new(TMesh::build(&pts, &s).unwrap());
         let settings = FitSettings { quadrature: 3, ..Default::default() };
@@ -194,7 +183,7 @@ mod tests {
 
     #[test]
     fn uniform_mesh_fit_has_accurate_curvature() {
-        let pts = sphere_points(2000, 0.5);
+        let pts = crate::demo::sphere_samples(2000, 0.5, DVec3::ZERO);
         let mesh = Arc::new(TMesh::uniform(4).unwrap());
         let (f, report) = fit(mesh, |p: DVec3| 0.5 - p.length(), &pts, &FitSettings::default()).unwrap();
         assert!(report.max_surface_error < 1e-3, "{report:?}");

@@ -63,20 +63,11 @@
 //! # Example
 //! ```
 //! use glam::DVec3;
-//! use isomorph_tspline::{EvolveSettings, FitSettings, Outcome, TMesh, TMeshSettings, evolve, fit};
+//! use isomorph_tspline::{EvolveSettings, FitSettings, Outcome, TMesh, TMeshSettings, demo, evolve, fit};
 //! use std::{ops::ControlFlow, sync::Arc};
 //!
 //! // A T-mesh refined around spheres of radius 0.6 and 0.4 (domain units).
-//! let sphere = |r: f64| -> Vec<DVec3> {
-//!     (0..800)
-//!         .map(|i| {
-//!             let z = 1.0 - 2.0 * (i as f64 + 0.5) / 800.0;
-//!             let (s, phi) = ((1.0 - z * z).sqrt(), i as f64 * 2.4);
-//!             r * DVec3::new(s * phi.cos(), s * phi.sin(), z)
-//!         })
-//!         .collect()
-//! };
-//! let (a, b) = (sphere(0.6), sphere(0.4));
+//! let (a, b) = (demo::sphere_samples(800, 0.6, DVec3::ZERO), demo::sphere_samples(800, 0.4, DVec3::ZERO));
 //! let samples: Vec<DVec3> = a.iter().chain(&b).copied().collect();
 //! let mut settings = TMeshSettings::default();
 //! settings.max_depth = 4;

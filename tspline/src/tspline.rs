@@ -159,20 +159,9 @@ mod tests {
     use super::*;
     use crate::tmesh::TMeshSettings;
 
-    fn sphere_points(n: usize, r: f64, c: DVec3) -> Vec<DVec3> {
-        (0..n)
-            .map(|i| {
-                let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
-                let s = (1.0 - z * z).sqrt();
-                let phi = i as f64 * 2.399_963_229_728_653;
-                c + r * DVec3::new(s * phi.cos(), s * phi.sin(), z)
-            })
-            .collect()
-    }
-
     /// An adapted, unbalanced-looking (but balanced) mesh with hanging anchors.
     fn adapted() -> Arc<TMesh> {
-        let pts = sphere_points(3000, 0.45, DVec3::new(0.1, -0.05, 0.02));
+        let pts = crate::demo::sphere_samples(3000, 0.45, DVec3::new(0.1, -0.05, 0.02));
         let s = TMeshSettings { max_depth: 5, min_depth: 1, ..Default::default() };
         Arc::new(TMesh::build(&pts, &s).unwrap())
     }
