@@ -21,9 +21,10 @@ pub(crate) struct Sample {
     pub eval: Eval,
 }
 
-/// The lattice for the zero-set mesh: `sub` nodes per finest cell.
+/// The lattice for the zero-set mesh: `sub` nodes per edge of the smallest
+/// leaf (not of the maximum depth, which the tree may not reach).
 fn lattice(spline: &TSpline, sub: u32) -> (u32, f64) {
-    let cells = spline.mesh().resolution() as u32 * sub;
+    let cells = (2.0 / spline.mesh().finest_cell()).round() as u32 * sub;
     (cells + 1, 2.0 / f64::from(cells))
 }
 

@@ -217,6 +217,7 @@ impl TMesh {
     }
 
     /// Finest lattice cells per axis.
+    #[cfg(test)]
     pub(crate) fn resolution(&self) -> i64 {
         self.res
     }
