@@ -1,0 +1,117 @@
+//! Benchmarks of the T-spline level-set morph (Yang & Jüttler 2007).
+//!
+//! - `morph/sphere_holed_cube`: the paper's Example 2, sphere r = 0.3 →
+//!   cube with three holes (genus 3), whole pipeline (T-mesh, fit,
+//!   evolution, projection frames).
+//! - `morph/bunny_petal_torus`: Example 1, the Stanford bunny → a petal
+//!   torus, whole pipeline.
+//! - `step/{500,1000,2000,4000}`: one evolution step (sampling, speed,
+//!   sparse least squares, Euler update) against the number of coefficients
+//!   (adaptive T-meshes around two spheres; the exact count is printed).
+//!
+//! `cargo bench -p isomorph-benches --bench tspline -- morph/sphere_holed_cube`
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use glam::DVec3;
+use isomorph_benches::data_path;
+use isomorph_common::marching_cubes::polygonize;
+use isomorph_common::mesh::io::read_mesh;
+use isomorph_common::{Aabb, Shape};
+use isomorph_tspline::{
+    EvolveSettings, FitSettings, MorphSettings, Speed, TMesh, TMeshSettings, demo, evolve, fit, morph,
+};
+use std::hint::black_box;
+use std::ops::ControlFlow;
+use std::sync::Arc;
+
+/// The settings of the sphere → holed cube test and demo.
+fn holed_cube_settings() -> MorphSettings {
+    let mut s = MorphSettings::default();
+    s.tmesh.max_depth = 4;
+    s.evolve.speed = Speed::Robust { v_max: 0.2, beta: 0.125 };
+    s.evolve.max_steps = 60;
+    s
+}
+
+fn morphs(c: &mut Criterion) {
+    let mut group = c.benchmark_group("morph");
+    group.sample_size(10);
+    let bounds = Aabb::cube(0.5);
+    let sphere = polygonize(&Shape::sphere(0.3), &bounds, 40, 0.0).unwrap();
+    let cube = polygonize(&demo::holed_cube(), &bounds, 64, 0.0).unwrap();
+    let settings = holed_cube_settings();
+    group.bench_function("sphere_holed_cube", |b| {
+        b.iter(|| {
+            black_box(morph(&sphere, &cube, &settings, &|_| ControlFlow::Continue(())).unwrap().frame_count())
+        })
+    });
+    if let Ok(bunny) = read_mesh(data_path("bunny.ply")) {
+        // The petal torus placed over the bunny's bounding box.
+        let bb = bunny.bounds();
+        let size = bb.size().max_element();
+        let mut torus = demo::petal_torus(0.3 * size, 0.12 * size, 0.35, 5, 96);
+        torus.transform(&glam::Affine3A::from_translation(bb.center()));
+        let mut settings = MorphSettings::default();
+        settings.tmesh.max_depth = 5;
+        settings.evolve.speed = Speed::Robust { v_max: 0.2, beta: 0.0625 };
+        settings.evolve.max_steps = 80;
+        group.bench_function("bunny_petal_torus", |b| {
+            b.iter(|| {
+                black_box(
+                    morph(&bunny, &torus, &settings, &|_| ControlFlow::Continue(())).unwrap().frame_count(),
+                )
+            })
+        });
+    }
+    group.finish();
+}
+
+/// An adaptive T-mesh with about `n` coefficients around a source sphere
+/// (r = 0.5) and a target sphere (r = 0.6), found by adjusting the sample
+/// spacing.
+fn mesh_with(n: usize) -> Arc<TMesh> {
+    let (mut lo, mut hi) = (0.01f64, 0.5f64);
+    let mut best: Option<Arc<TMesh>> = None;
+    for _ in 0..20 {
+        let spacing = (lo * hi).sqrt();
+        let count = (4.0 * std::f64::consts::PI * 0.36 / (spacing * spacing)) as usize;
+        let mut pts = demo::sphere_samples(count, 0.5, DVec3::ZERO);
+        pts.extend(demo::sphere_samples(count, 0.6, DVec3::ZERO));
+        let mut s = TMeshSettings::default();
+        s.sample_spacing = spacing;
+        s.min_depth = 1;
+        let mesh = Arc::new(TMesh::build(&pts, &s).unwrap());
+        let got = mesh.anchor_count();
+        let better = best.as_ref().is_none_or(|b| got.abs_diff(n) < b.anchor_count().abs_diff(n));
+        if better {
+            best = Some(mesh);
+        }
+        if got > n { lo = spacing } else { hi = spacing }
+    }
+    best.unwrap()
+}
+
+fn steps(c: &mut Criterion) {
+    let mut group = c.benchmark_group("step");
+    group.sample_size(10);
+    for n in [500usize, 1000, 2000, 4000] {
+        let mesh = mesh_with(n);
+        eprintln!("step/{n}: {} coefficients, {} leaves", mesh.anchor_count(), mesh.leaf_count());
+        let (f0, _) = fit(mesh, |p: DVec3| 0.5 - p.length(), &[], &FitSettings::default()).unwrap();
+        let mut settings = EvolveSettings::default();
+        settings.max_steps = 1;
+        settings.stall_steps = 10;
+        group.bench_function(BenchmarkId::from_parameter(n), |b| {
+            b.iter(|| {
+                let e =
+                    evolve(&f0, |p: DVec3| 0.6 - p.length(), &[], &settings, &|_| ControlFlow::Continue(()))
+                        .unwrap();
+                black_box(e.frames.len())
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, morphs, steps);
+criterion_main!(benches);

@@ -1,0 +1,159 @@
+//! The trivariate blending functions `B_i = N[ξ^i](x) N[η^i](y) N[ζ^i](z)`
+//! (paper eq. 1) and their rational normalization `R_i = B_i / Σ_j B_j`
+//! with first and second derivatives (note §2.2), evaluated only for the few
+//! anchors whose support meets the leaf containing the point.
+
+use crate::bspline::cubic;
+use crate::tmesh::{Anchor, TMesh};
+use glam::{DMat3, DVec3};
+
+/// A symmetric 3×3 matrix as `[xx, yy, zz, xy, xz, yz]`.
+pub(crate) type Sym3 = [f64; 6];
+
+/// Converts a [`Sym3`] to a full matrix.
+pub(crate) fn sym_to_mat(s: &Sym3) -> DMat3 {
+    DMat3::from_cols(DVec3::new(s[0], s[3], s[4]), DVec3::new(s[3], s[1], s[5]), DVec3::new(s[4], s[5], s[2]))
+}
+
+/// `B`, `∇B` and the Hessian of one anchor's blending function at `p`.
+#[inline]
+pub(crate) fn blend(anchor: &Anchor, p: DVec3) -> (f64, DVec3, Sym3) {
+    let [x0, x1, x2] = cubic(&anchor.knots[0], p.x);
+    if x0 == 0.0 && x1 == 0.0 && x2 == 0.0 {
+        return (0.0, DVec3::ZERO, [0.0; 6]);
+    }
+    let [y0, y1, y2] = cubic(&anchor.knots[1], p.y);
+    let [z0, z1, z2] = cubic(&anchor.knots[2], p.z);
+    let b = x0 * y0 * z0;
+    let g = DVec3::new(x1 * y0 * z0, x0 * y1 * z0, x0 * y0 * z1);
+    let h = [x2 * y0 * z0, x0 * y2 * z0, x0 * y0 * z2, x1 * y1 * z0, x1 * y0 * z1, x0 * y1 * z1];
+    (b, g, h)
+}
+
+/// The non-zero blending functions at one point: the leaf, the anchors of
+/// its list and their `B`, `∇B`, `H B`, plus the sums `D`, `∇D`, `H D`.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct LocalBasis {
+    /// Leaf containing the point.
+    pub leaf: usize,
+    /// Blending function values per local anchor.
+    pub b: Vec<f64>,
+    /// Gradients per local anchor.
+    pub db: Vec<DVec3>,
+    /// Hessians per local anchor.
+    pub hb: Vec<Sym3>,
+    /// `D = Σ B_i`.
+    pub d: f64,
+    /// `∇D`.
+    pub dd: DVec3,
+    /// `H D`.
+    pub hd: Sym3,
+}
+
+impl LocalBasis {
+    /// Evaluates every blending function of the leaf containing `p`.
+    pub fn at(&mut self, mesh: &TMesh, p: DVec3) {
+        self.leaf = mesh.locate(p);
+        let list = mesh.leaf_anchors(self.leaf);
+        let anchors = mesh.anchors();
+        self.b.clear();
+        self.db.clear();
+        self.hb.clear();
+        self.d = 0.0;
+        self.dd = DVec3::ZERO;
+        self.hd = [0.0; 6];
+        for &i in list {
+            let (b, g, h) = blend(&anchors[i as usize], p);
+            self.b.push(b);
+            self.db.push(g);
+            self.hb.push(h);
+            self.d += b;
+            self.dd += g;
+            for (acc, v) in self.hd.iter_mut().zip(h) {
+                *acc += v;
+            }
+        }
+    }
+
+    /// The rational basis `R_i = B_i / D` and its gradients
+    /// `∇R_i = (∇B_i − R_i ∇D) / D` into `r`, `dr` (local order). Returns
+    /// false when `D = 0` (the point is outside every support).
+    pub fn rational(&self, r: &mut Vec<f64>, dr: &mut Vec<DVec3>) -> bool {
+        r.clear();
+        dr.clear();
+        if self.d <= 0.0 {
+            return false;
+        }
+        let inv = 1.0 / self.d;
+        for (b, g) in self.b.iter().zip(&self.db) {
+            let ri = b * inv;
+            r.push(ri);
+            dr.push((*g - ri * self.dd) * inv);
+        }
+        true
+    }
+
+    /// Value, gradient and Hessian of `f = Σ c_i B_i / D` for the
+    /// coefficients of the leaf's anchors, `coeff(i)` by global index.
+    pub fn combine(&self, mesh: &TMesh, coeffs: &[f64]) -> Eval {
+        if self.d <= 0.0 {
+            return Eval::default();
+        }
+        let list = mesh.leaf_anchors(self.leaf);
+        let mut n = 0.0;
+        let mut dn = DVec3::ZERO;
+        let mut hn = [0.0; 6];
+        for (k, &i) in list.iter().enumerate() {
+            let c = coeffs[i as usize];
+            n += c * self.b[k];
+            dn += c * self.db[k];
+            for (acc, v) in hn.iter_mut().zip(self.hb[k]) {
+                *acc += c * v;
+            }
+        }
+        rational_derivatives(n, dn, &hn, self.d, self.dd, &self.hd)
+    }
+}
+
+/// Value, gradient and Hessian of `N / D` from those of `N` and `D` (note
+/// §2.2): `∇f = (∇N − f ∇D)/D`, `H f = (H N − f H D − ∇f ∇Dᵀ − ∇D ∇fᵀ)/D`.
+pub(crate) fn rational_derivatives(n: f64, dn: DVec3, hn: &Sym3, d: f64, dd: DVec3, hd: &Sym3) -> Eval {
+    let f = n / d;
+    let g = (dn - f * dd) / d;
+    let pairs = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
+    let h: Sym3 = std::array::from_fn(|k| {
+        let (a, b) = pairs[k];
+        (hn[k] - f * hd[k] - g[a] * dd[b] - dd[a] * g[b]) / d
+    });
+    Eval { value: f, gradient: g, hessian: sym_to_mat(&h) }
+}
+
+/// Value, gradient and Hessian of a T-spline function at a point (domain
+/// units, `f64`).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Eval {
+    /// `f(p)`.
+    pub value: f64,
+    /// `∇f(p)`; points into the shape (towards larger values).
+    pub gradient: DVec3,
+    /// The Hessian `H f(p)` (symmetric).
+    pub hessian: DMat3,
+}
+
+impl Eval {
+    /// Mean curvature of the level set through the point, `κ = div(∇f/|∇f|)/2
+    /// = (|∇f|² tr H − ∇fᵀ H ∇f) / (2 |∇f|³)` (note §6). With the
+    /// positive-inside convention it is **negative on convex parts** (for
+    /// `f = r − |x|` it is `−1/r`), so that `ḟ = κ |∇f|` is mean-curvature
+    /// flow (convex parts shrink). Zero where `∇f` vanishes.
+    pub fn mean_curvature(&self) -> f64 {
+        let g = self.gradient;
+        let len2 = g.length_squared();
+        if len2 <= 1e-24 {
+            return 0.0;
+        }
+        let h = self.hessian;
+        let trace = h.x_axis.x + h.y_axis.y + h.z_axis.z;
+        (len2 * trace - g.dot(h * g)) / (2.0 * len2 * len2.sqrt())
+    }
+}

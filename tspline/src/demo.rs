@@ -1,0 +1,82 @@
+//! The paper's example shapes that the shared models do not have, built from
+//! the shared CSG primitives or as parametric meshes.
+
+use glam::{DVec3, Quat, Vec3};
+use isomorph_common::{Shape, TriMesh};
+use std::f32::consts::{FRAC_PI_2, TAU};
+
+/// Example 2's target (Fig. 5): a cube of half edge 0.3 with three
+/// cylindrical holes of radius 0.08, one along each axis, offset from the
+/// centre so that they do not meet (three crossing holes would make genus
+/// 5): genus 3, inside `[−0.5, 0.5]³`.
+pub fn holed_cube() -> Shape {
+    let drill =
+        |rotation: Quat, offset: Vec3| Shape::cylinder(0.08, 0.5).rotated(rotation).translated(offset);
+    Shape::cuboid(Vec3::splat(0.3))
+        .subtract(drill(Quat::IDENTITY, Vec3::new(0.12, -0.12, 0.0)))
+        .subtract(drill(Quat::from_rotation_y(FRAC_PI_2), Vec3::new(0.0, 0.12, -0.12)))
+        .subtract(drill(Quat::from_rotation_x(FRAC_PI_2), Vec3::new(-0.12, 0.0, 0.12)))
+}
+
+/// Example 1's target (Fig. 1): a "petal torus", a torus in the xy plane
+/// whose tube radius varies with the angle around the z axis,
+/// `r(θ) = minor · (1 + amplitude · cos(petals · θ))`, as a closed,
+/// outward-oriented mesh with `segments` × `segments / 2` quads.
+pub fn petal_torus(major: f32, minor: f32, amplitude: f32, petals: u32, segments: u32) -> TriMesh {
+    let (nu, nv) = (segments.max(8), (segments / 2).max(6));
+    let mut positions = Vec::with_capacity((nu * nv) as usize);
+    for i in 0..nu {
+        let theta = TAU * i as f32 / nu as f32;
+        let r = minor * (1.0 + amplitude * (petals as f32 * theta).cos());
+        let (s, c) = theta.sin_cos();
+        for j in 0..nv {
+            let phi = TAU * j as f32 / nv as f32;
+            let rho = major + r * phi.cos();
+            positions.push(Vec3::new(rho * c, rho * s, r * phi.sin()));
+        }
+    }
+    let id = |i: u32, j: u32| (i % nu) * nv + j % nv;
+    let mut triangles = Vec::with_capacity((2 * nu * nv) as usize);
+    for i in 0..nu {
+        for j in 0..nv {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            triangles.push([a, b, c]);
+            triangles.push([a, c, d]);
+        }
+    }
+    TriMesh { positions, triangles, ..TriMesh::default() }
+}
+
+/// `n` nearly uniform points on the sphere of radius `r` about `center`
+/// (Fibonacci spiral), e.g. to build a [`crate::TMesh`] in domain units.
+pub fn sphere_samples(n: usize, r: f64, center: DVec3) -> Vec<DVec3> {
+    (0..n)
+        .map(|i| {
+            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+            let s = (1.0 - z * z).sqrt();
+            let phi = i as f64 * 2.399_963_229_728_653;
+            center + r * DVec3::new(s * phi.cos(), s * phi.sin(), z)
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use isomorph_common::Aabb;
+    use isomorph_common::marching_cubes::polygonize;
+
+    #[test]
+    fn holed_cube_has_genus_three() {
+        let m = polygonize(&holed_cube(), &Aabb::cube(0.5), 48, 0.0).unwrap();
+        assert_eq!(m.genus(), Some(3));
+        assert_eq!(m.connected_components(), 1);
+    }
+
+    #[test]
+    fn petal_torus_is_a_closed_outward_torus() {
+        let m = petal_torus(0.3, 0.1, 0.4, 5, 64);
+        assert_eq!(m.genus(), Some(1));
+        assert!(m.signed_volume() > 0.0, "outward orientation");
+    }
+}

@@ -1,0 +1,430 @@
+//! Evolution of the T-spline level set towards the target (paper §3.3,
+//! note §5): each step samples the zero set, evaluates the speed, solves a
+//! sparse least-squares problem for the coefficient velocities `ċ` and takes
+//! an explicit Euler step (eq. 9).
+//!
+//! # Sign convention
+//! Fields are positive inside. A zero set moving outward with normal speed
+//! `v` satisfies `∂f/∂τ = v |∇f|`, so `v = d_B > 0` inside the target grows
+//! the shape there and shrinks it where `d_B < 0` (paper eq. 7). The mean
+//! curvature `κ = div(∇f/|∇f|)/2` is negative on convex parts for a
+//! positive-inside field, so `v = κ` is mean-curvature flow (convex bumps
+//! shrink) and the paper's eq. 8, `v = λ d_B + (1 − λ) κ`, is used verbatim.
+//!
+//! # Least squares for `ċ` (note §5.3)
+//! With samples `p_k` on the zero set (M of them) and band points
+//! `q ∈ {p, p ± h n}` (K of them),
+//!
+//! ```text
+//! F(ċ) = 1/M Σ_k (Σ_i ċ_i R_i(p_k) − v_k |∇f(p_k)|)²                      velocity
+//!      + ω_D/K Σ_j (2 ∇f(q_j)·Σ_i ċ_i ∇R_i(q_j) + (|∇f(q_j)|² − 1)/τ)²    distance field
+//!      + ω_F/L Σ_l (Σ_i ċ_i R_i(x_l))²                                      far field
+//!      + ω_T ‖ċ‖²                                                          Tikhonov
+//! ```
+//!
+//! The far-field rows (`x_l` the centres of the `L` leaves whose
+//! coefficients have one sign, so that contain no zero) are our addition:
+//! without them blending functions with large supports that barely touch the
+//! zero set receive large velocities and raise spurious surfaces far away.
+//!
+//! The distance-field term asks `G = |∇f|² − 1` to relax as `Ġ = −G/τ`, which
+//! keeps `f` close to a signed distance function without re-initialization
+//! (the constraint of the paper's reference [29]). `ω_T` is relative to the
+//! mean diagonal of the data terms.
+
+use crate::error::{TsplineError, check_range};
+use crate::lsq::{self, LeafRows};
+use crate::sampling::{Sample, zero_set_samples};
+use crate::tspline::TSpline;
+use glam::DVec3;
+use rayon::prelude::*;
+use std::ops::ControlFlow;
+
+/// The speed function of the evolution.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub enum Speed {
+    /// The paper's eq. 8: `v = λ d_B + (1 − λ) κ`, `λ = exp(−d_B²)`. Keeps
+    /// thin features from splitting (Fig. 3), but far from the target the
+    /// curvature term dominates and large growth can stall or collapse
+    /// (note §5.2); stalls are detected and reported.
+    Paper,
+    /// `λ ≡ 1`: `v = d_B`, Breen & Whitaker's speed (the paper's Fig. 2).
+    Distance,
+    /// The note's robust alternative (§5.2):
+    /// `v = clamp(d_B, ±v_max) + β (1 − λ) κ` with `κ` clamped to `±1/h`.
+    /// The target stays a fixed point; curvature only regularizes.
+    Robust {
+        /// Largest distance speed (domain units per unit time), e.g. 0.2.
+        v_max: f64,
+        /// Curvature weight, e.g. the finest cell size.
+        beta: f64,
+    },
+}
+
+/// Settings of the evolution.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub struct EvolveSettings {
+    /// The speed function.
+    pub speed: Speed,
+    /// Morph step size `h` of `Δτ = min(1, h / max |v|)` (domain units);
+    /// `None` uses the finest cell size.
+    pub step: Option<f64>,
+    /// Step cap.
+    pub max_steps: usize,
+    /// Stop when the RMS distance between the zero set and the target
+    /// (both ways) is below this (domain units); `None` uses half the
+    /// finest cell size.
+    pub tolerance: Option<f64>,
+    /// Weight `ω_D` of the distance-field constraint.
+    pub distance_weight: f64,
+    /// Relaxation time `τ` of the distance-field constraint.
+    pub relaxation: f64,
+    /// Tikhonov weight `ω_T` (relative to the mean diagonal).
+    pub tikhonov: f64,
+    /// Weight `ω_F` of the far-field rows `ḟ = 0` at the centres of leaves
+    /// without a zero (coefficients of one sign). They keep blending
+    /// functions with large supports that barely touch the zero set from
+    /// creating spurious surfaces far away (note §5.5).
+    pub far_field_weight: f64,
+    /// Marching-cubes nodes per finest cell for the zero-set samples (1–4).
+    pub samples_per_cell: u32,
+    /// Report a stall when the error has not dropped by 1 % over this many
+    /// steps (and stop).
+    pub stall_steps: usize,
+}
+
+impl Default for EvolveSettings {
+    fn default() -> Self {
+        Self {
+            speed: Speed::Paper,
+            step: None,
+            max_steps: 200,
+            tolerance: None,
+            distance_weight: 0.1,
+            relaxation: 1.0,
+            tikhonov: 1e-2,
+            far_field_weight: 0.1,
+            samples_per_cell: 3,
+            stall_steps: 8,
+        }
+    }
+}
+
+impl EvolveSettings {
+    /// Checks the ranges.
+    ///
+    /// # Errors
+    /// [`TsplineError::BadSetting`].
+    pub fn validate(&self) -> Result<(), TsplineError> {
+        if let Some(h) = self.step {
+            check_range("step", h, 1e-6, 2.0, "(0, 2]")?;
+        }
+        if let Some(t) = self.tolerance {
+            check_range("tolerance", t, 1e-9, 2.0, "(0, 2]")?;
+        }
+        check_range("distance_weight", self.distance_weight, 0.0, 1e6, ">= 0")?;
+        check_range("relaxation", self.relaxation, 1e-6, 1e6, "> 0")?;
+        check_range("tikhonov", self.tikhonov, 1e-14, 1.0, "1e-14..=1")?;
+        check_range("far_field_weight", self.far_field_weight, 0.0, 1e6, ">= 0")?;
+        check_range("samples_per_cell", f64::from(self.samples_per_cell), 1.0, 4.0, "1..=4")?;
+        check_range("stall_steps", self.stall_steps as f64, 1.0, 1e9, ">= 1")?;
+        if let Speed::Robust { v_max, beta } = self.speed {
+            check_range("v_max", v_max, 1e-9, 1e6, "> 0")?;
+            check_range("beta", beta, 0.0, 1e6, ">= 0")?;
+        }
+        Ok(())
+    }
+}
+
+/// Why the evolution stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Outcome {
+    /// The zero set is within the tolerance of the target.
+    Converged,
+    /// No progress towards the target over `stall_steps` steps.
+    Stalled,
+    /// The step cap was reached.
+    StepLimit,
+    /// The zero set vanished (no sample left).
+    Vanished,
+}
+
+/// Statistics of one evolution step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub struct StepStats {
+    /// Step number (1-based).
+    pub step: usize,
+    /// Zero-set samples used (`N₁`).
+    pub samples: usize,
+    /// Largest `|v|` over the samples.
+    pub max_speed: f64,
+    /// The Euler step `Δτ`.
+    pub dt: f64,
+    /// RMS of `d_B` over the zero-set samples before the step.
+    pub rms_to_target: f64,
+    /// RMS first-order distance `|f|/|∇f|` of the target samples to the zero
+    /// set before the step.
+    pub rms_from_target: f64,
+    /// Range of `|∇f|` over the samples.
+    pub gradient_range: (f64, f64),
+    /// Stored non-zeros of the normal matrix.
+    pub nonzeros: usize,
+}
+
+impl StepStats {
+    /// The two-sided error `max(rms_to_target, rms_from_target)`.
+    pub fn error(&self) -> f64 {
+        self.rms_to_target.max(self.rms_from_target)
+    }
+}
+
+/// The result of [`evolve`].
+#[derive(Debug, Clone)]
+#[non_exhaustive]
+pub struct Evolution {
+    /// Coefficient vectors `c(τ_i)`, the initial one first.
+    pub frames: Vec<Vec<f64>>,
+    /// Per-step statistics.
+    pub steps: Vec<StepStats>,
+    /// Why it stopped.
+    pub outcome: Outcome,
+    /// The two-sided RMS error of the last frame (domain units).
+    pub final_error: f64,
+}
+
+/// Evolves `initial` towards the target with signed distance `target`
+/// (domain units, positive inside); `target_surface` are target surface
+/// samples (for the two-sided stopping test). `progress` sees every step and
+/// may break to cancel.
+///
+/// # Errors
+/// [`TsplineError::BadSetting`], [`TsplineError::Singular`] when a step's
+/// system cannot be solved, [`TsplineError::Cancelled`],
+/// [`TsplineError::Grid`] when the sampling lattice does not fit in memory.
+pub fn evolve<D: Fn(DVec3) -> f64 + Sync>(
+    initial: &TSpline,
+    target: D,
+    target_surface: &[DVec3],
+    settings: &EvolveSettings,
+    progress: &dyn Fn(&StepStats) -> ControlFlow<()>,
+) -> Result<Evolution, TsplineError> {
+    settings.validate()?;
+    let h_min = initial.mesh().finest_cell();
+    let h = settings.step.unwrap_or(h_min);
+    let tol = settings.tolerance.unwrap_or(0.5 * h_min);
+    let mut spline = initial.clone();
+    let mut frames = vec![spline.coefficients().to_vec()];
+    let mut steps: Vec<StepStats> = Vec::new();
+    let mut best = f64::INFINITY;
+    let mut best_step = 0;
+    let final_error;
+    let outcome = loop {
+        let samples = zero_set_samples(&spline, settings.samples_per_cell)?;
+        if samples.is_empty() {
+            final_error = f64::INFINITY;
+            break Outcome::Vanished;
+        }
+        let d_b: Vec<f64> = samples.par_iter().map(|s| target(s.p)).collect();
+        let rms_to = (d_b.iter().map(|d| d * d).sum::<f64>() / d_b.len() as f64).sqrt();
+        let rms_from = rms_first_order(&spline, target_surface);
+        let error = rms_to.max(rms_from);
+        if error < tol {
+            final_error = error;
+            break Outcome::Converged;
+        }
+        if error < best * 0.99 {
+            best = error;
+            best_step = steps.len();
+        } else if steps.len() - best_step >= settings.stall_steps {
+            final_error = error;
+            break Outcome::Stalled;
+        }
+        if steps.len() >= settings.max_steps {
+            final_error = error;
+            break Outcome::StepLimit;
+        }
+        let speeds: Vec<f64> =
+            samples.iter().zip(&d_b).map(|(s, &d)| speed(settings.speed, d, s, h_min)).collect();
+        let (cdot, nonzeros) = velocity(&spline, &samples, &speeds, h_min, settings)?;
+        let max_speed = speeds.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let dt = if max_speed > 0.0 { (h / max_speed).min(1.0) } else { 1.0 };
+        let c: Vec<f64> = spline.coefficients().iter().zip(&cdot).map(|(c, d)| c + dt * d).collect();
+        let grads = samples.iter().map(|s| s.eval.gradient.length());
+        let gradient_range = grads.fold((f64::MAX, 0.0f64), |(lo, hi), g| (lo.min(g), hi.max(g)));
+        spline = spline.with_coefficients(c)?;
+        frames.push(spline.coefficients().to_vec());
+        let stats = StepStats {
+            step: steps.len() + 1,
+            samples: samples.len(),
+            max_speed,
+            dt,
+            rms_to_target: rms_to,
+            rms_from_target: rms_from,
+            gradient_range,
+            nonzeros,
+        };
+        steps.push(stats);
+        if progress(&stats).is_break() {
+            return Err(TsplineError::Cancelled);
+        }
+    };
+    Ok(Evolution { frames, steps, outcome, final_error })
+}
+
+/// RMS of `|f|/|∇f|` over `points` (0 for none).
+fn rms_first_order(spline: &TSpline, points: &[DVec3]) -> f64 {
+    if points.is_empty() {
+        return 0.0;
+    }
+    let sum: f64 = points
+        .par_iter()
+        .map(|&p| {
+            let e = spline.eval(p);
+            let d = e.value / e.gradient.length().max(1e-3);
+            d * d
+        })
+        .sum();
+    (sum / points.len() as f64).sqrt()
+}
+
+/// The normal speed at a sample.
+fn speed(kind: Speed, d_b: f64, s: &Sample, h_min: f64) -> f64 {
+    let lambda = (-d_b * d_b).exp();
+    match kind {
+        Speed::Paper => lambda * d_b + (1.0 - lambda) * s.eval.mean_curvature(),
+        Speed::Distance => d_b,
+        Speed::Robust { v_max, beta } => {
+            let k = s.eval.mean_curvature().clamp(-1.0 / h_min, 1.0 / h_min);
+            d_b.clamp(-v_max, v_max) + beta * (1.0 - lambda) * k
+        }
+    }
+}
+
+/// One row: its leaf and entries in that leaf's anchor order.
+struct Row {
+    leaf: usize,
+    entries: Vec<f64>,
+    weight: f64,
+    rhs: f64,
+}
+
+/// Solves the least-squares problem of the module docs for `ċ`.
+fn velocity(
+    spline: &TSpline,
+    samples: &[Sample],
+    speeds: &[f64],
+    h_min: f64,
+    settings: &EvolveSettings,
+) -> Result<(Vec<f64>, usize), TsplineError> {
+    let mesh = spline.mesh();
+    let m = samples.len() as f64;
+    let k = 3.0 * m;
+    let w_data = 1.0 / m;
+    let w_dist = settings.distance_weight / k;
+    let tau = settings.relaxation;
+    let rows: Vec<Row> = samples
+        .par_iter()
+        .zip(speeds)
+        .map_init(
+            || (crate::basis::LocalBasis::default(), Vec::new(), Vec::new()),
+            |(local, r, dr), (s, &v)| {
+                let mut out = Vec::with_capacity(4);
+                let g = s.eval.gradient;
+                local.at(mesh, s.p);
+                if local.rational(r, dr) {
+                    out.push(Row {
+                        leaf: local.leaf,
+                        entries: r.clone(),
+                        weight: w_data,
+                        rhs: v * g.length(),
+                    });
+                }
+                if settings.distance_weight > 0.0 {
+                    let n = g.normalize_or_zero();
+                    for q in [s.p, s.p + h_min * n, s.p - h_min * n] {
+                        local.at(mesh, q);
+                        if !local.rational(r, dr) {
+                            continue;
+                        }
+                        let e = local.combine(mesh, spline.coefficients());
+                        let gq = e.gradient;
+                        let entries = dr.iter().map(|d| 2.0 * gq.dot(*d)).collect();
+                        let rhs = -(gq.length_squared() - 1.0) / tau;
+                        out.push(Row { leaf: local.leaf, entries, weight: w_dist, rhs });
+                    }
+                }
+                out
+            },
+        )
+        .flatten()
+        .collect();
+    let mut blocks = vec![LeafRows::default(); mesh.leaf_count()];
+    for row in &rows {
+        blocks[row.leaf].push(&row.entries, row.weight, row.rhs);
+    }
+    if settings.far_field_weight > 0.0 {
+        let c = spline.coefficients();
+        let far: Vec<usize> = (0..mesh.leaf_count())
+            .filter(|&l| {
+                let list = mesh.leaf_anchors(l);
+                list.iter().all(|&i| c[i as usize] > 0.0) || list.iter().all(|&i| c[i as usize] < 0.0)
+            })
+            .collect();
+        let w = settings.far_field_weight / far.len().max(1) as f64;
+        let mut local = crate::basis::LocalBasis::default();
+        let (mut r, mut dr) = (Vec::new(), Vec::new());
+        for l in far {
+            let (lo, hi) = mesh.leaf_box(l);
+            local.at(mesh, 0.5 * (lo + hi));
+            if local.rational(&mut r, &mut dr) {
+                blocks[l].push(&r, w, 0.0);
+            }
+        }
+    }
+    let zero = vec![0.0; mesh.anchor_count()];
+    let (x, stats) = lsq::solve(mesh, &blocks, settings.tikhonov, &zero, "evolution")?;
+    Ok((x, stats.nonzeros))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fit::{FitSettings, fit};
+    use crate::tmesh::{TMesh, TMeshSettings};
+    use std::sync::Arc;
+
+    fn run(r0: f64, r1: f64, speed: Speed) -> Evolution {
+        let (a, b) = (
+            crate::demo::sphere_samples(1500, r0, DVec3::ZERO),
+            crate::demo::sphere_samples(1500, r1, DVec3::ZERO),
+        );
+        let all: Vec<DVec3> = a.iter().chain(&b).copied().collect();
+        let s = TMeshSettings { max_depth: 4, min_depth: 3, sample_spacing: 0.05, ..Default::default() };
+        let mesh = Arc::new(TMesh::build(&all, &s).unwrap());
+        let (f0, _) = fit(mesh, move |p: DVec3| r0 - p.length(), &a, &FitSettings::default()).unwrap();
+        let settings = EvolveSettings { speed, max_steps: 60, ..Default::default() };
+        evolve(&f0, move |p: DVec3| r1 - p.length(), &b, &settings, &|_| ControlFlow::Continue(())).unwrap()
+    }
+
+    #[test]
+    fn shrinking_sphere_converges_to_the_target() {
+        let e = run(0.6, 0.4, Speed::Paper);
+        assert_eq!(e.outcome, Outcome::Converged, "{:?}", e.steps.last());
+        assert_eq!(e.frames.len(), e.steps.len() + 1);
+        // Each step moves the surface at most about h; the error decreases.
+        let first = e.steps[0].error();
+        assert!(first > 0.15 && e.final_error < 0.5 * 0.125, "{first} → {}", e.final_error);
+        let g = e.steps.last().unwrap().gradient_range;
+        assert!(g.0 > 0.7 && g.1 < 1.3, "|∇f| in {g:?}");
+    }
+
+    #[test]
+    fn growing_sphere_converges_with_the_robust_speed() {
+        let e = run(0.3, 0.6, Speed::Robust { v_max: 0.2, beta: 0.125 });
+        assert_eq!(e.outcome, Outcome::Converged, "{:?}", e.steps.last());
+    }
+}

@@ -1,0 +1,338 @@
+//! The whole method (paper §4, Fig. 4): alignment (§4.2), normalization to
+//! `D = [−1, 1]³`, T-mesh (§3.2), initial fit (§3.2), evolution (§3.3),
+//! projection frames at both ends (§4.3) and the combined alignment
+//! transforms of eq. 11 (§4.4), as an [`isomorph_common::Morph`].
+
+use crate::error::{TsplineError, check_range};
+use crate::evolution::{Evolution, EvolveSettings, StepStats, evolve};
+use crate::fit::{FitReport, FitSettings, fit};
+use crate::sampling::project;
+use crate::tmesh::{TMesh, TMeshSettings};
+use crate::tspline::TSpline;
+use glam::{Affine3A, DVec3, Vec3};
+use isomorph_common::alignment::{AlignMode, Alignment, Moments, align};
+use isomorph_common::marching_cubes::marching_cubes;
+use isomorph_common::mesh::distance::surface_samples;
+use isomorph_common::morph::check_time;
+use isomorph_common::sdf::MeshSdf;
+use isomorph_common::{Aabb, Field3, Frame, Grid3, Morph, TriMesh};
+use rayon::prelude::*;
+use std::ops::ControlFlow;
+use std::sync::Arc;
+
+/// Settings of [`morph`].
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub struct MorphSettings {
+    /// T-mesh construction (`n_T`, depth, sample spacing).
+    pub tmesh: TMeshSettings,
+    /// The initial fit.
+    pub fit: FitSettings,
+    /// The evolution (speed, step size, stopping).
+    pub evolve: EvolveSettings,
+    /// Moment alignment of the source onto the target before the morph
+    /// (paper §4.2); `None` morphs the shapes where they are.
+    pub align: Option<AlignMode>,
+    /// Empty margin around the aligned shapes inside the domain, as a
+    /// fraction of their half size.
+    pub margin: f64,
+    /// Insert the projection frames of §4.3 at both ends, so the sequence
+    /// starts exactly at the source mesh and ends exactly at the target mesh.
+    pub projection_frames: bool,
+}
+
+impl Default for MorphSettings {
+    fn default() -> Self {
+        Self {
+            tmesh: TMeshSettings::default(),
+            fit: FitSettings::default(),
+            evolve: EvolveSettings::default(),
+            align: None,
+            margin: 0.2,
+            projection_frames: true,
+        }
+    }
+}
+
+/// One frame of the sequence.
+#[derive(Debug, Clone)]
+enum FrameKind {
+    /// A projection frame: mesh in domain coordinates.
+    Mesh(Arc<TriMesh>),
+    /// A T-spline level set: index into the evolution's coefficient vectors.
+    Spline(usize),
+}
+
+/// The field of one frame of a [`TsplineMorph`], in domain coordinates.
+#[derive(Debug, Clone)]
+#[non_exhaustive]
+pub enum FrameField {
+    /// A T-spline level set `L_i`.
+    Spline(TSpline),
+    /// A projection frame (§4.3): the signed distance to its mesh.
+    Mesh(MeshSdf),
+}
+
+impl Field3 for FrameField {
+    fn value(&self, p: Vec3) -> f32 {
+        match self {
+            FrameField::Spline(s) => s.value(p),
+            FrameField::Mesh(m) => m.value(p),
+        }
+    }
+    fn gradient(&self, p: Vec3) -> Vec3 {
+        match self {
+            FrameField::Spline(s) => s.gradient(p),
+            FrameField::Mesh(m) => m.gradient(p),
+        }
+    }
+    fn bounds(&self) -> Option<Aabb> {
+        Some(Aabb::cube(1.0))
+    }
+}
+
+/// A finished T-spline morph: the fixed T-mesh, one coefficient vector per
+/// level set, the projection frames and the placement transforms.
+#[derive(Debug, Clone)]
+pub struct TsplineMorph {
+    mesh: Arc<TMesh>,
+    evolution: Evolution,
+    fit: FitReport,
+    frames: Vec<FrameKind>,
+    source_frames: usize,
+    target_frames: usize,
+    /// Domain → working space (the target's world space).
+    denormalize: Affine3A,
+    /// Working space → source world space and the alignment path.
+    alignment: Option<(Alignment, Affine3A)>,
+}
+
+impl TsplineMorph {
+    /// The fixed T-mesh.
+    pub fn tmesh(&self) -> &Arc<TMesh> {
+        &self.mesh
+    }
+
+    /// The evolution: coefficient vectors, per-step statistics, outcome.
+    pub fn evolution(&self) -> &Evolution {
+        &self.evolution
+    }
+
+    /// How well the initial level set fits the source.
+    pub fn fit_report(&self) -> &FitReport {
+        &self.fit
+    }
+
+    /// Total frames `m_A + n_l + m_B`.
+    pub fn frame_count(&self) -> usize {
+        self.frames.len()
+    }
+
+    /// Projection frames at the start (`m_A`) and at the end (`m_B`).
+    pub fn projection_frame_counts(&self) -> (usize, usize) {
+        (self.source_frames, self.target_frames)
+    }
+
+    /// The level set `L_i` (`i < n_l`) as a T-spline in domain coordinates.
+    ///
+    /// # Errors
+    /// [`TsplineError::BadSetting`] for `i >= n_l`.
+    pub fn level_set(&self, i: usize) -> Result<TSpline, TsplineError> {
+        let c = self.evolution.frames.get(i).ok_or(TsplineError::BadSetting {
+            name: "level set index",
+            value: i as f64,
+            expected: "below the number of level sets",
+        })?;
+        TSpline::new(self.mesh.clone(), c.clone())
+    }
+
+    /// Domain coordinates → world coordinates of frame `i` (eq. 11: the
+    /// alignment undone gradually, translation and stretch linearly,
+    /// rotation by slerp).
+    pub fn frame_transform(&self, i: usize) -> Affine3A {
+        let u = if self.frames.len() > 1 { i as f32 / (self.frames.len() - 1) as f32 } else { 0.0 };
+        match &self.alignment {
+            Some((al, inverse)) => al.at(u) * *inverse * self.denormalize,
+            None => self.denormalize,
+        }
+    }
+
+    fn index(&self, t: f32) -> Result<usize, TsplineError> {
+        let t = check_time(t).map_err(|_| TsplineError::InvalidTime(t))?;
+        Ok((t * (self.frames.len() - 1) as f32).round() as usize)
+    }
+}
+
+impl Morph for TsplineMorph {
+    type Field = FrameField;
+    type Error = TsplineError;
+
+    fn method(&self) -> &str {
+        "tspline"
+    }
+
+    fn frame(&self, t: f32) -> Result<Frame<FrameField>, TsplineError> {
+        let i = self.index(t)?;
+        let field = match &self.frames[i] {
+            FrameKind::Spline(k) => FrameField::Spline(self.level_set(*k)?),
+            FrameKind::Mesh(m) => FrameField::Mesh(MeshSdf::new(m)?),
+        };
+        Ok(Frame { field, iso: 0.0, transform: self.frame_transform(i) })
+    }
+
+    fn bounds(&self) -> Aabb {
+        Aabb::cube(1.0)
+    }
+
+    /// Projection frames are returned as meshes directly; level sets are
+    /// polygonized over the domain with `res` nodes per axis.
+    fn frame_mesh(&self, t: f32, res: u32) -> Result<TriMesh, TsplineError> {
+        let i = self.index(t)?;
+        let mut mesh = match &self.frames[i] {
+            FrameKind::Mesh(m) => (**m).clone(),
+            FrameKind::Spline(k) => {
+                let spline = self.level_set(*k)?;
+                let grid = Grid3::sample_box(&spline, &Aabb::cube(1.0), res)?;
+                marching_cubes(&grid, 0.0)
+            }
+        };
+        mesh.transform(&self.frame_transform(i));
+        Ok(mesh)
+    }
+}
+
+/// Runs the whole method from a source to a target mesh (closed, outward
+/// oriented, world units). `progress` sees every evolution step and may
+/// break to cancel.
+///
+/// # Errors
+/// [`TsplineError::EmptyShape`] for a mesh without area,
+/// [`TsplineError::NonFinite`], [`TsplineError::Mesh`] for invalid meshes,
+/// [`TsplineError::Align`] when alignment is asked for an open mesh,
+/// [`TsplineError::NoOverlap`] when the shapes do not overlap after
+/// alignment, [`TsplineError::Singular`], [`TsplineError::BadSetting`],
+/// [`TsplineError::Cancelled`].
+pub fn morph(
+    source: &TriMesh,
+    target: &TriMesh,
+    settings: &MorphSettings,
+    progress: &dyn Fn(&StepStats) -> ControlFlow<()>,
+) -> Result<TsplineMorph, TsplineError> {
+    check_range("margin", settings.margin, 0.0, 10.0, "0..=10")?;
+    settings.tmesh.validate()?;
+    for (name, m) in [("source", source), ("target", target)] {
+        m.validate()?;
+        if m.is_empty() || surface_samples(m, 1).is_none() {
+            return Err(TsplineError::EmptyShape(name));
+        }
+    }
+    // §4.2: the source is mapped into the target's frame.
+    let alignment = match settings.align {
+        Some(mode) => {
+            let al = align(&Moments::from_mesh(source)?, &Moments::from_mesh(target)?, mode)?;
+            let inverse = al.map.inverse();
+            if !inverse.is_finite() {
+                return Err(TsplineError::NonFinite("alignment"));
+            }
+            Some((al, inverse))
+        }
+        None => None,
+    };
+    let aligned = match &alignment {
+        Some((al, _)) => source.transformed(&al.map),
+        None => source.clone(),
+    };
+    // §3.2: normalize into D = [−1, 1]³ with a margin.
+    let bounds = aligned.bounds().union(&target.bounds());
+    let half = 0.5 * bounds.size().max_element() * (1.0 + settings.margin as f32);
+    if !(half.is_finite() && half > 0.0) {
+        return Err(TsplineError::NonFinite("bounds"));
+    }
+    let center = bounds.center();
+    let denormalize =
+        Affine3A::from_scale_rotation_translation(Vec3::splat(half), glam::Quat::IDENTITY, center);
+    let normalize = denormalize.inverse();
+    let a = aligned.transformed(&normalize);
+    let b = target.transformed(&normalize);
+    let (samples_a, samples_b) = (uniform_samples(&a, settings)?, uniform_samples(&b, settings)?);
+    let (sdf_a, sdf_b) = (MeshSdf::new(&a)?, MeshSdf::new(&b)?);
+    let da = |p: DVec3| f64::from(sdf_a.signed_distance(p.as_vec3()));
+    let db = |p: DVec3| f64::from(sdf_b.signed_distance(p.as_vec3()));
+    let overlap = samples_a.par_iter().any(|&p| db(p) > 0.0) || samples_b.par_iter().any(|&p| da(p) > 0.0);
+    if !overlap {
+        return Err(TsplineError::NoOverlap);
+    }
+    let all: Vec<DVec3> = samples_a.iter().chain(&samples_b).copied().collect();
+    let mesh = Arc::new(TMesh::build(&all, &settings.tmesh)?);
+    let (initial, fit_report) = fit(mesh.clone(), da, &samples_a, &settings.fit)?;
+    let evolution = evolve(&initial, db, &samples_b, &settings.evolve, progress)?;
+    let h = settings.evolve.step.unwrap_or(mesh.finest_cell());
+    let mut frames = Vec::new();
+    let (mut source_frames, mut target_frames) = (0, 0);
+    if settings.projection_frames {
+        let start = projection_frames(&a, &initial, h);
+        source_frames = start.len();
+        frames.extend(start.into_iter().map(|m| FrameKind::Mesh(Arc::new(m))));
+    }
+    frames.extend((0..evolution.frames.len()).map(FrameKind::Spline));
+    if settings.projection_frames {
+        let last = TSpline::new(mesh.clone(), evolution.frames.last().cloned().unwrap_or_default())?;
+        let mut end = projection_frames(&b, &last, h);
+        end.reverse();
+        target_frames = end.len();
+        frames.extend(end.into_iter().map(|m| FrameKind::Mesh(Arc::new(m))));
+    }
+    Ok(TsplineMorph {
+        mesh,
+        evolution,
+        fit: fit_report,
+        frames,
+        source_frames,
+        target_frames,
+        denormalize,
+        alignment,
+    })
+}
+
+/// Uniform surface samples with the T-mesh's spacing (domain units).
+fn uniform_samples(mesh: &TriMesh, settings: &MorphSettings) -> Result<Vec<DVec3>, TsplineError> {
+    let area = mesh.area();
+    let count = (area / (settings.tmesh.sample_spacing * settings.tmesh.sample_spacing)).ceil();
+    let count = count.clamp(16.0, 4e6) as usize;
+    let pts = surface_samples(mesh, count).ok_or(TsplineError::EmptyShape("input"))?;
+    Ok(pts.into_iter().map(|p| p.as_dvec3()).collect())
+}
+
+/// §4.3: the mesh's vertices moved towards their foot points on the level
+/// set (eq. 10, `v̇ = q − v`) by explicit Euler steps of at most `h`, until
+/// every vertex is on it (at most 64 frames). The first frame is the mesh.
+fn projection_frames(mesh: &TriMesh, spline: &TSpline, h: f64) -> Vec<TriMesh> {
+    let mut frames = vec![mesh.clone()];
+    let mut current = mesh.clone();
+    for _ in 0..64 {
+        let moves: Vec<Vec3> = current
+            .positions
+            .par_iter()
+            .map(|&v| {
+                let v64 = v.as_dvec3();
+                match project(spline, v64, 0.5) {
+                    Some(s) => {
+                        let d = s.p - v64;
+                        let len = d.length();
+                        (if len > h { d * (h / len) } else { d }).as_vec3()
+                    }
+                    None => Vec3::ZERO,
+                }
+            })
+            .collect();
+        let largest = moves.iter().fold(0.0f32, |m, d| m.max(d.length()));
+        if f64::from(largest) < 1e-4 * h {
+            break;
+        }
+        for (p, d) in current.positions.iter_mut().zip(&moves) {
+            *p += *d;
+        }
+        frames.push(current.clone());
+    }
+    frames
+}

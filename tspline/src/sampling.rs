@@ -1,0 +1,94 @@
+//! Points on the current zero set (paper §3.3 samples `x_j` along `L_τ`):
+//! marching cubes on a lattice of the finest cell size restricted to the
+//! leaves whose coefficients change sign, then Newton projection onto
+//! `f = 0` (note §7.1, Hartmann's surface-point step).
+//!
+//! Culling is exact: `f` is a convex combination of the coefficients of the
+//! leaf's anchors (`R_i ≥ 0`, `Σ R_i = 1`), so a leaf whose coefficients all
+//! have one sign contains no zero.
+
+use crate::basis::Eval;
+use crate::tspline::TSpline;
+use glam::{DVec3, UVec3, Vec3};
+use isomorph_common::marching_cubes::marching_cubes;
+use isomorph_common::{Grid3, GridError, TriMesh};
+use rayon::prelude::*;
+
+/// A point on the zero set with the function's derivatives there.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Sample {
+    pub p: DVec3,
+    pub eval: Eval,
+}
+
+/// The lattice for the zero-set mesh: `sub` nodes per edge of the smallest
+/// leaf (not of the maximum depth, which the tree may not reach).
+fn lattice(spline: &TSpline, sub: u32) -> (u32, f64) {
+    let cells = (2.0 / spline.mesh().finest_cell()).round() as u32 * sub;
+    (cells + 1, 2.0 / f64::from(cells))
+}
+
+/// The zero set of `spline` as a marching-cubes mesh in domain coordinates,
+/// evaluated only in leaves whose coefficients change sign.
+pub(crate) fn zero_set_mesh(spline: &TSpline, sub: u32) -> Result<TriMesh, GridError> {
+    let mesh = spline.mesh();
+    let c = spline.coefficients();
+    let (n, step) = lattice(spline, sub);
+    // Per leaf: the coefficient range (a bound of f on the leaf).
+    let ranges: Vec<(f64, f64)> = (0..mesh.leaf_count())
+        .map(|l| {
+            mesh.leaf_anchors(l)
+                .iter()
+                .fold((f64::MAX, f64::MIN), |(lo, hi), &i| (lo.min(c[i as usize]), hi.max(c[i as usize])))
+        })
+        .collect();
+    let mut grid = Grid3::new(UVec3::splat(n), Vec3::splat(-1.0), step as f32, 0.0f32)?;
+    let nn = n as usize;
+    grid.data_mut().par_chunks_mut(nn * nn).enumerate().for_each(|(k, slab)| {
+        for (idx, out) in slab.iter_mut().enumerate() {
+            let (i, j) = (idx % nn, idx / nn);
+            let p = DVec3::new(i as f64, j as f64, k as f64) * step - DVec3::ONE;
+            let (lo, hi) = ranges[mesh.locate(p)];
+            *out = if lo > 0.0 {
+                lo as f32
+            } else if hi < 0.0 {
+                hi as f32
+            } else {
+                spline.value_at(p) as f32
+            };
+        }
+    });
+    Ok(marching_cubes(&grid, 0.0))
+}
+
+/// Newton projection of `x` onto `f = 0` along the gradient (note §7.1):
+/// `None` when it does not converge within `max_drift` of the start.
+pub(crate) fn project(spline: &TSpline, x: DVec3, max_drift: f64) -> Option<Sample> {
+    let mut p = x;
+    for _ in 0..12 {
+        let e = spline.eval(p);
+        let g2 = e.gradient.length_squared();
+        if g2 < 1e-16 {
+            return None;
+        }
+        let delta = e.value / g2 * e.gradient;
+        // Positive inside: ∇f points to larger values, so step against it
+        // when f > 0.
+        p -= delta;
+        if (p - x).length() > max_drift || p.abs().max_element() > 1.0 {
+            return None;
+        }
+        if delta.length() < 1e-12 {
+            break;
+        }
+    }
+    let eval = spline.eval(p);
+    (eval.value.abs() < 1e-6).then_some(Sample { p, eval })
+}
+
+/// Samples of the zero set: the marching-cubes vertices projected onto it.
+pub(crate) fn zero_set_samples(spline: &TSpline, sub: u32) -> Result<Vec<Sample>, GridError> {
+    let mc = zero_set_mesh(spline, sub)?;
+    let (_, step) = lattice(spline, sub);
+    Ok(mc.positions.par_iter().filter_map(|&v| project(spline, v.as_dvec3(), 2.0 * step)).collect())
+}
