@@ -3,6 +3,8 @@
 use crate::inputs::BUNNY;
 use crate::level_set::{Align, Solver};
 use crate::morph::{Format, Method, MorphArgs, morph, print_summary};
+use crate::rbf::{self, ContoursArgs, KernelArg};
+use crate::tspline::SpeedArg;
 use crate::warp::{self, FilterArg, RawType, WarpArgs};
 use clap::Args;
 use isomorph_common::glam::Vec3;
@@ -31,6 +33,8 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         (Method::LevelSet, "ball", "c-shape", Align::None, "level_set_ball_to_c"),
         (Method::LevelSet, "mug", "chain", Align::Auto, "level_set_mug_to_chain"),
         (Method::Blobtree, "rook", "queen", Align::None, "blobtree_rook_to_queen"),
+        (Method::Rbf, "sphere", "torus", Align::None, "rbf_sphere_to_torus"),
+        (Method::Tspline, "sphere", "torus", Align::None, "tspline_sphere_to_torus"),
     ];
     for (method, source, target, align, folder) in demos {
         let morph_args = MorphArgs {
@@ -47,6 +51,13 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
             curvature: None,
             report: false,
             links: None,
+            points: 300,
+            separation: 1.0,
+            kernel: KernelArg::Tps,
+            speed: SpeedArg::Robust,
+            nt: None,
+            depth: Some(4),
+            step: None,
         };
         let report = morph(&morph_args)?;
         print_summary(&report, &morph_args);
@@ -58,6 +69,16 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
             );
         }
     }
+    // Turk & O'Brien's Fig. 1: the X becomes the O through one 3D implicit.
+    rbf::contours(&ContoursArgs {
+        a: "x".into(),
+        b: "o".into(),
+        frames: args.frames.max(2),
+        res: 128,
+        separation: 1.0,
+        kernel: KernelArg::Tps,
+        out: args.out.join("rbf_x_to_o"),
+    })?;
     // True's kind of edit (the thesis' teapot spout): drag the bunny's ear
     // tip up by 2.5 units (a quarter of its height), with a region of
     // influence of 3 units so the rest of the bunny stays put.

@@ -10,7 +10,9 @@ mod inputs;
 mod level_set;
 mod morph;
 mod progress;
+mod rbf;
 mod sdf;
+mod tspline;
 mod warp;
 
 use clap::{Parser, Subcommand};
@@ -38,6 +40,9 @@ enum Command {
     /// Align a source onto a target by their moments: print the map as JSON
     /// and write the aligned source mesh.
     Align(align::AlignArgs),
+    /// Transform one 2D shape into another (Turk & O'Brien): PNG frames of
+    /// the in-between shapes and the 3D space-time surface.
+    Contours(rbf::ContoursArgs),
     /// Polygonize one BlobTree (scene file or built-in) and preview it.
     Blob(blob::BlobArgs),
     /// Warp a shape or mesh with True's trivariate B-spline volume warp: drag
@@ -56,6 +61,7 @@ fn main() -> ExitCode {
         Command::Align(args) => align::run(&args),
         Command::Warp(args) => warp::run(&args),
         Command::Blob(args) => blob::run(&args),
+        Command::Contours(args) => rbf::contours(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -4,6 +4,8 @@ use crate::blob;
 use crate::inputs::{Input, morph_bounds};
 use crate::level_set::{self, Align, Solver};
 use crate::progress::FrameBar;
+use crate::rbf::{self, KernelArg};
+use crate::tspline::{self, SpeedArg};
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 use isomorph_blobtree::BlobMorph;
@@ -21,6 +23,11 @@ pub enum Method {
     /// Breen & Whitaker's level-set morph: the source surface moves along
     /// its normals with the target's signed distance as speed.
     LevelSet,
+    /// Turk & O'Brien's variational implicit in 4D: the shapes' surface
+    /// constraints at t = 0 and t = separation, one RBF interpolation.
+    Rbf,
+    /// Yang & Jüttler's T-spline level sets on an adaptive octree.
+    Tspline,
     /// Galin, Leclercq & Akkouche's BlobTree morph: source and target are
     /// BlobTree scenes (.ron/.json files or built-in names).
     Blobtree,
@@ -80,6 +87,28 @@ pub struct MorphArgs {
     /// evolving surface away from the target (Yang & Jüttler's weighting).
     #[arg(long, value_parser = parse_weight)]
     pub curvature: Option<f32>,
+    /// RBF only: surface points per shape (each a boundary and a normal
+    /// constraint).
+    #[arg(long, default_value_t = 400, value_parser = clap::value_parser!(u32).range(4..=20_000))]
+    pub points: u32,
+    /// RBF only: separation of the shapes along the fourth axis (world units).
+    #[arg(long, default_value_t = 1.0, value_parser = parse_separation)]
+    pub separation: f32,
+    /// RBF only: the radial kernel.
+    #[arg(long, value_enum, default_value_t = KernelArg::Tps)]
+    pub kernel: KernelArg,
+    /// T-spline only: the evolution speed.
+    #[arg(long, value_enum, default_value_t = SpeedArg::Robust)]
+    pub speed: SpeedArg,
+    /// T-spline only: largest number of surface samples per octree cell.
+    #[arg(long)]
+    pub nt: Option<usize>,
+    /// T-spline only: maximum octree depth (1–7).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=7))]
+    pub depth: Option<u32>,
+    /// T-spline only: morph step size h (units of the [−1, 1]³ domain).
+    #[arg(long)]
+    pub step: Option<f64>,
     /// BlobTree only: the animator's links, speed curves and trajectories
     /// (a RON or JSON morph spec); automatic correspondence without it.
     #[arg(long)]
@@ -95,6 +124,12 @@ pub struct MorphArgs {
     /// summary table; it is always written to `OUT/report.json` too.
     #[arg(long)]
     pub report: bool,
+}
+
+/// Accepts a finite separation in `(0, 100]`.
+fn parse_separation(s: &str) -> Result<f32, String> {
+    let v: f32 = s.parse().map_err(|e| format!("{e}"))?;
+    if v > 0.0 && v <= 100.0 { Ok(v) } else { Err(format!("{v} is not in (0, 100]")) }
 }
 
 /// Accepts a finite weight in `[0, 100]`.
@@ -152,6 +187,19 @@ pub fn morph(args: &MorphArgs) -> anyhow::Result<Report> {
                 curvature: args.curvature,
             };
             export(&level_set::build(&source, &target, &options)?, &settings, &label)
+        }
+        Method::Rbf => {
+            let options = rbf::Options {
+                points: args.points as usize,
+                separation: args.separation,
+                kernel: args.kernel,
+            };
+            export(&rbf::build(&source, &target, options)?, &settings, &label)
+        }
+        Method::Tspline => {
+            let options =
+                tspline::Options { nt: args.nt, depth: args.depth, step: args.step, speed: args.speed };
+            export(&tspline::build(&source, &target, options)?, &settings, &label)
         }
         Method::Blobtree => bail!("BlobTree morphs take BlobTree scenes"),
     }

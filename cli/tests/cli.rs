@@ -59,6 +59,23 @@ fn demo_writes_frames_sheet_and_report() {
     for f in blob["frames"].as_array().unwrap() {
         assert_eq!(f["components"], 1, "{f}");
     }
+    // RBF and T-spline: sphere → torus, genus 0 → 1, ends on the inputs.
+    for dir in ["rbf_sphere_to_torus", "tspline_sphere_to_torus"] {
+        let r: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join(dir).join("report.json")).unwrap()).unwrap();
+        let frames = r["frames"].as_array().unwrap();
+        assert_eq!(
+            (&frames[0]["genus"], &frames[frames.len() - 1]["genus"]),
+            (&serde_json::json!(0), &serde_json::json!(1)),
+            "{dir}: {r}"
+        );
+        for end in ["source", "target"] {
+            assert!(r["endpoints"][end]["mean_voxels"].as_f64().unwrap() < 0.5, "{dir} {end}: {r}");
+        }
+    }
+    for f in ["frame_000.png", "contact_sheet.png", "spacetime.ply"] {
+        assert!(out.join("rbf_x_to_o").join(f).is_file(), "missing rbf_x_to_o/{f}");
+    }
     // The warped bunny: the ear tip was dragged up by 2.5 units.
     let ear = out.join("warp_bunny_ear");
     assert!(ear.join("before_after.png").is_file());
@@ -448,5 +465,42 @@ fn blob_polygonizes_a_scene_and_morph_takes_blobtrees() {
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("radius") && err.lines().count() == 1, "{err}");
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
+fn contours_and_rbf_morph_run_and_refuse_bad_input() {
+    let out = scratch("contours");
+    let o = isomorph(&["contours", "x", "o", "--frames", "3", "--res", "32", "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in ["frame_000.png", "frame_002.png", "contact_sheet.png", "spacetime.ply", "spacetime.png"] {
+        assert!(out.join(f).is_file(), "missing {f}");
+    }
+    let o = isomorph(&["contours", "x", "no-such.png", "--out", out.to_str().unwrap()]);
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("no-such.png"));
+    // RBF morph with a mesh: the bunny into the sphere, the report says rbf.
+    let frames = out.join("morph");
+    let o = isomorph(&[
+        "morph",
+        "--method",
+        "rbf",
+        "--source",
+        "bunny",
+        "--target",
+        "sphere",
+        "--points",
+        "150",
+        "--res",
+        "24",
+        "--frames",
+        "2",
+        "--report",
+        "--out",
+        frames.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(report["method"], "rbf");
+    assert_eq!(report["frames"][1]["components"], 1);
     let _ = std::fs::remove_dir_all(&out);
 }

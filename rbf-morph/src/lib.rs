@@ -112,6 +112,7 @@
 
 pub mod constraints;
 pub mod error;
+pub mod figures;
 pub mod image;
 pub mod influence;
 pub mod interpolant;

@@ -13,7 +13,7 @@ use crate::slice::{Slice2, Slice3};
 use glam::{UVec2, Vec2, Vec3};
 use isomorph_common::marching_squares::{Polyline2, marching_squares};
 use isomorph_common::morph::check_time;
-use isomorph_common::{Aabb, Frame, Grid2, Morph};
+use isomorph_common::{Aabb, Frame, Grid2, Morph, TriMesh};
 
 /// Settings of a shape transformation.
 #[derive(Debug, Clone, PartialEq)]
@@ -206,6 +206,17 @@ impl Morph for RbfMorph {
     fn bounds(&self) -> Aabb {
         self.bounds
     }
+
+    /// The slice polygonized near its surface only
+    /// ([`polygonize_near_surface`](crate::polygonize::polygonize_near_surface)):
+    /// the same mesh as marching cubes on the full grid over
+    /// [`Morph::bounds`] for fields without sub-block features, at a fraction
+    /// of the O(n) kernel evaluations per node.
+    fn frame_mesh(&self, t: f32, res: u32) -> Result<TriMesh, RbfError> {
+        let slice = self.slice(t)?;
+        let bounds = self.bounds.expanded(1e-4);
+        Ok(crate::polygonize::polygonize_near_surface(&slice, &bounds, res, 0.0, &Default::default())?.0)
+    }
 }
 
 /// Transformation between two 2D shapes through one 3D variational implicit
@@ -345,34 +356,9 @@ mod tests {
         assert!(matches!(morph.frame(f32::NAN), Err(RbfError::InvalidTime(_))));
     }
 
-    /// Antialiased image of a signed distance (positive inside) on `n × n`
-    /// pixels over `[-0.5, 0.5]²`.
-    fn raster(n: u32, sd: impl Fn(Vec2) -> f32) -> Grid2<f32> {
-        let h = 1.0 / n as f32;
-        let o = Vec2::splat(-0.5 + 0.5 * h);
-        let data = (0..n * n)
-            .map(|k| (sd(o + h * Vec2::new((k % n) as f32, (k / n) as f32)) / h + 0.5).clamp(0.0, 1.0))
-            .collect();
-        Grid2::from_vec(UVec2::splat(n), o, h, data).unwrap()
-    }
-
-    /// The paper's X and O (Fig. 1 and 3).
-    fn x_and_o(n: u32) -> (Grid2<f32>, Grid2<f32>) {
-        let bar = |p: Vec2, d: Vec2| {
-            let along = p.dot(d).abs() - 0.33;
-            let across = p.perp_dot(d).abs() - 0.07;
-            -along.max(across)
-        };
-        let d1 = Vec2::new(1.0, 1.0).normalize();
-        let d2 = Vec2::new(1.0, -1.0).normalize();
-        let x = raster(n, |p| bar(p, d1).max(bar(p, d2)));
-        let o = raster(n, |p| 0.09 - (p.length() - 0.26).abs());
-        (x, o)
-    }
-
     #[test]
     fn x_to_o_changes_topology() {
-        let (x, o) = x_and_o(32);
+        let (x, o) = (crate::figures::x_image(32), crate::figures::o_image(32));
         let a = image_constraints(&x, 0.5).unwrap();
         let b = image_constraints(&o, 0.5).unwrap();
         let morph = ContourMorph::new(&a, &b, &TransformSettings::default()).unwrap();
