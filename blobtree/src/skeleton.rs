@@ -571,8 +571,12 @@ impl Hit {
         Self { d: m.norm(r), r, kink }
     }
 
+    /// Keeps the better candidate. A located candidate (face or edge) also
+    /// replaces an untracked one (the `f32` Euclidean start, a vertex) that
+    /// is better only by rounding, so that the kink rule sees where `q*` is.
     fn offer(&mut self, other: Hit) {
-        if other.d < self.d {
+        let located = !matches!(other.kink, Kink::None) && matches!(self.kink, Kink::None);
+        if other.d < self.d || (located && other.d <= self.d * (1.0 + 1e-7)) {
             *self = other;
         }
     }
@@ -597,15 +601,25 @@ impl Hit {
             return Vec3::ZERO;
         }
         let g = match (m, self.kink) {
-            (Metric::P(p), _) => {
+            (_, Kink::Face(n)) => n / m.dual_norm(n),
+            (Metric::P(p), kink) => {
                 let s = r.abs() / self.d;
-                DVec3::new(
+                let mut g = DVec3::new(
                     sgn(r.x) * s.x.powf(p - 1.0),
                     sgn(r.y) * s.y.powf(p - 1.0),
                     sgn(r.z) * s.z.powf(p - 1.0),
-                )
+                );
+                if let Kink::Edge(e) = kink {
+                    // Near-zero components are not resolved by the edge solve
+                    // (`|r_k|^{p−1}` is ill-conditioned for p near 1): give them
+                    // the value, within their possible range, that makes `g`
+                    // orthogonal to the edge (the optimality condition).
+                    let tiny = 1e-6 * r.abs().max_element();
+                    let bound = 1e-6f64.powf(p - 1.0);
+                    orthogonalize(&mut g, e, |k| r[k].abs() <= tiny, bound);
+                }
+                g
             }
-            (_, Kink::Face(n)) => n / m.dual_norm(n),
             (Metric::Inf, kink) => {
                 let a = r.abs();
                 let mx = a.max_element();
@@ -637,32 +651,39 @@ impl Hit {
             (Metric::One, kink) => {
                 let zero = r.abs().cmple(DVec3::splat(1e-9 * self.d));
                 let mut g = DVec3::new(sgn(r.x), sgn(r.y), sgn(r.z));
-                let mut ez2 = 0.0;
                 for k in 0..3 {
                     if zero.test(k) {
                         g[k] = 0.0;
                     }
                 }
                 if let Kink::Edge(e) = kink {
-                    let s = g.dot(e);
-                    for k in 0..3 {
-                        if zero.test(k) {
-                            ez2 += e[k] * e[k];
-                        }
-                    }
-                    if ez2 > 0.0 {
-                        // Zero components take the subgradient orthogonal to the edge.
-                        for k in 0..3 {
-                            if zero.test(k) {
-                                g[k] = (-s * e[k] / ez2).clamp(-1.0, 1.0);
-                            }
-                        }
-                    }
+                    // Zero components take the subgradient orthogonal to the edge.
+                    orthogonalize(&mut g, e, |k| zero.test(k), 1.0);
                 }
                 g
             }
         };
         g.as_vec3()
+    }
+}
+
+/// Sets the components `k` of `g` with `free(k)` (assumed zero in `g`'s
+/// contribution) so that `g·e = 0`, least-squares, clamped to `±bound`.
+fn orthogonalize(g: &mut DVec3, e: DVec3, free: impl Fn(usize) -> bool, bound: f64) {
+    let (mut s, mut ez2) = (0.0, 0.0);
+    for k in 0..3 {
+        if free(k) {
+            ez2 += e[k] * e[k];
+        } else {
+            s += g[k] * e[k];
+        }
+    }
+    if ez2 > 0.0 {
+        for k in 0..3 {
+            if free(k) {
+                g[k] = (-s * e[k] / ez2).clamp(-bound, bound);
+            }
+        }
     }
 }
 
@@ -1158,12 +1179,13 @@ mod tests {
     }
 
     /// Weak duality: for `‖u‖_{p*} = 1`, `d_p(x, S) ≥ u·x − h_S(u)`. With `u`
-    /// the returned gradient (the dual optimum) the bound must meet `d`.
+    /// the returned gradient (the dual optimum) the bound must meet `d`: a
+    /// certificate that `d` is the minimum (not just an upper bound).
     #[test]
     fn gradient_is_a_dual_certificate() {
         let mut rng = Lcg(11);
         for poly in random_shapes(&mut rng) {
-            for _ in 0..6 {
+            for _ in 0..200 {
                 let x = rng.v(2.0);
                 for &p in &PS {
                     let m = Metric::new(p);
@@ -1177,10 +1199,9 @@ mod tests {
                     let lower = (g.dot(x.as_dvec3()) - h) / gn;
                     let d = d as f64;
                     assert!(lower <= d + 1e-5 * (1.0 + d), "p={p}: bound {lower} above {d}");
-                    if matches!(m, Metric::P(_)) {
-                        assert!((gn - 1.0).abs() < 1e-4, "p={p}: ‖∇d‖_p* = {gn}");
-                        assert!(d - lower <= 1e-4 * (1.0 + d), "p={p} at {x}: gap {d} vs {lower}");
-                    }
+                    assert!((gn - 1.0).abs() < 1e-4, "p={p}: ‖∇d‖_p* = {gn}");
+                    // Also for p = 1, ∞: the kink rule picks the dual optimum.
+                    assert!(d - lower <= 1e-5 * (1.0 + d), "p={p} at {x}: gap {d} vs {lower}");
                 }
             }
         }
