@@ -23,8 +23,9 @@
 //! ≤ 11 candidates are evaluated — exact. Otherwise `φ′(t)` of
 //! `φ = Σ|r_k|^p` is monotone and a safeguarded Newton iteration (bisection
 //! whenever Newton leaves the bracket or does not halve its step) from the
-//! Euclidean parameter finds its root to `1e-14` in `t` (typically 4–8
-//! steps).
+//! Euclidean parameter finds its root to `1e-11` in `t` (measured: about 8
+//! steps for `1.5 ≤ p ≤ 8`; up to ~35, mostly bisection, near `p = 1` or for
+//! very large `p`, where `φ` is nearly piecewise linear).
 //!
 //! **Polygons and polyhedra** (the choice, instead of a general projected
 //! Newton or Frank–Wolfe solver): in 3D the minimizer lies either in the
@@ -49,10 +50,11 @@
 //! `∇‖r‖_p · r > 0`), and `x` inside gives 0. The search starts from the
 //! L^p length of the Euclidean residual (the old approximation, an upper
 //! bound), so the pruning is effective. The result is exact up to
-//! floating-point rounding (computed in `f64`; tested against brute force to
-//! `1e-4` relative and by a duality gap below `1e-4`); cost: a few
-//! closed-form plane solves plus usually zero to two segment solves,
-//! allocation-free.
+//! floating-point rounding (computed in `f64`, returned as `f32`; tested
+//! against brute force and by a duality-gap certificate below `1e-5`
+//! relative). Cost: a few closed-form plane solves plus, measured on random
+//! 8-point polyhedra and 6-point polygons, 2.5–5 segment solves per query;
+//! no allocation.
 //!
 //! # Gradient
 //!
@@ -61,11 +63,15 @@
 //! `u*` of `d_p = max_{‖u‖_{p*} ≤ 1} u·x − h_S(u)`. For `p = 1` and `p = ∞`
 //! the distance has kinks and the returned vector is a subgradient chosen so:
 //! face optimum → the face's dual normal `n/‖n‖_{p*}` (the exact gradient
-//! there); edge optimum → among the tied components of `r` (`p = ∞`: the
+//! there, used for every `p` as it is better conditioned than the formula
+//! above); edge optimum → among the tied components of `r` (`p = ∞`: the
 //! components achieving the max; `p = 1`: the zero components) the
 //! subgradient orthogonal to the edge when one exists; otherwise (vertex
 //! optimum, or no orthogonal choice) equal weights over the tied
-//! components. Away from kinks this is the gradient.
+//! components. Away from kinks this is the gradient; in tests the returned
+//! vector is a dual certificate (`u·x − h_S(u)` meets `d_p` to `1e-5`) for
+//! every `p`. For `p` near 1 the edge formula is ill-conditioned in
+//! components `r_k ≈ 0`; those are likewise set orthogonal to the edge.
 
 use crate::hull::{HullShape, convex_hull};
 use glam::{DVec3, Vec3};
@@ -812,7 +818,7 @@ fn segment_hit(m: Metric, c: DVec3, e: DVec3) -> Hit {
                 };
                 last = (next - t).abs();
                 t = next;
-                if last <= 1e-14 || hi - lo <= 1e-14 {
+                if last <= 1e-11 || hi - lo <= 1e-11 {
                     break;
                 }
             }
