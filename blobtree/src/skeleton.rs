@@ -427,8 +427,14 @@ impl Polytope {
                     return Hit::new(m, r, Kink::Face(n * delta.signum()));
                 }
                 let mut best = Hit::new(m, xd - self.closest_point(x).as_dvec3(), Kink::None);
+                let strict = matches!(m, Metric::P(_));
                 for i in 0..k {
                     let (a, b) = (v[i].as_dvec3(), v[(i + 1) % k].as_dvec3());
+                    // For 1 < p < ∞ the plane minimizer is unique, so the
+                    // face minimum is on an edge whose half-plane excludes it.
+                    if strict && n.cross(b - a).dot(q - a) >= -1e-9 * scale {
+                        continue;
+                    }
                     best.edge(m, cp, xd, a, b);
                 }
                 best
@@ -438,36 +444,54 @@ impl Polytope {
                     return Hit { d: 0.0, r: DVec3::ZERO, kink: Kink::None };
                 }
                 let mut best = Hit::new(m, xd - self.closest_point(x).as_dvec3(), Kink::None);
-                for (t, (n, e)) in triangles.iter().zip(&self.planes) {
-                    let degenerate = *n == Vec3::ZERO;
-                    if !degenerate && n.dot(x) <= *e {
-                        continue; // the L^p closest point lies on a visible face
+                let strict = matches!(m, Metric::P(_));
+                // Pass 0: the cheap plane candidates; pass 1: the edges of the
+                // faces whose plane minimizer falls outside (better pruning).
+                for pass in 0..2 {
+                    for (t, (n, e)) in triangles.iter().zip(&self.planes) {
+                        let degenerate = *n == Vec3::ZERO;
+                        if !degenerate && n.dot(x) <= *e {
+                            continue; // the L^p closest point lies on a visible face
+                        }
+                        let [a, b, c] = t.map(|i| v[i as usize].as_dvec3());
+                        let mut use_edge = [true; 3];
+                        if !degenerate {
+                            let nn = (b - a).cross(c - a);
+                            let delta = nn.dot(xd - a);
+                            if delta <= 0.0 {
+                                continue;
+                            }
+                            // Exact L^p distance to the plane: a lower bound for the triangle.
+                            if delta / m.dual_norm(nn) >= best.d {
+                                continue;
+                            }
+                            let r = plane_residual(m, nn, delta);
+                            let q = xd - r;
+                            let tol = -1e-9 * nn.length_squared();
+                            let inside = [
+                                nn.dot((b - a).cross(q - a)) >= tol,
+                                nn.dot((c - b).cross(q - b)) >= tol,
+                                nn.dot((a - c).cross(q - c)) >= tol,
+                            ];
+                            if inside == [true; 3] {
+                                if pass == 0 {
+                                    best.offer(Hit::new(m, r, Kink::Face(nn)));
+                                }
+                                continue;
+                            }
+                            if strict {
+                                // Unique plane minimizer: only edges excluding it.
+                                use_edge = inside.map(|i| !i);
+                            }
+                        }
+                        if pass == 1 {
+                            for (k, (u, w)) in [(a, b), (b, c), (c, a)].into_iter().enumerate() {
+                                if use_edge[k] {
+                                    best.edge(m, cp, xd, u, w);
+                                }
+                            }
+                        }
                     }
-                    let [a, b, c] = t.map(|i| v[i as usize].as_dvec3());
-                    if !degenerate {
-                        let nn = (b - a).cross(c - a);
-                        let delta = nn.dot(xd - a);
-                        if delta <= 0.0 {
-                            continue;
-                        }
-                        // Exact L^p distance to the plane: a lower bound for the triangle.
-                        if delta / m.dual_norm(nn) >= best.d {
-                            continue;
-                        }
-                        let r = plane_residual(m, nn, delta);
-                        let q = xd - r;
-                        let tol = -1e-9 * nn.length_squared();
-                        if nn.dot((b - a).cross(q - a)) >= tol
-                            && nn.dot((c - b).cross(q - b)) >= tol
-                            && nn.dot((a - c).cross(q - c)) >= tol
-                        {
-                            best.offer(Hit::new(m, r, Kink::Face(nn)));
-                            continue;
-                        }
-                    }
-                    best.edge(m, cp, xd, a, b);
-                    best.edge(m, cp, xd, b, c);
-                    best.edge(m, cp, xd, c, a);
                 }
                 best
             }
