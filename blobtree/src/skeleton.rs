@@ -805,8 +805,14 @@ fn segment_hit(m: Metric, c: DVec3, e: DVec3) -> Hit {
                 let (mut d1, mut d2) = (0.0, 0.0);
                 for k in 0..3 {
                     let a = s[k].abs();
-                    d1 -= e[k] * sgn(s[k]) * a.powf(p - 1.0);
-                    d2 += e[k] * e[k] * a.powf(p - 2.0);
+                    if a > 0.0 {
+                        let w = a.powf(p - 2.0); // one powf for both terms
+                        d1 -= e[k] * sgn(s[k]) * a * w;
+                        d2 += e[k] * e[k] * w;
+                    } else if e[k] != 0.0 && p <= 2.0 {
+                        // |r_k|^{p−2} at 0: infinite curvature (p < 2) → bisection.
+                        d2 += if p < 2.0 { f64::INFINITY } else { e[k] * e[k] };
+                    }
                 }
                 let step = -mx * d1 / ((p - 1.0) * d2);
                 (d1, step)
