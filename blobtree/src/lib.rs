@@ -32,10 +32,10 @@
 //!   neutral — which the paper's difference insertion (Fig. 14) needs — and
 //!   clamped at 0 so that pruning stays exact. The level `c` is stored in the
 //!   node and scales with it, so `αN` is exactly `α` times `N` (§4.2).
-//! - **L^p distance** `min_q ‖x − q‖_p` is exact for points and segments and
-//!   for axis-aligned boxes; for oblique polygons/polyhedra with `p ≠ 2` it is
-//!   the L^p length of the Euclidean residual (an upper bound). The L^p axes
-//!   are the primitive's local axes. `p` is interpolated linearly (§3.4.3), or
+//! - **L^p distance** `min_q ‖x − q‖_p` is exact for every skeleton kind
+//!   (oblique polygons and polyhedra by a closed-form per-face plane solve
+//!   plus exact edge minimization, see [`skeleton`]), so iso-surfaces of a
+//!   primitive are `S ⊕ B_p(r)`. The L^p axes are the primitive's local axes. `p` is interpolated linearly (§3.4.3), or
 //!   through `1/p` when an end is `p = ∞`.
 //! - **Super-elliptic blend of a split child**: copies are weighted
 //!   `α^{1/n}` so their super-elliptic blend equals the original.

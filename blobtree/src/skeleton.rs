@@ -5,12 +5,73 @@
 //! is its evaluable form: the convex hull with its structure. Minkowski
 //! interpolation (§3.4.1) produces polytopes of any dimension directly.
 //!
-//! **Distance.** The Euclidean distance (`p = 2`) is exact for every kind.
-//! For `p ≠ 2` the L^p distance `min_{q∈S} ‖x − q‖_p` is computed exactly for
-//! points and segments (a one-dimensional convex minimization); for polygons
-//! and polyhedra it is `‖x − q₂(x)‖_p` with `q₂` the Euclidean closest point,
-//! which is exact for axis-aligned boxes and rectangles (the closest points
-//! coincide coordinate-wise) and an upper bound otherwise.
+//! # Distance
+//!
+//! The distance is the exact `d_p(x, S) = min_{q∈S} ‖x − q‖_p` for every
+//! kind and every `p ∈ [1, ∞]`, the metric axes being the primitive's local
+//! axes. Its sub-level sets are the Minkowski sums `S ⊕ B_p(r)`, which is
+//! what makes a fixed-metric primitive morph as the Minkowski morph of its
+//! two solids. Closed forms:
+//!
+//! - `p = 2`: the Euclidean closest point (Voronoi regions per kind).
+//! - points: `‖x − c‖_p`; axis-aligned boxes: clamping (the problem is
+//!   separable, so the clamp minimizes every coordinate term at once).
+//!
+//! **Segments** `a + t e`: for `p = 1` and `p = ∞` the objective is convex
+//! and piecewise linear in `t`, so its minimum is at an end or a breakpoint
+//! (zero crossings of `r_k`, and for `∞` the crossings `r_i = ±r_j`): all
+//! ≤ 11 candidates are evaluated — exact. Otherwise `φ′(t)` of
+//! `φ = Σ|r_k|^p` is monotone and a safeguarded Newton iteration (bisection
+//! whenever Newton leaves the bracket or does not halve its step) from the
+//! Euclidean parameter finds its root to `1e-11` in `t` (measured: about 8
+//! steps for `1.5 ≤ p ≤ 8`; up to ~35, mostly bisection, near `p = 1` or for
+//! very large `p`, where `φ` is nearly piecewise linear).
+//!
+//! **Polygons and polyhedra** (the choice, instead of a general projected
+//! Newton or Frank–Wolfe solver): in 3D the minimizer lies either in the
+//! relative interior of a planar face or on an edge. Over a *whole plane*
+//! `n·q = c` the problem has a closed form (Hölder's equality case): with
+//! `δ = n·x − c`, `r = x − q = δ w/(n·w)`, `w_k = sign(n_k)|n_k|^{p*−1}`,
+//! and `‖r‖_p = |δ|/‖n‖_{p*}` (`1/p + 1/p* = 1`). So, per face (a polygon,
+//! or each outward triangle of a polyhedron):
+//!
+//! 1. `|δ|/‖n‖_{p*}` is a lower bound for the whole face: skip the face if
+//!    it cannot beat the best candidate so far;
+//! 2. if the plane minimizer lies in the face, it is the face's minimum;
+//! 3. otherwise the face's minimum is on its boundary (the minimizer set is
+//!    convex: if it meets the face but misses its boundary it lies inside,
+//!    so this also holds for the non-unique minimizers of `p = 1, ∞`):
+//!    minimize over its edges with the exact segment routine, skipping an
+//!    edge when `c_p·|x − q₂(edge)|` (`‖v‖_p ≥ c_p‖v‖₂`) cannot beat the
+//!    best.
+//!
+//! For a polyhedron only faces whose plane has `x` in front are visited
+//! (the optimality condition puts `∇‖r‖_p` in the normal cone at `q*`, and
+//! `∇‖r‖_p · r > 0`), and `x` inside gives 0. The search starts from the
+//! L^p length of the Euclidean residual (the old approximation, an upper
+//! bound), so the pruning is effective. The result is exact up to
+//! floating-point rounding (computed in `f64`, returned as `f32`; tested
+//! against brute force and by a duality-gap certificate below `1e-5`
+//! relative). Cost: a few closed-form plane solves plus, measured on random
+//! 8-point polyhedra and 6-point polygons, 2.5–5 segment solves per query;
+//! no allocation.
+//!
+//! # Gradient
+//!
+//! By the envelope theorem `∂d_p/∂x_k = sign(r_k)|r_k|^{p−1}/‖r‖_p^{p−1}`
+//! with `r = x − q*` (unique for `1 < p < ∞`); it is also the dual optimum
+//! `u*` of `d_p = max_{‖u‖_{p*} ≤ 1} u·x − h_S(u)`. For `p = 1` and `p = ∞`
+//! the distance has kinks and the returned vector is a subgradient chosen so:
+//! face optimum → the face's dual normal `n/‖n‖_{p*}` (the exact gradient
+//! there, used for every `p` as it is better conditioned than the formula
+//! above); edge optimum → among the tied components of `r` (`p = ∞`: the
+//! components achieving the max; `p = 1`: the zero components) the
+//! subgradient orthogonal to the edge when one exists; otherwise (vertex
+//! optimum, or no orthogonal choice) equal weights over the tied
+//! components. Away from kinks this is the gradient; in tests the returned
+//! vector is a dual certificate (`u·x − h_S(u)` meets `d_p` to `1e-5`) for
+//! every `p`. For `p` near 1 the edge formula is ill-conditioned in
+//! components `r_k ≈ 0`; those are likewise set orthogonal to the edge.
 
 use crate::hull::{HullShape, convex_hull};
 use glam::{DVec3, Vec3};
@@ -300,35 +361,499 @@ impl Polytope {
         }
     }
 
-    /// The L^p distance from `x` (see the module docs for exactness) and its
-    /// gradient with respect to `x` (zero inside the skeleton).
+    /// The L^p distance `min_{q∈S} ‖x − q‖_p` (exact, see the module docs)
+    /// and its gradient with respect to `x` (zero inside the skeleton).
     ///
-    /// The gradient is analytic (`∇‖x − q‖_p` at the closest point `q`) for
-    /// `p = 2` and for points; for other skeletons with `p ≠ 2` the L^p
-    /// closest point need not be unique (flat optima of `p = ∞`), so the
-    /// gradient is taken by central differences of the distance (step 1e-4).
+    /// The gradient is the envelope-theorem gradient `∇‖r‖_p` at the
+    /// residual `r = x − q*` of the L^p closest point `q*`. For `p = 1` and
+    /// `p = ∞` the distance has kinks; there the returned vector is a
+    /// subgradient chosen as described in the module docs.
     pub fn distance(&self, x: Vec3, p: f32) -> (f32, Vec3) {
-        if p == 2.0 || matches!(self.structure, Structure::Point) {
+        if p == 2.0 {
             let r = x - self.closest_point(x);
             return (lp_norm(r, p), lp_norm_gradient(r, p));
         }
-        let d = self.lp_distance(x, p);
-        let h = 1e-4;
-        let g = Vec3::new(
-            self.lp_distance(x + Vec3::X * h, p) - self.lp_distance(x - Vec3::X * h, p),
-            self.lp_distance(x + Vec3::Y * h, p) - self.lp_distance(x - Vec3::Y * h, p),
-            self.lp_distance(x + Vec3::Z * h, p) - self.lp_distance(x - Vec3::Z * h, p),
-        ) / (2.0 * h);
-        (d, g)
+        let m = Metric::new(p);
+        let hit = self.lp_hit(x, m);
+        (hit.d as f32, hit.gradient(m))
     }
 
-    /// The L^p distance alone (see the module docs for exactness).
+    /// The L^p distance alone (exact, see the module docs).
     pub fn lp_distance(&self, x: Vec3, p: f32) -> f32 {
-        let q = match self.structure {
-            Structure::Segment if p != 2.0 => lp_closest_on_segment(x, self.vertices[0], self.vertices[1], p),
-            _ => self.closest_point(x),
+        if p == 2.0 {
+            return (x - self.closest_point(x)).length();
+        }
+        self.lp_hit(x, Metric::new(p)).d as f32
+    }
+
+    /// The L^p closest residual for `p ≠ 2` (any structure).
+    fn lp_hit(&self, x: Vec3, m: Metric) -> Hit {
+        let v = &self.vertices;
+        let xd = x.as_dvec3();
+        match &self.structure {
+            Structure::Point => Hit::new(m, xd - v[0].as_dvec3(), Kink::None),
+            Structure::Segment => {
+                let (a, b) = (v[0].as_dvec3(), v[1].as_dvec3());
+                segment_hit(m, xd - a, b - a)
+            }
+            Structure::Polyhedron { .. } if self.aabb.is_some() => {
+                // Separable: clamping minimizes every coordinate term at once.
+                Hit::new(m, xd - self.closest_point(x).as_dvec3(), Kink::None)
+            }
+            _ => self.lp_hit_general(x, m),
+        }
+    }
+
+    /// The exact L^p closest residual for polygons and polyhedra by the
+    /// face/edge decomposition of the module docs (no axis-aligned shortcut).
+    fn lp_hit_general(&self, x: Vec3, m: Metric) -> Hit {
+        let v = &self.vertices;
+        let xd = x.as_dvec3();
+        let cp = m.euclid_factor();
+        match &self.structure {
+            Structure::Polygon { normal } => {
+                let n = normal.as_dvec3();
+                let v0 = v[0].as_dvec3();
+                let delta = n.dot(xd - v0);
+                let r = plane_residual(m, n, delta);
+                let q = xd - r;
+                let k = v.len();
+                let scale = self.diameter_sq();
+                let inside = (0..k).all(|i| {
+                    let (a, b) = (v[i].as_dvec3(), v[(i + 1) % k].as_dvec3());
+                    n.cross(b - a).dot(q - a) >= -1e-9 * scale
+                });
+                if inside {
+                    return Hit::new(m, r, Kink::Face(n * delta.signum()));
+                }
+                let mut best = Hit::new(m, xd - self.closest_point(x).as_dvec3(), Kink::None);
+                let strict = matches!(m, Metric::P(_));
+                for i in 0..k {
+                    let (a, b) = (v[i].as_dvec3(), v[(i + 1) % k].as_dvec3());
+                    // For 1 < p < ∞ the plane minimizer is unique, so the
+                    // face minimum is on an edge whose half-plane excludes it.
+                    if strict && n.cross(b - a).dot(q - a) >= -1e-9 * scale {
+                        continue;
+                    }
+                    best.edge(m, cp, xd, a, b);
+                }
+                best
+            }
+            Structure::Polyhedron { triangles } => {
+                if self.planes.iter().all(|(n, e)| n.dot(x) <= *e) {
+                    return Hit { d: 0.0, r: DVec3::ZERO, kink: Kink::None };
+                }
+                let mut best = Hit::new(m, xd - self.closest_point(x).as_dvec3(), Kink::None);
+                let strict = matches!(m, Metric::P(_));
+                // Pass 0: the cheap plane candidates; pass 1: the edges of the
+                // faces whose plane minimizer falls outside (better pruning).
+                for pass in 0..2 {
+                    for (t, (n, e)) in triangles.iter().zip(&self.planes) {
+                        let degenerate = *n == Vec3::ZERO;
+                        if !degenerate && n.dot(x) <= *e {
+                            continue; // the L^p closest point lies on a visible face
+                        }
+                        let [a, b, c] = t.map(|i| v[i as usize].as_dvec3());
+                        let mut use_edge = [true; 3];
+                        if !degenerate {
+                            let nn = (b - a).cross(c - a);
+                            let delta = nn.dot(xd - a);
+                            if delta <= 0.0 {
+                                continue;
+                            }
+                            // Exact L^p distance to the plane: a lower bound for the triangle.
+                            if delta / m.dual_norm(nn) >= best.d {
+                                continue;
+                            }
+                            let r = plane_residual(m, nn, delta);
+                            let q = xd - r;
+                            let tol = -1e-9 * nn.length_squared();
+                            let inside = [
+                                nn.dot((b - a).cross(q - a)) >= tol,
+                                nn.dot((c - b).cross(q - b)) >= tol,
+                                nn.dot((a - c).cross(q - c)) >= tol,
+                            ];
+                            if inside == [true; 3] {
+                                if pass == 0 {
+                                    best.offer(Hit::new(m, r, Kink::Face(nn)));
+                                }
+                                continue;
+                            }
+                            if strict {
+                                // Unique plane minimizer: only edges excluding it.
+                                use_edge = inside.map(|i| !i);
+                            }
+                        }
+                        if pass == 1 {
+                            for (k, (u, w)) in [(a, b), (b, c), (c, a)].into_iter().enumerate() {
+                                if use_edge[k] {
+                                    best.edge(m, cp, xd, u, w);
+                                }
+                            }
+                        }
+                    }
+                }
+                best
+            }
+            _ => self.lp_hit(x, m),
+        }
+    }
+
+    /// Squared diameter of the vertex box (a scale for tolerances).
+    fn diameter_sq(&self) -> f64 {
+        let b = self.bounds();
+        (b.max - b.min).as_dvec3().length_squared()
+    }
+}
+
+/// The metric `‖·‖_p`, with its two polyhedral ends singled out.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Metric {
+    One,
+    Inf,
+    P(f64),
+}
+
+impl Metric {
+    fn new(p: f32) -> Self {
+        if p <= 1.0 {
+            Metric::One
+        } else if p.is_infinite() {
+            Metric::Inf
+        } else {
+            Metric::P(p as f64)
+        }
+    }
+
+    fn norm(self, v: DVec3) -> f64 {
+        let a = v.abs();
+        match self {
+            Metric::One => a.x + a.y + a.z,
+            Metric::Inf => a.max_element(),
+            Metric::P(p) => pnorm(a, p),
+        }
+    }
+
+    /// The dual norm `‖n‖_{p*}`, `1/p + 1/p* = 1`.
+    fn dual_norm(self, n: DVec3) -> f64 {
+        let a = n.abs();
+        match self {
+            Metric::One => a.max_element(),
+            Metric::Inf => a.x + a.y + a.z,
+            Metric::P(p) => pnorm(a, p / (p - 1.0)),
+        }
+    }
+
+    /// `c` with `‖v‖_p ≥ c ‖v‖_2` in 3D.
+    fn euclid_factor(self) -> f64 {
+        match self {
+            Metric::One => 1.0,
+            Metric::Inf => 1.0 / 3f64.sqrt(),
+            Metric::P(p) if p <= 2.0 => 1.0,
+            Metric::P(p) => 3f64.powf(1.0 / p - 0.5),
+        }
+    }
+}
+
+/// `‖a‖_p` for a non-negative vector, scaled against overflow.
+fn pnorm(a: DVec3, p: f64) -> f64 {
+    let mx = a.max_element();
+    if mx == 0.0 || !mx.is_finite() {
+        return mx;
+    }
+    let s = a / mx;
+    mx * (s.x.powf(p) + s.y.powf(p) + s.z.powf(p)).powf(1.0 / p)
+}
+
+/// Sign with `sgn(0) = 0`.
+#[inline]
+fn sgn(v: f64) -> f64 {
+    if v > 0.0 {
+        1.0
+    } else if v < 0.0 {
+        -1.0
+    } else {
+        0.0
+    }
+}
+
+/// Where on the skeleton the closest point was found (for kink gradients).
+#[derive(Debug, Clone, Copy)]
+enum Kink {
+    /// A vertex, or a point whose neighbourhood is not tracked.
+    None,
+    /// The relative interior of a planar face with this normal (`n·r > 0`).
+    Face(DVec3),
+    /// The relative interior of an edge with this direction.
+    Edge(DVec3),
+}
+
+/// A candidate closest point: its distance and residual `r = x − q`.
+#[derive(Debug, Clone, Copy)]
+struct Hit {
+    d: f64,
+    r: DVec3,
+    kink: Kink,
+}
+
+impl Hit {
+    fn new(m: Metric, r: DVec3, kink: Kink) -> Self {
+        Self { d: m.norm(r), r, kink }
+    }
+
+    /// Keeps the better candidate. A located candidate (face or edge) also
+    /// replaces an untracked one (the `f32` Euclidean start, a vertex) that
+    /// is better only by rounding, so that the kink rule sees where `q*` is.
+    fn offer(&mut self, other: Hit) {
+        let located = !matches!(other.kink, Kink::None) && matches!(self.kink, Kink::None);
+        if other.d < self.d || (located && other.d <= self.d * (1.0 + 1e-7)) {
+            *self = other;
+        }
+    }
+
+    /// Offers the L^p closest point of edge `[a, b]` unless its Euclidean
+    /// lower bound `c_p·|x − q₂|` already rules it out.
+    fn edge(&mut self, m: Metric, cp: f64, x: DVec3, a: DVec3, b: DVec3) {
+        let e = b - a;
+        let l2 = e.length_squared();
+        let t2 = if l2 > 0.0 { ((x - a).dot(e) / l2).clamp(0.0, 1.0) } else { 0.0 };
+        if cp * (x - a - e * t2).length() >= self.d {
+            return;
+        }
+        self.offer(segment_hit(m, x - a, e));
+    }
+
+    /// `∇_x d_p`: the envelope gradient `∇‖r‖_p`, with the kink rule of the
+    /// module docs for `p ∈ {1, ∞}`.
+    fn gradient(&self, m: Metric) -> Vec3 {
+        let r = self.r;
+        if self.d <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let g = match (m, self.kink) {
+            (_, Kink::Face(n)) => n / m.dual_norm(n),
+            (Metric::P(p), kink) => {
+                let s = r.abs() / self.d;
+                let mut g = DVec3::new(
+                    sgn(r.x) * s.x.powf(p - 1.0),
+                    sgn(r.y) * s.y.powf(p - 1.0),
+                    sgn(r.z) * s.z.powf(p - 1.0),
+                );
+                if let Kink::Edge(e) = kink {
+                    // Near-zero components are not resolved by the edge solve
+                    // (`|r_k|^{p−1}` is ill-conditioned for p near 1): give them
+                    // the value, within their possible range, that makes `g`
+                    // orthogonal to the edge (the optimality condition).
+                    let tiny = 1e-6 * r.abs().max_element();
+                    let bound = 1e-6f64.powf(p - 1.0);
+                    orthogonalize(&mut g, e, |k| r[k].abs() <= tiny, bound);
+                }
+                g
+            }
+            (Metric::Inf, kink) => {
+                let a = r.abs();
+                let mx = a.max_element();
+                let tied: [bool; 3] = [0, 1, 2].map(|k| a[k] >= mx * (1.0 - 1e-9));
+                let count = tied.iter().filter(|t| **t).count();
+                let mut g = DVec3::ZERO;
+                let mut split = true;
+                if let (Kink::Edge(e), 2) = (kink, count) {
+                    // The subgradient orthogonal to the edge, if one exists.
+                    let i = tied.iter().position(|t| *t).unwrap_or(0);
+                    let j = tied.iter().rposition(|t| *t).unwrap_or(2);
+                    let (ai, aj) = (sgn(r[i]) * e[i], sgn(r[j]) * e[j]);
+                    if ai * aj < 0.0 {
+                        let l = aj / (aj - ai);
+                        g[i] = l * sgn(r[i]);
+                        g[j] = (1.0 - l) * sgn(r[j]);
+                        split = false;
+                    }
+                }
+                if split {
+                    for k in 0..3 {
+                        if tied[k] {
+                            g[k] = sgn(r[k]) / count as f64;
+                        }
+                    }
+                }
+                g
+            }
+            (Metric::One, kink) => {
+                let zero = r.abs().cmple(DVec3::splat(1e-9 * self.d));
+                let mut g = DVec3::new(sgn(r.x), sgn(r.y), sgn(r.z));
+                for k in 0..3 {
+                    if zero.test(k) {
+                        g[k] = 0.0;
+                    }
+                }
+                if let Kink::Edge(e) = kink {
+                    // Zero components take the subgradient orthogonal to the edge.
+                    orthogonalize(&mut g, e, |k| zero.test(k), 1.0);
+                }
+                g
+            }
         };
-        lp_norm(x - q, p)
+        g.as_vec3()
+    }
+}
+
+/// Sets the components `k` of `g` with `free(k)` (assumed zero in `g`'s
+/// contribution) so that `g·e = 0`, least-squares, clamped to `±bound`.
+fn orthogonalize(g: &mut DVec3, e: DVec3, free: impl Fn(usize) -> bool, bound: f64) {
+    let (mut s, mut ez2) = (0.0, 0.0);
+    for k in 0..3 {
+        if free(k) {
+            ez2 += e[k] * e[k];
+        } else {
+            s += g[k] * e[k];
+        }
+    }
+    if ez2 > 0.0 {
+        for k in 0..3 {
+            if free(k) {
+                g[k] = (-s * e[k] / ez2).clamp(-bound, bound);
+            }
+        }
+    }
+}
+
+/// The residual `r = x − q` minimizing `‖r‖_p` over the affine plane
+/// `n·q = n·x − δ`, i.e. over `n·r = δ` (Hölder's equality case):
+/// `r = δ w / (n·w)` with `w_k = sign(n_k)|n_k|^{p*−1}`, `‖r‖_p = |δ|/‖n‖_{p*}`.
+/// For `p = ∞` zero normal components get `r_k = 0`; for `p = 1` the whole
+/// residual goes on one largest normal component.
+fn plane_residual(m: Metric, n: DVec3, delta: f64) -> DVec3 {
+    let s = n.abs().max_element();
+    if s == 0.0 || delta == 0.0 {
+        return DVec3::ZERO;
+    }
+    let n = n / s;
+    let w = match m {
+        Metric::Inf => DVec3::new(sgn(n.x), sgn(n.y), sgn(n.z)),
+        Metric::One => {
+            let a = n.abs();
+            let k = if a.x == 1.0 {
+                0
+            } else if a.y == 1.0 {
+                1
+            } else {
+                2
+            };
+            let mut w = DVec3::ZERO;
+            w[k] = sgn(n[k]);
+            w
+        }
+        Metric::P(p) => {
+            let e = 1.0 / (p - 1.0); // p* − 1
+            DVec3::new(
+                sgn(n.x) * n.x.abs().powf(e),
+                sgn(n.y) * n.y.abs().powf(e),
+                sgn(n.z) * n.z.abs().powf(e),
+            )
+        }
+    };
+    w * (delta / s / n.dot(w))
+}
+
+/// The exact L^p closest point of the segment `a + t e`, `t ∈ [0, 1]`, with
+/// `c = x − a`. `p = 1`, `p = ∞`: the objective is convex piecewise linear,
+/// so its minimum is at one of the breakpoints (zero crossings of `r_k`, and
+/// for `∞` the crossings `r_i = ±r_j`) or an end: all are evaluated. Other
+/// `p`: the derivative of `Σ|r_k|^p` is monotone; safeguarded Newton
+/// (bisection whenever Newton leaves the bracket or stalls), from the
+/// Euclidean parameter.
+fn segment_hit(m: Metric, c: DVec3, e: DVec3) -> Hit {
+    let edge_at = |t: f64| {
+        let kink = if t > 0.0 && t < 1.0 { Kink::Edge(e) } else { Kink::None };
+        Hit::new(m, c - e * t, kink)
+    };
+    let mut best = edge_at(0.0);
+    best.offer(edge_at(1.0));
+    let try_t = |t: f64, best: &mut Hit| {
+        if t > 0.0 && t < 1.0 {
+            best.offer(edge_at(t));
+        }
+    };
+    match m {
+        Metric::One | Metric::Inf => {
+            for k in 0..3 {
+                if e[k] != 0.0 {
+                    try_t(c[k] / e[k], &mut best);
+                }
+            }
+            if m == Metric::Inf {
+                for (i, j) in [(0, 1), (1, 2), (0, 2)] {
+                    for sign in [1.0, -1.0] {
+                        let den = e[i] - sign * e[j];
+                        if den != 0.0 {
+                            try_t((c[i] - sign * c[j]) / den, &mut best);
+                        }
+                    }
+                }
+            }
+            best
+        }
+        Metric::P(p) => {
+            // Scaled derivative terms at t: sign of φ′, and the Newton step.
+            let deriv = |t: f64| -> (f64, f64) {
+                let r = c - e * t;
+                let mx = r.abs().max_element();
+                if mx == 0.0 {
+                    return (0.0, 0.0);
+                }
+                let s = r / mx;
+                let (mut d1, mut d2) = (0.0, 0.0);
+                for k in 0..3 {
+                    let a = s[k].abs();
+                    if a > 0.0 {
+                        let w = a.powf(p - 2.0); // one powf for both terms
+                        d1 -= e[k] * sgn(s[k]) * a * w;
+                        d2 += e[k] * e[k] * w;
+                    } else if e[k] != 0.0 && p <= 2.0 {
+                        // |r_k|^{p−2} at 0: infinite curvature (p < 2) → bisection.
+                        d2 += if p < 2.0 { f64::INFINITY } else { e[k] * e[k] };
+                    }
+                }
+                let step = -mx * d1 / ((p - 1.0) * d2);
+                (d1, step)
+            };
+            if deriv(0.0).0 >= 0.0 {
+                return edge_at(0.0);
+            }
+            if deriv(1.0).0 <= 0.0 {
+                return edge_at(1.0);
+            }
+            let (mut lo, mut hi) = (0.0f64, 1.0f64);
+            let l2 = e.length_squared();
+            let mut t = (c.dot(e) / l2).clamp(0.0, 1.0);
+            if t <= 0.0 || t >= 1.0 {
+                t = 0.5;
+            }
+            let mut last = 1.0f64;
+            for _ in 0..100 {
+                let (d1, step) = deriv(t);
+                if d1 == 0.0 {
+                    break;
+                }
+                if d1 < 0.0 {
+                    lo = t;
+                } else {
+                    hi = t;
+                }
+                let newton = t + step;
+                let next = if step.is_finite() && newton > lo && newton < hi && step.abs() < 0.5 * last {
+                    newton
+                } else {
+                    0.5 * (lo + hi)
+                };
+                last = (next - t).abs();
+                t = next;
+                if last <= 1e-11 || hi - lo <= 1e-11 {
+                    break;
+                }
+            }
+            edge_at(t)
+        }
     }
 }
 
@@ -405,37 +930,6 @@ fn closest_on_segment(x: Vec3, a: Vec3, b: Vec3) -> Vec3 {
         return a;
     }
     a + e * ((x - a).dot(e) / l2).clamp(0.0, 1.0)
-}
-
-/// Exact L^p closest point on a segment: `‖x − a − t e‖_p` is convex in `t`,
-/// minimized by golden-section search over `[0, 1]`.
-fn lp_closest_on_segment(x: Vec3, a: Vec3, b: Vec3, p: f32) -> Vec3 {
-    let e = b - a;
-    let f = |t: f32| lp_norm(x - a - e * t, p);
-    let (mut lo, mut hi) = (0.0f32, 1.0f32);
-    const G: f32 = 0.618_034;
-    let mut c = hi - G * (hi - lo);
-    let mut d = lo + G * (hi - lo);
-    let (mut fc, mut fd) = (f(c), f(d));
-    for _ in 0..40 {
-        if fc <= fd {
-            hi = d;
-            d = c;
-            fd = fc;
-            c = hi - G * (hi - lo);
-            fc = f(c);
-        } else {
-            lo = c;
-            c = d;
-            fc = fd;
-            d = lo + G * (hi - lo);
-            fd = f(d);
-        }
-    }
-    let mid = 0.5 * (lo + hi);
-    // The ends may be better when the minimum sits on the boundary.
-    let best = [0.0, mid, 1.0].into_iter().min_by(|s, t| f(*s).total_cmp(&f(*t))).unwrap_or(mid);
-    a + e * best
 }
 
 /// Closest point on triangle `abc` (Ericson, *Real-Time Collision Detection* §5.1.5).
@@ -585,6 +1079,300 @@ mod tests {
             ) / (2.0 * h);
             assert!((g - fd).length() < 1e-2, "p={p}: {g} vs {fd}");
         }
+    }
+
+    /// A small deterministic generator.
+    struct Lcg(u64);
+    impl Lcg {
+        fn f(&mut self) -> f32 {
+            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((self.0 >> 40) as f32) / (1u64 << 24) as f32
+        }
+        fn v(&mut self, s: f32) -> Vec3 {
+            Vec3::new(self.f() - 0.5, self.f() - 0.5, self.f() - 0.5) * (2.0 * s)
+        }
+    }
+
+    /// Random oblique convex polygons (hull of points in a random plane)
+    /// and polyhedra (hull of random points).
+    fn random_shapes(rng: &mut Lcg) -> Vec<Polytope> {
+        let mut out = Vec::new();
+        for _ in 0..4 {
+            let u = rng.v(1.0).normalize();
+            let w = u.any_orthonormal_vector();
+            let z = u.cross(w);
+            let o = rng.v(0.5);
+            let pts: Vec<Vec3> =
+                (0..6).map(|_| o + u * (2.0 * rng.f() - 1.0) + w * (2.0 * rng.f() - 1.0)).collect();
+            let _ = z;
+            out.push(Polytope::hull(&pts));
+        }
+        for _ in 0..4 {
+            let pts: Vec<Vec3> = (0..8).map(|_| rng.v(1.0)).collect();
+            out.push(Polytope::hull(&pts));
+        }
+        out
+    }
+
+    /// The triangles covering the polytope's boundary (fan for a polygon).
+    fn boundary_triangles(poly: &Polytope) -> Vec<[Vec3; 3]> {
+        let v = poly.vertices();
+        match &poly.structure {
+            Structure::Polygon { .. } => (1..v.len() - 1).map(|i| [v[0], v[i], v[i + 1]]).collect(),
+            Structure::Polyhedron { triangles } => {
+                triangles.iter().map(|t| t.map(|i| v[i as usize])).collect()
+            }
+            _ => unreachable!(),
+        }
+    }
+
+    /// Brute force: a barycentric lattice on every boundary triangle, then
+    /// zoomed lattices around the best sample (f64).
+    fn brute_lp(poly: &Polytope, x: Vec3, p: f32) -> f64 {
+        let m = Metric::new(p);
+        let xd = x.as_dvec3();
+        let f = |t: &[Vec3; 3], u: f64, w: f64| {
+            let u = u.clamp(0.0, 1.0);
+            let w = w.clamp(0.0, 1.0 - u);
+            let q = t[0].as_dvec3() * (1.0 - u - w) + t[1].as_dvec3() * u + t[2].as_dvec3() * w;
+            m.norm(xd - q)
+        };
+        let n = 30;
+        let mut best = (f64::INFINITY, 0usize, 0.0, 0.0);
+        let tris = boundary_triangles(poly);
+        for (k, t) in tris.iter().enumerate() {
+            for i in 0..=n {
+                for j in 0..=n - i {
+                    let (u, w) = (i as f64 / n as f64, j as f64 / n as f64);
+                    let d = f(t, u, w);
+                    if d < best.0 {
+                        best = (d, k, u, w);
+                    }
+                }
+            }
+        }
+        // Zoom on each of the few best triangles' optimum.
+        let mut result = best.0;
+        for (k, t) in tris.iter().enumerate() {
+            let (mut u0, mut w0, mut d0) = (best.2, best.3, f64::INFINITY);
+            if k != best.1 {
+                // Restart from this triangle's own best lattice point.
+                for i in 0..=n {
+                    for j in 0..=n - i {
+                        let (u, w) = (i as f64 / n as f64, j as f64 / n as f64);
+                        let d = f(t, u, w);
+                        if d < d0 {
+                            (d0, u0, w0) = (d, u, w);
+                        }
+                    }
+                }
+                if d0 > best.0 * 1.2 + 0.05 {
+                    continue;
+                }
+            }
+            let mut win = 1.0 / n as f64;
+            for _ in 0..25 {
+                let (mut bu, mut bw, mut bd) = (u0, w0, f(t, u0, w0));
+                for i in -5..=5 {
+                    for j in -5..=5 {
+                        let u = (u0 + win * i as f64 / 5.0).clamp(0.0, 1.0);
+                        let w = (w0 + win * j as f64 / 5.0).clamp(0.0, 1.0 - u);
+                        let d = f(t, u, w);
+                        if d < bd {
+                            (bd, bu, bw) = (d, u, w);
+                        }
+                    }
+                }
+                (u0, w0) = (bu, bw);
+                result = result.min(bd);
+                win /= 2.5;
+            }
+        }
+        result
+    }
+
+    const PS: [f32; 5] = [1.0, 1.5, 3.0, 8.0, f32::INFINITY];
+
+    #[test]
+    fn exact_lp_matches_brute_force_on_oblique_polytopes() {
+        let mut rng = Lcg(7);
+        for poly in random_shapes(&mut rng) {
+            for _ in 0..3 {
+                let x = rng.v(2.0);
+                for &p in &PS {
+                    let d = poly.lp_distance(x, p) as f64;
+                    let b = brute_lp(&poly, x, p);
+                    let inside = poly.dimension() == 3 && d == 0.0;
+                    if inside {
+                        assert!(poly.planes.iter().all(|(n, e)| n.dot(x) <= *e + 1e-6));
+                        continue;
+                    }
+                    assert!(d <= b + 1e-5 * (1.0 + b), "p={p} at {x}: exact {d} > brute {b} ({poly:?})");
+                    assert!(b - d <= 1e-4 * (1.0 + b), "p={p} at {x}: exact {d} ≪ brute {b} ({poly:?})");
+                }
+            }
+        }
+    }
+
+    /// Weak duality: for `‖u‖_{p*} = 1`, `d_p(x, S) ≥ u·x − h_S(u)`. With `u`
+    /// the returned gradient (the dual optimum) the bound must meet `d`: a
+    /// certificate that `d` is the minimum (not just an upper bound).
+    #[test]
+    fn gradient_is_a_dual_certificate() {
+        let mut rng = Lcg(11);
+        for poly in random_shapes(&mut rng) {
+            for _ in 0..200 {
+                let x = rng.v(2.0);
+                for &p in &PS {
+                    let m = Metric::new(p);
+                    let (d, g) = poly.distance(x, p);
+                    if d == 0.0 {
+                        continue;
+                    }
+                    let g = g.as_dvec3();
+                    let gn = m.dual_norm(g);
+                    let h = poly.vertices().iter().map(|v| g.dot(v.as_dvec3())).fold(f64::MIN, f64::max);
+                    let lower = (g.dot(x.as_dvec3()) - h) / gn;
+                    let d = d as f64;
+                    assert!(lower <= d + 1e-5 * (1.0 + d), "p={p}: bound {lower} above {d}");
+                    assert!((gn - 1.0).abs() < 1e-4, "p={p}: ‖∇d‖_p* = {gn}");
+                    // Also for p = 1, ∞: the kink rule picks the dual optimum.
+                    assert!(d - lower <= 1e-5 * (1.0 + d), "p={p} at {x}: gap {d} vs {lower}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn general_method_agrees_with_closed_forms() {
+        let mut rng = Lcg(3);
+        let boxes = [Skeleton::cuboid(Vec3::new(1.0, 0.5, 0.25)).polytope().unwrap()];
+        for b in &boxes {
+            assert!(b.aabb.is_some());
+            for _ in 0..40 {
+                let x = rng.v(2.5);
+                for &p in &PS {
+                    let m = Metric::new(p);
+                    let closed = b.lp_hit(x, m).d;
+                    let general = b.lp_hit_general(x, m).d;
+                    assert!(
+                        (closed - general).abs() <= 1e-5 * (1.0 + closed),
+                        "box p={p} at {x}: {closed} vs {general}"
+                    );
+                }
+            }
+        }
+        for poly in random_shapes(&mut rng) {
+            for _ in 0..20 {
+                let x = rng.v(2.0);
+                let euclid = (x - poly.closest_point(x)).length() as f64;
+                let general = poly.lp_hit_general(x, Metric::P(2.0)).d;
+                assert!(
+                    (euclid - general).abs() <= 1e-5 * (1.0 + euclid),
+                    "p=2 at {x}: {euclid} vs {general}"
+                );
+            }
+        }
+    }
+
+    /// Points `s_S(u) + r s_{B_p}(u)` lie on `S ⊕ B_p(r)`, so `d_p = r` there.
+    #[test]
+    fn offsets_are_minkowski_sums() {
+        let rot = glam::Quat::from_rotation_x(0.35) * glam::Quat::from_rotation_z(0.52);
+        let square: Vec<Vec3> = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+            .iter()
+            .map(|&(a, b)| rot * Vec3::new(a, b, 0.0))
+            .collect();
+        let cube: Vec<Vec3> = (0..8)
+            .map(|i| {
+                rot * Vec3::new(
+                    (i & 1) as f32 - 0.5,
+                    ((i >> 1) & 1) as f32 - 0.5,
+                    ((i >> 2) & 1) as f32 - 0.5,
+                )
+            })
+            .collect();
+        let r = 0.6f32;
+        let mut rng = Lcg(5);
+        for verts in [&square, &cube] {
+            let poly = Polytope::hull(verts);
+            for &p in &PS {
+                for _ in 0..12 {
+                    let u = rng.v(1.0).as_dvec3();
+                    // Support point of the unit L^p ball: ∇‖u‖_{p*}.
+                    let ball = match Metric::new(p) {
+                        Metric::Inf => DVec3::new(sgn(u.x), sgn(u.y), sgn(u.z)),
+                        Metric::One => {
+                            let a = u.abs();
+                            let k = if a.x >= a.y && a.x >= a.z {
+                                0
+                            } else if a.y >= a.z {
+                                1
+                            } else {
+                                2
+                            };
+                            let mut s = DVec3::ZERO;
+                            s[k] = sgn(u[k]);
+                            s
+                        }
+                        Metric::P(p) => {
+                            let q = p / (p - 1.0);
+                            let a = u.abs() / pnorm(u.abs(), q);
+                            DVec3::new(
+                                sgn(u.x) * a.x.powf(q - 1.0),
+                                sgn(u.y) * a.y.powf(q - 1.0),
+                                sgn(u.z) * a.z.powf(q - 1.0),
+                            )
+                        }
+                    };
+                    let x = poly.support(u.as_vec3()) + ball.as_vec3() * r;
+                    let d = poly.lp_distance(x, p);
+                    assert!((d - r).abs() < 2e-5, "p={p}, u={u}: d={d}, r={r}");
+                    let out = x + u.normalize().as_vec3() * 0.01;
+                    assert!(poly.lp_distance(out, p) > r, "p={p}: outward point not outside");
+                }
+            }
+        }
+        // The old Euclidean-residual approximation fails here: above the
+        // tilted square's edge midpoint, offset along the in-plane normal.
+        let poly = Polytope::hull(&square);
+        let mid = (square[0] + square[1]) * 0.5;
+        let out = (mid - square[2]).normalize();
+        let x = mid + out * 0.5;
+        let exact = poly.lp_distance(x, f32::INFINITY);
+        let approx = lp_norm(x - poly.closest_point(x), f32::INFINITY);
+        assert!(exact < approx - 1e-3, "{exact} vs {approx}");
+    }
+
+    #[test]
+    fn lp_gradients_match_central_differences() {
+        let mut rng = Lcg(9);
+        let mut checked = 0;
+        for poly in random_shapes(&mut rng) {
+            for _ in 0..6 {
+                let x = rng.v(2.0);
+                for &p in &PS {
+                    let (d, g) = poly.distance(x, p);
+                    if d < 1e-2 {
+                        continue;
+                    }
+                    let fd = |h: f32| {
+                        Vec3::new(
+                            poly.lp_distance(x + Vec3::X * h, p) - poly.lp_distance(x - Vec3::X * h, p),
+                            poly.lp_distance(x + Vec3::Y * h, p) - poly.lp_distance(x - Vec3::Y * h, p),
+                            poly.lp_distance(x + Vec3::Z * h, p) - poly.lp_distance(x - Vec3::Z * h, p),
+                        ) / (2.0 * h)
+                    };
+                    let (a, b) = (fd(1e-3), fd(2e-3));
+                    if (a - b).length() > 1e-3 {
+                        continue; // near a kink
+                    }
+                    assert!((g - a).length() < 1e-2, "p={p} at {x}: {g} vs {a}");
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 100, "{checked}");
     }
 
     #[test]
