@@ -310,24 +310,11 @@ fn level_set_morph_takes_an_align_file_and_prints_its_report() {
     let v = align_json(&["mug", "chain", "--res", "32", "--out", out.join("aligned.ply").to_str().unwrap()]);
     std::fs::write(&map, v.to_string()).unwrap();
     let frames = out.join("frames");
-    let o = isomorph(&[
-        "morph",
-        "--method",
-        "level-set",
-        "--source",
-        "mug",
-        "--target",
-        "chain",
-        "--align",
-        map.to_str().unwrap(),
-        "--res",
-        "32",
-        "--frames",
-        "3",
-        "--report",
-        "--out",
-        frames.to_str().unwrap(),
-    ]);
+    let (map_arg, frames_arg) = (map.to_str().unwrap(), frames.to_str().unwrap());
+    let morph =
+        ["morph", "--method", "level-set", "--source", "mug", "--target", "chain", "--align", map_arg];
+    let o =
+        isomorph(&[&morph[..], &["--res", "32", "--frames", "3", "--report", "--out", frames_arg]].concat());
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let report: serde_json::Value = serde_json::from_slice(&o.stdout).expect("stdout is the JSON report");
     assert_eq!(report["method"], "level-set");
@@ -341,19 +328,7 @@ fn level_set_morph_takes_an_align_file_and_prints_its_report() {
     assert!(target["mean_voxels"].as_f64().unwrap() < 0.5, "{target}");
     // A map file that is not affine is refused with one clear line.
     std::fs::write(&map, r#"{"matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[1,0,0,1]]}"#).unwrap();
-    let o = isomorph(&[
-        "morph",
-        "--method",
-        "level-set",
-        "--source",
-        "mug",
-        "--target",
-        "chain",
-        "--align",
-        map.to_str().unwrap(),
-        "--out",
-        frames.to_str().unwrap(),
-    ]);
+    let o = isomorph(&[&morph[..], &["--out", frames_arg]].concat());
     assert!(!o.status.success());
     assert!(
         String::from_utf8_lossy(&o.stderr).contains("last row"),

@@ -63,7 +63,7 @@
 //!   with the torus (genus 1, mean distance < 0.05) plus two blobs at the
 //!   poles; sphere → holed cube (4794 coefficients) reaches a mean surface
 //!   distance of 0.012 (world units, shapes of size 0.6) but with 13 small
-//!   components, so its genus-3 test is `#[ignore]`d. Rows of the velocity
+//!   components, so its genus-3 test is ignored (with that reason). Rows of the velocity
 //!   equation at lattice nodes where the signs of `f` and `d_B` disagree
 //!   (note §5.5 a) are the planned remedy.
 //! - Cost: one evolution step costs a sparse Cholesky factorization of the
