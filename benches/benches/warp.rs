@@ -1,6 +1,6 @@
 //! Benchmarks of True's volume warping: the full antialiased (box filter)
 //! warp, the local update after moving one control point, and the
-//! table-driven vs direct evaluation of the deformation mapping array.
+//! table-driven vs separable vs direct evaluation of the deformation mapping array.
 //!
 //! `cargo bench -p isomorph-benches --bench warp -- pushforward_box/256`
 
@@ -8,7 +8,9 @@ use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_m
 use glam::{UVec3, Vec3};
 use isomorph_benches::torus_grid;
 use isomorph_common::Grid3;
-use isomorph_warp::{BSplineMap, CoefficientTable, DeformationArray, Filter, VolumeWarp, WarpSettings};
+use isomorph_warp::{
+    BSplineMap, CoefficientTable, DeformationArray, Evaluator, Filter, VolumeWarp, WarpSettings,
+};
 use std::hint::black_box;
 
 /// Control points per axis: 11 leaves 8 regions, so 128 and 256 are integer
@@ -90,9 +92,13 @@ fn map_eval(c: &mut Criterion) {
     let table = CoefficientTable::new(&map).expect("128 is a multiple of 8 regions");
     let mut array = DeformationArray::identity(UVec3::splat(n)).expect("fits");
     group.throughput(Throughput::Elements(u64::from(n).pow(3)));
-    for (name, table) in [("table", Some(&table)), ("direct", None)] {
+    for (name, evaluator) in [
+        ("table", Evaluator::Table(&table)),
+        ("separable", Evaluator::Separable),
+        ("direct", Evaluator::Direct),
+    ] {
         group.bench_function(BenchmarkId::new(name, n), |b| {
-            b.iter(|| array.update(black_box(&map), table, UVec3::ZERO, UVec3::splat(n)))
+            b.iter(|| array.update(black_box(&map), evaluator, UVec3::ZERO, UVec3::splat(n)))
         });
     }
     group.finish();

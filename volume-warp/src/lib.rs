@@ -14,7 +14,7 @@
 //! |---|---|
 //! | §5.1 basis `B0…B3`, eq. 3 | [`basis`], [`map`] ([`BSplineMap`]) |
 //! | §5.5 control point placement (identity map) | [`BSplineMap::identity`] |
-//! | §5.2 rapid evaluation, table eq. 4, eq. 5 | [`table`] ([`CoefficientTable`], [`DeformationArray`]) |
+//! | §5.2 rapid evaluation, table eq. 4, eq. 5 | [`table`] ([`CoefficientTable`], [`DeformationArray`]); beyond the thesis, its tensor-product factorization [`Evaluation::Separable`] |
 //! | §5.3 map-and-round, main loop with local updates | [`pushforward`] ([`Filter::Round`]), [`warp`] ([`VolumeWarp::move_control_points`]) |
 //! | §5.4 antialiasing box filter, weight normalization | [`pushforward`] ([`Filter::Box`]) |
 //! | §6 direct manipulation (after Hsu et al. 1992) | [`manipulate`] ([`solve_drag`], [`VolumeWarp::drag`]) |
@@ -24,8 +24,11 @@
 //! # Choices where the thesis is open
 //! - Coordinates are source voxel indices; a lattice of `C` points per axis
 //!   spans `C − 3` regions of `h = n/(C − 3)` voxels. The table of §5.2 needs
-//!   `h` to be an integer `G`; [`Evaluation::Auto`] uses it then and direct
-//!   evaluation otherwise (both agree to 1e-5 voxels, tested).
+//!   `h` to be an integer `G` ([`Evaluation::Table`]). [`Evaluation::Auto`]
+//!   uses the tensor-product factorization of the same weight products
+//!   ([`Evaluation::Separable`]: 4 terms per voxel instead of 64, any size),
+//!   which measured 4.5× faster than the table; table, separable and direct
+//!   evaluation agree to 1e-5 voxels (tested).
 //! - Control points are stored as displacements from their rest positions,
 //!   so the untouched lattice reproduces the input bit for bit.
 //! - The target is the source padded by `pad` voxels per side (the thesis'
@@ -106,5 +109,5 @@ pub use manipulate::{Drag, Handle, solve_drag};
 pub use map::BSplineMap;
 pub use morph::{WarpMorph, WorldMap};
 pub use pushforward::{Density, Filter};
-pub use table::{CoefficientTable, DeformationArray, Evaluation};
+pub use table::{CoefficientTable, DeformationArray, Evaluation, Evaluator};
 pub use warp::{VolumeWarp, WarpSettings};

@@ -93,11 +93,6 @@ impl Density for f32 {
     const ZERO: Self = 0.0;
 }
 
-/// Target voxels per axis a source voxel's box may span in the
-/// accumulation fast path (boxes up to 3 voxels wide; larger ones, from
-/// strong stretching, take the general loop).
-const MAX_SPAN: usize = 4;
-
 /// Source z-slices per accumulation slab.
 const SLAB: u32 = 8;
 
@@ -298,7 +293,11 @@ impl<T: Density> Splat<'_, T> {
                     floor(bmax[axis] + 0.5).min(self.target_dims[axis] as i32 - 1),
                 )
             } else {
-                cover(bmin[axis], bmax[axis], self.target_dims[axis])
+                // One voxel more at the top: the 2 × 2 × 2 fast path of
+                // `accumulate` writes (zero weights) to voxel `q + 1` even
+                // when a box ends in voxel `q`.
+                let (first, last) = cover(bmin[axis], bmax[axis], self.target_dims[axis]);
+                (first, (last + 1).min(self.target_dims[axis] as i32 - 1))
             };
         }
         first.cmple(last).all().then_some((first, last))
@@ -317,107 +316,171 @@ impl<T: Density> Splat<'_, T> {
         z1: u32,
         sign: f32,
     ) {
-        let (tx, ty) = (self.target_dims.x as usize, self.target_dims.y as usize);
-        let layers = (part.len() / (tx * ty)) as i32;
+        let dims = self.deformation.dims();
+        let points = self.deformation.points();
+        let mut target = Target::new(part, zbase, self.target_dims, sign);
         let pad = Vec3A::splat(self.pad as f32);
-        let src_dims = self.deformation.dims();
         for g in z0..z1 {
             for f in lo.y..hi.y {
-                for e in lo.x..hi.x {
-                    let n =
-                        e as usize + src_dims.x as usize * (f as usize + src_dims.y as usize * g as usize);
-                    let v = self.source[n].to_f32();
-                    if self.filter == Filter::Round {
-                        let q = self.deformation.get(e, f, g) + pad + 0.5;
-                        let qi = IVec3::new(floor(q.x), floor(q.y), floor(q.z));
-                        if qi.cmpge(IVec3::ZERO).all() && qi.cmplt(self.target_dims.as_ivec3()).all() {
-                            let z = qi.z - zbase;
-                            debug_assert!((0..layers).contains(&z));
-                            let cell = &mut part[qi.x as usize + tx * (qi.y as usize + ty * z as usize)];
-                            cell[0] += sign;
-                            cell[1] += sign * v;
-                        }
-                        continue;
+                let row = self.deformation.index(0, f, g);
+                let values = &self.source[row..row + dims.x as usize];
+                if self.filter == Filter::Round {
+                    for e in lo.x..hi.x {
+                        target.add_point(points[row + e as usize] + pad, values[e as usize].to_f32());
                     }
+                    continue;
+                }
+                // Interior voxels of interior rows: the six face centres are
+                // midpoints with the six neighbours (min/max of the midpoints
+                // = midpoint of the min/max), read from seven row slices
+                // without index arithmetic; the rest take `voxel_box`.
+                let interior_row = f > 0 && g > 0 && f + 1 < dims.y && g + 1 < dims.z;
+                let (a, b) = if interior_row {
+                    (lo.x.max(1), hi.x.min(dims.x - 1).max(lo.x.max(1)))
+                } else {
+                    (hi.x, hi.x)
+                };
+                for e in (lo.x..a).chain(b..hi.x) {
                     let (blo, bhi) = voxel_box(self.deformation, e, f, g);
-                    let (blo, bhi) = (blo + pad, bhi + pad);
-                    let (x0, x1) = cover(blo.x, bhi.x, self.target_dims.x);
-                    let (y0, y1) = cover(blo.y, bhi.y, self.target_dims.y);
-                    let (z0t, z1t) = cover(blo.z, bhi.z, self.target_dims.z);
-                    if x0 > x1 || y0 > y1 || z0t > z1t {
-                        continue;
-                    }
-                    // Overlap lengths per axis (at most MAX_SPAN target voxels
-                    // per axis in the fast path), then their products.
-                    let overlap =
-                        |q: i32, l: f32, h: f32| (h.min(q as f32 + 0.5) - l.max(q as f32 - 0.5)).max(0.0);
-                    let (nxs, nys) = ((x1 - x0 + 1) as usize, (y1 - y0 + 1) as usize);
-                    let sv = sign * v;
-                    if nxs == 2 && nys == 2 && z1t == z0t + 1 {
-                        // The common case: a box straddling 2 × 2 × 2 target
-                        // voxels. Each (row, z) pair updates four contiguous
-                        // floats: weight and weighted value of two cells.
-                        let wx = [overlap(x0, blo.x, bhi.x), overlap(x1, blo.x, bhi.x)];
-                        let wy = [overlap(y0, blo.y, bhi.y), overlap(y1, blo.y, bhi.y)];
-                        let wz = [overlap(z0t, blo.z, bhi.z), overlap(z1t, blo.z, bhi.z)];
-                        let z = (z0t - zbase) as usize;
-                        debug_assert!(z as i32 + 1 < layers);
-                        let base = tx * (y0 as usize + ty * z) + x0 as usize;
-                        for (dz, &wzv) in wz.iter().enumerate() {
-                            for (dy, &wyv) in wy.iter().enumerate() {
-                                let row = base + tx * (dy + ty * dz);
-                                let wyz = wzv * wyv;
-                                let cells = &mut part[row..row + 2];
-                                let (w0, w1) = (wyz * wx[0], wyz * wx[1]);
-                                cells[0][0] += sign * w0;
-                                cells[0][1] += sv * w0;
-                                cells[1][0] += sign * w1;
-                                cells[1][1] += sv * w1;
-                            }
-                        }
-                    } else if nxs <= MAX_SPAN && nys <= MAX_SPAN {
-                        let mut ox = [0.0f32; MAX_SPAN];
-                        let mut oy = [0.0f32; MAX_SPAN];
-                        for (n, o) in ox[..nxs].iter_mut().enumerate() {
-                            *o = overlap(x0 + n as i32, blo.x, bhi.x);
-                        }
-                        for (n, o) in oy[..nys].iter_mut().enumerate() {
-                            *o = overlap(y0 + n as i32, blo.y, bhi.y);
-                        }
-                        for qz in z0t..=z1t {
-                            let wz = overlap(qz, blo.z, bhi.z);
-                            let z = qz - zbase;
-                            debug_assert!((0..layers).contains(&z));
-                            for (dy, &wy) in oy[..nys].iter().enumerate() {
-                                let wyz = wz * wy;
-                                let row = tx * ((y0 as usize + dy) + ty * z as usize) + x0 as usize;
-                                for (cell, &wx) in part[row..row + nxs].iter_mut().zip(&ox[..nxs]) {
-                                    let w = wyz * wx;
-                                    cell[0] += sign * w;
-                                    cell[1] += sv * w;
-                                }
-                            }
-                        }
-                    } else {
-                        for qz in z0t..=z1t {
-                            let wz = overlap(qz, blo.z, bhi.z);
-                            let z = qz - zbase;
-                            for qy in y0..=y1 {
-                                let wyz = wz * overlap(qy, blo.y, bhi.y);
-                                let row = tx * (qy as usize + ty * z as usize);
-                                for qx in x0..=x1 {
-                                    let w = wyz * overlap(qx, blo.x, bhi.x);
-                                    let cell = &mut part[row + qx as usize];
-                                    cell[0] += sign * w;
-                                    cell[1] += sv * w;
-                                }
-                            }
-                        }
+                    target.add_box(blo + pad, bhi + pad, values[e as usize].to_f32());
+                }
+                if a < b {
+                    let (sy, sz) = (dims.x as usize, dims.x as usize * dims.y as usize);
+                    let (a, b) = (row + a as usize, row + b as usize);
+                    let centre = &points[a..b];
+                    let n = centre.len();
+                    let (xm, xp) = (&points[a - 1..b - 1][..n], &points[a + 1..b + 1][..n]);
+                    let (ym, yp) = (&points[a - sy..b - sy][..n], &points[a + sy..b + sy][..n]);
+                    let (zm, zp) = (&points[a - sz..b - sz][..n], &points[a + sz..b + sz][..n]);
+                    let values = &self.source[a..b][..n];
+                    for i in 0..n {
+                        let lo = xm[i].min(xp[i]).min(ym[i].min(yp[i])).min(zm[i].min(zp[i]));
+                        let hi = xm[i].max(xp[i]).max(ym[i].max(yp[i])).max(zm[i].max(zp[i]));
+                        let c = centre[i];
+                        target.add_box(0.5 * (c + lo) + pad, 0.5 * (c + hi) + pad, values[i].to_f32());
                     }
                 }
             }
         }
     }
+}
+
+/// A slab's part of the accumulator, and the sign of the pass (`+1` adds
+/// contributions, `−1` removes them for a local update).
+struct Target<'a> {
+    part: &'a mut Accumulator,
+    zbase: i32,
+    dims: UVec3,
+    /// The largest voxel index along each axis at which a 2 × 2 × 2 block
+    /// may start (`dims − 2`), as floats.
+    last_block: Vec3A,
+    sign: f32,
+}
+
+impl<'a> Target<'a> {
+    fn new(part: &'a mut Accumulator, zbase: i32, dims: UVec3, sign: f32) -> Self {
+        let last_block = (dims.saturating_sub(UVec3::splat(2))).as_vec3a();
+        Self { part, zbase, dims, last_block, sign }
+    }
+
+    /// Index into `part` of target voxel `(x, y, z)`.
+    #[inline(always)]
+    fn cell(&self, x: usize, y: usize, z: i32) -> usize {
+        let z = z - self.zbase;
+        debug_assert!(z >= 0 && (z as usize + 1) * (self.dims.x * self.dims.y) as usize <= self.part.len());
+        x + self.dims.x as usize * (y + self.dims.y as usize * z as usize)
+    }
+
+    /// Map and round (§5.3): the voxel centre's image `p` (target voxel
+    /// coordinates) rounded to the nearest target voxel, weight one.
+    #[inline]
+    fn add_point(&mut self, p: Vec3A, v: f32) {
+        let q = p + 0.5;
+        let qi = IVec3::new(floor(q.x), floor(q.y), floor(q.z));
+        if qi.cmpge(IVec3::ZERO).all() && qi.cmplt(self.dims.as_ivec3()).all() {
+            let n = self.cell(qi.x as usize, qi.y as usize, qi.z);
+            let cell = &mut self.part[n];
+            cell[0] += self.sign;
+            cell[1] += self.sign * v;
+        }
+    }
+
+    /// The box filter (§5.4): adds the box `[lo, hi]` (target voxel
+    /// coordinates) of a source voxel of value `v` to every target voxel it
+    /// overlaps, weighted by the overlap volume.
+    #[inline(always)]
+    fn add_box(&mut self, lo: Vec3A, hi: Vec3A, v: f32) {
+        let sign = self.sign;
+        let sv = sign * v;
+        // The common case, branch-free in SIMD: a box within 2 × 2 × 2
+        // target voxels, `q` and `q + 1` per axis (voxel `q` spans
+        // `[q − ½, q + ½]`), split at `m = q + ½`; the overlaps are
+        // `min(m, hi) − lo` and `max(hi − m, 0)` (zero when the box ends in
+        // voxel `q`; the slab's range includes `q + 1` then, see
+        // `target_range`).
+        let start = lo + 0.5;
+        let q = floor_small(start);
+        let m = q + 0.5;
+        let (w_lo, w_hi) = (m.min(hi) - lo, (hi - m).max(Vec3A::ZERO));
+        if (w_hi.cmple(Vec3A::ONE) & start.cmpge(Vec3A::ZERO) & q.cmple(self.last_block)).all() {
+            let wx = [[sign * w_lo.x, sv * w_lo.x], [sign * w_hi.x, sv * w_hi.x]];
+            let base = self.cell(small_index(q.x), small_index(q.y), small_index(q.z) as i32);
+            let (tx, layer) = (self.dims.x as usize, (self.dims.x * self.dims.y) as usize);
+            // The four rows of two cells, at these offsets in one block.
+            let block = &mut self.part[base..base + layer + tx + 2];
+            let rows = [
+                (0, w_lo.y * w_lo.z),
+                (tx, w_hi.y * w_lo.z),
+                (layer, w_lo.y * w_hi.z),
+                (layer + tx, w_hi.y * w_hi.z),
+            ];
+            for (offset, wyz) in rows {
+                for (cell, w) in block[offset..offset + 2].iter_mut().zip(&wx) {
+                    cell[0] += wyz * w[0];
+                    cell[1] += wyz * w[1];
+                }
+            }
+            return;
+        }
+        // General boxes (strong stretching, or at the target's border).
+        let (x0, x1) = cover(lo.x, hi.x, self.dims.x);
+        let (y0, y1) = cover(lo.y, hi.y, self.dims.y);
+        let (z0, z1) = cover(lo.z, hi.z, self.dims.z);
+        let overlap = |q: i32, l: f32, h: f32| (h.min(q as f32 + 0.5) - l.max(q as f32 - 0.5)).max(0.0);
+        for qz in z0..=z1 {
+            let wz = overlap(qz, lo.z, hi.z);
+            for qy in y0..=y1 {
+                let wyz = wz * overlap(qy, lo.y, hi.y);
+                let row = self.cell(0, qy as usize, qz);
+                for qx in x0..=x1 {
+                    let w = wyz * overlap(qx, lo.x, hi.x);
+                    let cell = &mut self.part[row + qx as usize];
+                    cell[0] += sign * w;
+                    cell[1] += sv * w;
+                }
+            }
+        }
+    }
+}
+
+/// `⌊x⌋` per lane for `x` in `[0, 2²²)` (other lanes give garbage that
+/// the caller rejects): rounding to nearest by adding and subtracting 2²³,
+/// then one down where that rounded up. Five SIMD instructions instead of
+/// the general `floor`.
+#[inline(always)]
+fn floor_small(x: Vec3A) -> Vec3A {
+    const MAGIC: Vec3A = Vec3A::splat(8_388_608.0);
+    let r = (x + MAGIC) - MAGIC;
+    Vec3A::select(r.cmpgt(x), r - Vec3A::ONE, r)
+}
+
+/// An integer-valued float in `[0, 2²³)` as an index, without the
+/// saturating checks of `as`: adding 2²³ puts the integer in the low
+/// mantissa bits.
+#[inline(always)]
+fn small_index(x: f32) -> usize {
+    debug_assert!((0.0..8_388_608.0).contains(&x) && x.fract() == 0.0);
+    ((x + 8_388_608.0).to_bits() - 0x4B00_0000) as usize
 }
 
 /// Writes the normalized density (§5.4's last loop) of the target voxels in

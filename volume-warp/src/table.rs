@@ -18,7 +18,7 @@
 //! deformation mapping array), filled by the table ([`Evaluation::Table`]) or
 //! by direct basis evaluation ([`Evaluation::Direct`], any source size).
 
-use crate::basis::weight_poly;
+use crate::basis::{weight_poly, weights};
 use crate::{BSplineMap, WarpError};
 use glam::{UVec3, Vec3, Vec3A, Vec4};
 use isomorph_common::GridError;
@@ -90,17 +90,47 @@ impl CoefficientTable {
     }
 }
 
-/// How the map is evaluated at the voxel centres.
+/// How the map is evaluated at the voxels.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Evaluation {
-    /// The precomputed table of §5.2 when the sizes allow it, else direct.
+    /// [`Evaluation::Separable`], the fastest (it serves any source size).
     #[default]
     Auto,
-    /// The precomputed table (fails with [`WarpError::NotTableable`] when the
-    /// source is not an integer multiple of the region count).
+    /// The precomputed table of §5.2 and the 64-term dot product of eq. 5
+    /// per voxel (fails with [`WarpError::NotTableable`] when the source is
+    /// not an integer multiple of the region count).
     Table,
+    /// The tensor-product factorization of eq. 4–5 (beyond the thesis):
+    /// the same weight products `wx_i · wy_j · wz_k`, but the 64-term sum
+    /// contracted one axis at a time, z and y once per row of a region and
+    /// x per voxel (4 terms per voxel instead of 64). Any source size.
+    Separable,
     /// Direct basis evaluation per voxel (eq. 3).
     Direct,
+}
+
+/// The evaluation [`DeformationArray::update`] runs: an [`Evaluation`]
+/// resolved, carrying the table it needs.
+#[derive(Debug, Clone, Copy)]
+pub enum Evaluator<'a> {
+    /// The §5.2 table (it must belong to the map's lattice).
+    Table(&'a CoefficientTable),
+    /// The tensor-product factorization ([`Evaluation::Separable`]).
+    Separable,
+    /// Direct basis evaluation (eq. 3).
+    Direct,
+}
+
+impl<'a> Evaluator<'a> {
+    /// Resolves `evaluation`; `table` must be given exactly for
+    /// [`Evaluation::Table`] (otherwise it is ignored).
+    pub fn new(evaluation: Evaluation, table: Option<&'a CoefficientTable>) -> Self {
+        match (evaluation, table) {
+            (Evaluation::Direct, _) => Self::Direct,
+            (Evaluation::Table, Some(table)) => Self::Table(table),
+            _ => Self::Separable,
+        }
+    }
 }
 
 /// The deformation mapping array: `B(e, f, g)` for every source voxel
@@ -135,11 +165,10 @@ impl DeformationArray {
     pub fn compute(map: &BSplineMap, evaluation: Evaluation) -> Result<Self, WarpError> {
         let mut out = Self::identity(map.source_dims())?;
         let table = match evaluation {
-            Evaluation::Direct => None,
             Evaluation::Table => Some(CoefficientTable::new(map)?),
-            Evaluation::Auto => CoefficientTable::new(map).ok(),
+            _ => None,
         };
-        out.update(map, table.as_ref(), UVec3::ZERO, map.source_dims());
+        out.update(map, Evaluator::new(evaluation, table.as_ref()), UVec3::ZERO, map.source_dims());
         Ok(out)
     }
 
@@ -195,10 +224,9 @@ impl DeformationArray {
         e as usize + self.dims.x as usize * (f as usize + self.dims.y as usize * g as usize)
     }
 
-    /// Re-evaluates `map` on the source voxels of the box `[lo, hi)`, with
-    /// the `table` when given (it must belong to `map`'s lattice), else by
-    /// direct evaluation. Parallel over z-slices.
-    pub fn update(&mut self, map: &BSplineMap, table: Option<&CoefficientTable>, lo: UVec3, hi: UVec3) {
+    /// Re-evaluates `map` on the source voxels of the box `[lo, hi)` with
+    /// `evaluator`. Parallel over z-slices.
+    pub fn update(&mut self, map: &BSplineMap, evaluator: Evaluator<'_>, lo: UVec3, hi: UVec3) {
         let hi = hi.min(self.dims);
         if lo.cmpge(hi).any() {
             return;
@@ -206,11 +234,23 @@ impl DeformationArray {
         let (nx, ny) = (self.dims.x as usize, self.dims.y as usize);
         let slab = nx * ny;
         let slices = self.points[lo.z as usize * slab..hi.z as usize * slab].par_chunks_mut(slab);
-        match table {
-            Some(table) => slices.enumerate().for_each(|(dz, slice)| {
+        match evaluator {
+            Evaluator::Table(table) => slices.enumerate().for_each(|(dz, slice)| {
                 table_slice(map, table, slice, lo.z + dz as u32, lo, hi, nx);
             }),
-            None => slices.enumerate().for_each(|(dz, slice)| {
+            Evaluator::Separable => {
+                // Region and basis weights of every x of the box, once.
+                let xs: Vec<(u32, [f32; 4])> = (lo.x..hi.x)
+                    .map(|e| {
+                        let (a, t) = map.locate(e as f32, 0);
+                        (a, weights(t))
+                    })
+                    .collect();
+                slices.enumerate().for_each(|(dz, slice)| {
+                    separable_slice(map, &xs, slice, lo.z + dz as u32, lo, hi, nx);
+                });
+            }
+            Evaluator::Direct => slices.enumerate().for_each(|(dz, slice)| {
                 let g = lo.z + dz as u32;
                 for f in lo.y..hi.y {
                     for e in lo.x..hi.x {
@@ -219,6 +259,48 @@ impl DeformationArray {
                     }
                 }
             }),
+        }
+    }
+}
+
+/// One z-slice `g` of the separable path. Per row `f`: the displacements
+/// blended along z and y, `S_m = Σ_{j,k} wy_j wz_k D_{m, b+j, c+k}`, for every
+/// control column `m` the row's regions use; then per voxel the 4-term sum
+/// `Σ_i wx_i S_{a+i}` (`xs` holds each voxel's region `a` and `wx`).
+fn separable_slice(
+    map: &BSplineMap,
+    xs: &[(u32, [f32; 4])],
+    slice: &mut [Vec3A],
+    g: u32,
+    lo: UVec3,
+    hi: UVec3,
+    nx: usize,
+) {
+    let controls = map.controls();
+    let (cx, cy) = (controls.x as usize, controls.y as usize);
+    let disp = map.displacements();
+    let (c, tz) = map.locate(g as f32, 2);
+    let wz = weights(tz);
+    let (first, last) = (xs[0].0 as usize, xs[xs.len() - 1].0 as usize + 4);
+    let mut columns = vec![Vec3A::ZERO; last - first];
+    for f in lo.y..hi.y {
+        let (b, ty) = map.locate(f as f32, 1);
+        let wy = weights(ty);
+        columns.fill(Vec3A::ZERO);
+        for (k, &wk) in wz.iter().enumerate() {
+            for (j, &wj) in wy.iter().enumerate() {
+                let w = wj * wk;
+                let row = cx * (b as usize + j + cy * (c as usize + k));
+                for (sum, &d) in columns.iter_mut().zip(&disp[row + first..row + last]) {
+                    *sum += w * Vec3A::from(d);
+                }
+            }
+        }
+        let out = &mut slice[nx * f as usize + lo.x as usize..nx * f as usize + hi.x as usize];
+        for ((p, &(a, wx)), e) in out.iter_mut().zip(xs).zip(lo.x..) {
+            let s = &columns[a as usize - first..a as usize - first + 4];
+            *p = Vec3A::new(e as f32, f as f32, g as f32)
+                + (wx[0] * s[0] + wx[1] * s[1] + (wx[2] * s[2] + wx[3] * s[3]));
         }
     }
 }
@@ -335,15 +417,17 @@ mod tests {
     fn table_and_direct_evaluation_agree() {
         let dims = UVec3::new(24, 18, 30);
         let map = random_map(dims, UVec3::new(7, 9, 8), 4.0, 5);
-        let table = DeformationArray::compute(&map, Evaluation::Table).unwrap();
         let direct = DeformationArray::compute(&map, Evaluation::Direct).unwrap();
-        let worst = table
-            .points()
-            .iter()
-            .zip(direct.points())
-            .map(|(a, b)| (*a - *b).abs().max_element())
-            .fold(0.0, f32::max);
-        assert!(worst < 1e-5, "table vs direct: worst difference {worst} voxels");
+        for evaluation in [Evaluation::Table, Evaluation::Separable] {
+            let fast = DeformationArray::compute(&map, evaluation).unwrap();
+            let worst = fast
+                .points()
+                .iter()
+                .zip(direct.points())
+                .map(|(a, b)| (*a - *b).abs().max_element())
+                .fold(0.0, f32::max);
+            assert!(worst < 1e-5, "{evaluation:?} vs direct: worst difference {worst} voxels");
+        }
         let p = UVec3::new(13, 5, 22);
         assert_eq!(Vec3::from(direct.get(p.x, p.y, p.z)), map.eval(p.as_vec3()));
     }
@@ -352,7 +436,7 @@ mod tests {
     fn identity_array_is_exact_on_both_paths() {
         let map = BSplineMap::identity(UVec3::splat(12), 7).unwrap();
         let id = DeformationArray::identity(map.source_dims()).unwrap();
-        for evaluation in [Evaluation::Table, Evaluation::Direct] {
+        for evaluation in [Evaluation::Table, Evaluation::Separable, Evaluation::Direct] {
             assert_eq!(DeformationArray::compute(&map, evaluation).unwrap(), id);
         }
     }
@@ -366,8 +450,22 @@ mod tests {
         let c = UVec3::new(3, 4, 2);
         map.set_displacement(c, Vec3::new(1.5, -2.0, 0.5)).unwrap();
         let (lo, hi) = map.influence_box(c);
-        array.update(&map, Some(&table), lo, hi);
+        array.update(&map, Evaluator::Table(&table), lo, hi);
         assert_eq!(array, DeformationArray::compute(&map, Evaluation::Table).unwrap());
+    }
+
+    #[test]
+    fn separable_partial_update_equals_full_compute_on_any_size() {
+        // 17 × 13 × 11 voxels: not a multiple of the region counts.
+        let dims = UVec3::new(17, 13, 11);
+        let mut map = random_map(dims, UVec3::new(7, 6, 5), 2.0, 3);
+        assert!(CoefficientTable::new(&map).is_err());
+        let mut array = DeformationArray::compute(&map, Evaluation::Separable).unwrap();
+        let c = UVec3::new(4, 2, 3);
+        map.set_displacement(c, Vec3::new(-1.0, 2.5, 0.75)).unwrap();
+        let (lo, hi) = map.influence_box(c);
+        array.update(&map, Evaluator::Separable, lo, hi);
+        assert_eq!(array, DeformationArray::compute(&map, Evaluation::Separable).unwrap());
     }
 
     #[test]

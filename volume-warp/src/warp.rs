@@ -4,7 +4,7 @@
 
 use crate::manipulate::{Drag, Handle, solve_drag};
 use crate::pushforward::{Density, Filter, Splat, resolve};
-use crate::table::{CoefficientTable, DeformationArray, Evaluation};
+use crate::table::{CoefficientTable, DeformationArray, Evaluation, Evaluator};
 use crate::{BSplineMap, WarpError};
 use glam::{UVec3, Vec3};
 use isomorph_common::Grid3;
@@ -84,9 +84,8 @@ impl<T: Density> VolumeWarp<T> {
             return Err(WarpError::NonFiniteDensity(n));
         }
         let table = match settings.evaluation {
-            Evaluation::Direct => None,
             Evaluation::Table => Some(CoefficientTable::new(&map)?),
-            Evaluation::Auto => CoefficientTable::new(&map).ok(),
+            _ => None,
         };
         let deformation = DeformationArray::identity(source.dims())?;
         let pad = settings.pad;
@@ -156,7 +155,12 @@ impl<T: Density> VolumeWarp<T> {
     /// Recomputes the deformation array and the whole target from scratch.
     fn recompute(&mut self) {
         let dims = self.source.dims();
-        self.deformation.update(&self.map, self.table.as_ref(), UVec3::ZERO, dims);
+        self.deformation.update(
+            &self.map,
+            Evaluator::new(self.settings.evaluation, self.table.as_ref()),
+            UVec3::ZERO,
+            dims,
+        );
         let all = (UVec3::ZERO, self.target.dims() - UVec3::ONE);
         if self.settings.filter == Filter::Backward {
             self.backward(all.0, all.1);
@@ -220,7 +224,12 @@ impl<T: Density> VolumeWarp<T> {
         if self.settings.filter == Filter::Backward {
             let old = self.image_box(slo, shi);
             moved(&mut self.map);
-            self.deformation.update(&self.map, self.table.as_ref(), lo, hi);
+            self.deformation.update(
+                &self.map,
+                Evaluator::new(self.settings.evaluation, self.table.as_ref()),
+                lo,
+                hi,
+            );
             let new = self.image_box(slo, shi);
             if let Some((a, b)) = union(old, new) {
                 self.backward(a, b);
@@ -228,7 +237,12 @@ impl<T: Density> VolumeWarp<T> {
         } else {
             let old = self.splat(slo, shi, -1.0);
             moved(&mut self.map);
-            self.deformation.update(&self.map, self.table.as_ref(), lo, hi);
+            self.deformation.update(
+                &self.map,
+                Evaluator::new(self.settings.evaluation, self.table.as_ref()),
+                lo,
+                hi,
+            );
             let new = self.splat(slo, shi, 1.0);
             if let Some((a, b)) = union(old, new) {
                 resolve(&self.accum, &mut self.target, a, b);
