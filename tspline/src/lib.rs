@@ -62,10 +62,26 @@
 //!   does not always remove them: sphere → torus on a depth-3 T-mesh ends
 //!   with the torus (genus 1, mean distance < 0.05) plus two blobs at the
 //!   poles; sphere → holed cube (4794 coefficients) reaches a mean surface
-//!   distance of 0.012 (world units, shapes of size 0.6) but with 13 small
-//!   components, so its genus-3 test is ignored (with that reason). Rows of the velocity
-//!   equation at lattice nodes where the signs of `f` and `d_B` disagree
-//!   (note §5.5 a) are the planned remedy.
+//!   distance of 0.012 (world units, shapes of size 0.6) but stays genus 0
+//!   and ends with about 13 extra components, so its genus-3 test is
+//!   ignored (with that reason). Diagnosis (per-frame component counts and
+//!   probes of `f` along lines): (1) the extra components are **not** blobs
+//!   pinched off the shape but open sheets at the domain boundary: with
+//!   `margin` 0.2 and depth 4 the cube faces lie 1.3 finest cells inside
+//!   `D`, and in that gap `f` rises from about −0.04 back above 0 at the
+//!   boundary (only weak rows constrain it there); with `margin` 0.5 they
+//!   do not appear (21 steps, one component, genus 0 at every frame).
+//!   (2) The genus stays 0 because each hole is dug from both ends but a
+//!   plug of positive `f` (up to ≈ 0.18, about 5 finest cells long) remains
+//!   in its middle and the evolution stalls: the holes are only 3.5 finest
+//!   cells wide at depth 4, and the velocity rows at the tunnel tips cannot
+//!   lower the plug without moving the walls.
+//!   Tried and rejected (no gain, or the sphere → torus test lost its hole):
+//!   the level-set equation `ḟ = v|∇f|` at every leaf centre (creates voids
+//!   inside the sphere, where the distance constraint keeps `|∇f| ≈ 1`),
+//!   and the same with the speed extended from the Newton foot point plus
+//!   distance rows at every leaf centre (no strays for 20 steps instead of
+//!   12, but the plugs remain and sphere → torus stays genus 0).
 //! - Cost: one evolution step costs a sparse Cholesky factorization of the
 //!   `n × n` normal matrix plus `O(samples × support²)` assembly, and the
 //!   zero-set lattice has the smallest leaf's spacing everywhere, so steps
@@ -75,7 +91,14 @@
 //! `cargo bench -p isomorph-benches --bench tspline -- --warm-up-time 1
 //! --measurement-time 3 --sample-size 10 step/`: one step with 499 / 997 /
 //! 1992 / 4002 coefficients took 0.48 / 0.56 / 4.0 / 3.3 s (not linear in
-//! `n`; dominated by the sample count, see above). The whole sphere → holed
+//! `n`; dominated by the sample count, see above). A `perf` profile of the
+//! sphere → holed cube run (release, under load, first 40 s) puts 32 % of the
+//! time in the cubic B-spline factors and 10 % in gathering a leaf's blending
+//! functions (Newton projection of every marching-cubes vertex with full
+//! Hessians, plus the three band rows per sample), 9 % in the target's
+//! winding-number sign, and only ≈ 12 % in the sparse Cholesky (dense
+//! supernode kernels and AMD ordering): the step cost follows the number of
+//! zero-set samples (∝ area / h_min²), not `n`. The whole sphere → holed
 //! cube morph (4794 coefficients, 22 steps) took about 66 s per run
 //! (criterion's estimate from the warm-up), far from the 2 s target.
 //! - Not implemented: the paper's "final refinement" (adding degrees of
