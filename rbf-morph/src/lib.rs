@@ -16,12 +16,12 @@
 //! | §4.1 constraints from a grayscale image | [`image`] |
 //! | §4.2 constraints from points with normals / meshes | [`constraints`] |
 //! | §5.1, §5.2 shape transformation in N + 1 dimensions, §6.2 separation | [`transform`] ([`RbfMorph`], [`ContourMorph`]) |
+//! | §6, §6.1, §6.2 surface reconstruction from parallel (any spacing) and non-parallel contours | [`reconstruct`] ([`ContourSet`], [`Plane`], [`ContourSurface`]) |
 //! | §7 influence shapes (triangle in N + 2, tetrahedron in N + 3 dimensions) | [`influence`] ([`InfluenceShapes`], [`InfluencePath`]) |
 //! | §5.2 polygonizing only near the surface (the paper uses Bloomenthal's continuation polygonizer) | [`polygonize`] |
 //! | fast evaluation of slices (what the paper's Bloomenthal polygonizer calls) | [`slice`](mod@slice) ([`Slice3`], [`Slice2`]) |
 //!
-//! Not implemented yet: contour reconstruction from many parallel /
-//! non-parallel slices (§6, §6.1) and warping (appendix).
+//! Not implemented yet: warping (appendix).
 //!
 //! # Choices where the paper leaves details open
 //! - **Kernel**: `r² log r` (eq. 2) is the default; `r³` is selectable
@@ -118,6 +118,7 @@ pub mod influence;
 pub mod interpolant;
 pub mod kernel;
 pub mod polygonize;
+pub mod reconstruct;
 pub mod slice;
 pub mod transform;
 
@@ -129,6 +130,7 @@ pub use error::RbfError;
 pub use influence::{InfluencePath, InfluenceShapes};
 pub use interpolant::{Constraint, FitReport, FitSettings, Interpolant};
 pub use kernel::Kernel;
+pub use reconstruct::{ContourSet, ContourSurface, Plane, ReconstructSettings};
 pub use slice::{Slice2, Slice3};
 pub use solve::Factorization;
 pub use transform::{ContourMorph, RbfMorph, TransformSettings};
