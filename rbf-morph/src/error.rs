@@ -37,7 +37,7 @@ pub enum RbfError {
     NonFinite {
         /// Index of the offending constraint in the input.
         index: usize,
-        /// `"position"` or `"value"`.
+        /// `"position"`, `"value"` or `"correspondence"`.
         what: &'static str,
     },
     /// Two constraints are closer than the duplicate tolerance but ask for

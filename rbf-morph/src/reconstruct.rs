@@ -316,7 +316,7 @@ impl ContourSurface {
         self.bounds
     }
 
-    /// The implicit as a fast [`Field3`](isomorph_common::Field3) (f32
+    /// The implicit as a fast [`Field3`] (f32
     /// batch evaluation) reporting [`ContourSurface::bounds`].
     pub fn field(&self) -> Slice3 {
         // A 3D interpolant has no coordinate to fix: this cannot fail.
@@ -403,17 +403,22 @@ mod tests {
         (0..n).map(|i| Vec2::from_angle(i as f32 * TAU / n as f32) * r).collect()
     }
 
-    /// Largest `|f|` (exact f64 evaluation) over the points, and the largest
-    /// distance from a point to the nearest mesh vertex.
-    fn through(surface: &ContourSurface, mesh: &TriMesh, points: &[Vec3]) -> (f64, f32) {
+    /// Asserts that the surface passes through `points`: `|f| < 1e-6` there
+    /// (exact f64 evaluation) and every point lies within one grid spacing of
+    /// a vertex of the mesh at `res`, which is returned.
+    fn assert_through(surface: &ContourSurface, points: &[Vec3], res: u32) -> TriMesh {
+        let mesh = surface.mesh(res).unwrap();
+        let h = surface.bounds().size().max_element() / (res - 1) as f32;
         let f = surface.interpolant();
-        let worst_value =
-            points.iter().map(|p| f.value_f64(p.to_array().map(f64::from)).abs()).fold(0.0, f64::max);
-        let worst_distance = points
+        let value = points.iter().map(|p| f.value_f64(p.to_array().map(f64::from)).abs()).fold(0.0, f64::max);
+        assert!(value < 1e-6, "|f| on the contours {value:e}");
+        let distance = points
             .iter()
             .map(|p| mesh.positions.iter().map(|q| q.distance(*p)).fold(f32::INFINITY, f32::min))
             .fold(0.0, f32::max);
-        (worst_value, worst_distance)
+        assert!(distance < h, "contour point {distance} from the mesh (spacing {h})");
+        assert_eq!(mesh.connected_components(), 1);
+        mesh
     }
 
     #[test]
@@ -441,13 +446,7 @@ mod tests {
         let report = surface.interpolant().report();
         assert!(report.max_residual.unwrap() < 1e-8, "{report:?}");
         assert!(report.merged > 0, "the circles cross at the axes");
-        let res = 40;
-        let mesh = surface.mesh(res).unwrap();
-        let h = surface.bounds().size().max_element() / (res - 1) as f32;
-        let (value, distance) = through(&surface, &mesh, &points);
-        assert!(value < 1e-6, "|f| on the contours {value:e}");
-        assert!(distance < h, "contour point {distance} from the mesh (spacing {h})");
-        assert_eq!(mesh.connected_components(), 1);
+        let mesh = assert_through(&surface, &points, 40);
         assert_eq!(mesh.genus(), Some(0));
         // Between the circles the surface stays close to the sphere.
         let worst = mesh.positions.iter().map(|p| (p.length() - r).abs()).fold(0.0, f32::max);
@@ -469,13 +468,7 @@ mod tests {
             set.add_polylines(&plane, &[ring]).unwrap();
         }
         let surface = set.fit(&ReconstructSettings::default()).unwrap();
-        let res = 40;
-        let mesh = surface.mesh(res).unwrap();
-        let h = surface.bounds().size().max_element() / (res - 1) as f32;
-        let (value, distance) = through(&surface, &mesh, &points);
-        assert!(value < 1e-6, "|f| on the contours {value:e}");
-        assert!(distance < h, "contour point {distance} from the mesh (spacing {h})");
-        assert_eq!(mesh.connected_components(), 1);
+        let mesh = assert_through(&surface, &points, 40);
         // Within the slices' z range the surface is the sphere, also in the
         // wide gaps (0.12 .. 0.22) and (-0.2 .. -0.08).
         let within: Vec<f32> =
