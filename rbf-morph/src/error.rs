@@ -37,7 +37,7 @@ pub enum RbfError {
     NonFinite {
         /// Index of the offending constraint in the input.
         index: usize,
-        /// `"position"` or `"value"`.
+        /// `"position"`, `"value"` or `"correspondence"`.
         what: &'static str,
     },
     /// Two constraints are closer than the duplicate tolerance but ask for
@@ -97,6 +97,40 @@ pub enum RbfError {
     /// A morph time is NaN or outside `[0, 1]`.
     #[error("time {0} is outside [0, 1]")]
     InvalidTime(f32),
+    /// A contour plane has a zero or non-finite origin or axis, or parallel
+    /// axes (it spans no plane).
+    #[error("degenerate contour plane: {0}")]
+    DegeneratePlane(&'static str),
+    /// A contour polyline cannot give constraints (fewer than three distinct
+    /// points, zero area).
+    #[error("contour {contour}: {reason}")]
+    InvalidContour {
+        /// Index of the polyline in the call that added it.
+        contour: usize,
+        /// What is wrong with it.
+        reason: &'static str,
+    },
+    /// The point lists of a warp's correspondences differ in length.
+    #[error("{on_source} points on the source but {on_target} on the target: correspondences come in pairs")]
+    CorrespondenceCount {
+        /// Points given on the source shape.
+        on_source: usize,
+        /// Points given on the target shape.
+        on_target: usize,
+    },
+    /// Too few correspondences for a displacement warp with a degree-one
+    /// polynomial part.
+    #[error(
+        "{got} correspondences in {dim} dimensions; a warp needs at least {needed}, not all on one hyperplane"
+    )]
+    TooFewCorrespondences {
+        /// Correspondences given.
+        got: usize,
+        /// Correspondences needed: `dim + 1`.
+        needed: usize,
+        /// The dimension of the shapes.
+        dim: usize,
+    },
     /// A grid could not be made (from a polygonizer or sampler).
     #[error(transparent)]
     Grid(#[from] GridError),

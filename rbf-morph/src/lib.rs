@@ -16,12 +16,12 @@
 //! | §4.1 constraints from a grayscale image | [`image`] |
 //! | §4.2 constraints from points with normals / meshes | [`constraints`] |
 //! | §5.1, §5.2 shape transformation in N + 1 dimensions, §6.2 separation | [`transform`] ([`RbfMorph`], [`ContourMorph`]) |
+//! | §6, §6.1, §6.2 surface reconstruction from parallel (any spacing) and non-parallel contours | [`reconstruct`] ([`ContourSet`], [`Plane`], [`ContourSurface`]) |
+//! | appendix: warping by point correspondences, eq. 4–5 unwarping | [`warp`] ([`WarpedMorph`], [`HalfwayWarps`], [`DisplacementWarp`]) |
 //! | §7 influence shapes (triangle in N + 2, tetrahedron in N + 3 dimensions) | [`influence`] ([`InfluenceShapes`], [`InfluencePath`]) |
 //! | §5.2 polygonizing only near the surface (the paper uses Bloomenthal's continuation polygonizer) | [`polygonize`] |
 //! | fast evaluation of slices (what the paper's Bloomenthal polygonizer calls) | [`slice`](mod@slice) ([`Slice3`], [`Slice2`]) |
 //!
-//! Not implemented yet: contour reconstruction from many parallel /
-//! non-parallel slices (§6, §6.1) and warping (appendix).
 //!
 //! # Choices where the paper leaves details open
 //! - **Kernel**: `r² log r` (eq. 2) is the default; `r³` is selectable
@@ -39,6 +39,14 @@
 //!   noisy data.
 //! - **Normal offset**: `k = 0.01` of the bounding-box diagonal by default
 //!   ([`constraints::NormalOffset`]); one pixel for images.
+//!
+//! - **Contours** (§6): polylines decide inside by even-odd nesting, not by
+//!   orientation; their normal constraints lie in the slice plane; the
+//!   bounds grow until they enclose the rounded caps.
+//! - **Warping** (appendix): the normal constraints are displaced with the
+//!   boundary constraints (the paper names only the latter), so they stay
+//!   inside the warped shapes; frames are unwarped by pulling the slice back
+//!   through eq. 4–5, with the chain-rule gradient.
 //!
 //! # Guarantees
 //! - Interpolation is exact: the f64 interpolant matches every (merged)
@@ -118,8 +126,10 @@ pub mod influence;
 pub mod interpolant;
 pub mod kernel;
 pub mod polygonize;
+pub mod reconstruct;
 pub mod slice;
 pub mod transform;
+pub mod warp;
 
 mod duplicates;
 mod solve;
@@ -129,6 +139,8 @@ pub use error::RbfError;
 pub use influence::{InfluencePath, InfluenceShapes};
 pub use interpolant::{Constraint, FitReport, FitSettings, Interpolant};
 pub use kernel::Kernel;
+pub use reconstruct::{ContourSet, ContourSurface, Plane, ReconstructSettings};
 pub use slice::{Slice2, Slice3};
 pub use solve::Factorization;
 pub use transform::{ContourMorph, RbfMorph, TransformSettings};
+pub use warp::{DisplacementWarp, HalfwayWarps, WarpedMorph, WarpedSlice};

@@ -270,6 +270,17 @@ impl<F: Field3 + ?Sized> Sampler<'_, F> {
     }
 }
 
+/// The mesh of `field`'s zero set over `bounds` (grown by a hair so that a
+/// surface on the box is still closed) with `res` nodes along the longest
+/// edge, polygonized near the surface with the default settings.
+pub(crate) fn zero_set_mesh<F: Field3 + ?Sized>(
+    field: &F,
+    bounds: &Aabb,
+    res: u32,
+) -> Result<TriMesh, RbfError> {
+    Ok(polygonize_near_surface(field, &bounds.expanded(1e-4), res, 0.0, &SparseSettings::default())?.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -8,7 +8,9 @@
 //! A general LU loses 4–6 digits on this saddle-point matrix. Instead the
 //! polynomial part is projected out: a Householder QR of `P = Q [R; 0]`
 //! (`m = D + 1` reflectors, `Q = I − V T Vᵀ` in compact WY form) is applied
-//! to `Φ` from both sides in two GEMM passes, `QᵀΦQ = Φ − X Vᵀ − V Xᵀ`. With
+//! to `Φ` from both sides in two GEMM passes, `QᵀΦQ = Φ − X Vᵀ − V Xᵀ`. Only
+//! the lower triangle of `Φ` is built (in parallel, `n²/2` kernels) and
+//! updated; the products read it as a symmetric matrix. With
 //! `d = Z y` (`Z` the last `n − m` columns of `Q`, so `Pᵀ d = 0` holds by
 //! construction), the trailing block `B = Zᵀ(Φ + λI)Z` is symmetric positive
 //! definite for a conditionally positive definite kernel of order 2 and
@@ -24,7 +26,7 @@ use crate::error::RbfError;
 use crate::kernel::Kernel;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::{lblt as bunch_kaufman, llt};
-use faer::linalg::matmul::matmul;
+use faer::linalg::matmul::triangular::{self, BlockStructure};
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::{Accum, Mat, MatMut, Par};
 use rayon::prelude::*;
@@ -144,8 +146,10 @@ impl PolyQr {
     }
 }
 
-/// Fills `a` (column-major `n × n`) with `Φ + λI` and transforms it to
-/// `QᵀΦQ` in place.
+/// Fills the lower triangle of `a` (column-major `n × n`) with `Φ + λI` and
+/// transforms it to the lower triangle of `QᵀΦQ` in place. The strict upper
+/// triangle is neither read nor written: the kernel is evaluated `n²/2`
+/// times and the rank-`2m` update touches half the matrix.
 fn build_projected(
     a: &mut [f64],
     positions: &[f64],
@@ -157,7 +161,7 @@ fn build_projected(
     let n = qr.n;
     a.par_chunks_mut(n).enumerate().for_each(|(j, col)| {
         let cj = &positions[j * dim..(j + 1) * dim];
-        for (i, out) in col.iter_mut().enumerate() {
+        for (i, out) in col.iter_mut().enumerate().skip(j) {
             let ci = &positions[i * dim..(i + 1) * dim];
             let r2: f64 = ci.iter().zip(cj).map(|(x, y)| (x - y) * (x - y)).sum();
             *out = kernel.eval_r2(r2);
@@ -165,14 +169,58 @@ fn build_projected(
         col[j] += smoothing;
     });
     let mut am = MatMut::from_column_major_slice_mut(a, n, n);
-    // Y = A V,  M = Vᵀ Y,  X = Y T − ½ V Tᵀ M T,  QᵀAQ = A − X Vᵀ − V Xᵀ.
+    // Y = A V (A symmetric from its lower triangle L: Y = L V + L_strictᵀ V),
+    // M = Vᵀ Y,  X = Y T − ½ V Tᵀ M T,  QᵀAQ = A − X Vᵀ − V Xᵀ.
     let t = qr.wy_t();
+    let par = Par::rayon(0);
     let mut y = Mat::<f64>::zeros(n, qr.m);
-    matmul(y.as_mut(), Accum::Replace, am.as_ref(), qr.v.as_ref(), 1.0, Par::rayon(0));
+    let rect = BlockStructure::Rectangular;
+    triangular::matmul(
+        y.as_mut(),
+        rect,
+        Accum::Replace,
+        am.as_ref(),
+        BlockStructure::TriangularLower,
+        qr.v.as_ref(),
+        rect,
+        1.0,
+        par,
+    );
+    triangular::matmul(
+        y.as_mut(),
+        rect,
+        Accum::Add,
+        am.as_ref().transpose(),
+        BlockStructure::StrictTriangularUpper,
+        qr.v.as_ref(),
+        rect,
+        1.0,
+        par,
+    );
     let mm = qr.v.transpose() * &y;
     let x = &y * &t - (&qr.v * (t.transpose() * &mm * &t)) * 0.5;
-    matmul(am.as_mut(), Accum::Add, x.as_ref(), qr.v.transpose(), -1.0, Par::rayon(0));
-    matmul(am.as_mut(), Accum::Add, qr.v.as_ref(), x.transpose(), -1.0, Par::rayon(0));
+    for (l, r) in [(x.as_ref(), qr.v.transpose()), (qr.v.as_ref(), x.transpose())] {
+        triangular::matmul(
+            am.as_mut(),
+            BlockStructure::TriangularLower,
+            Accum::Add,
+            l,
+            rect,
+            r,
+            rect,
+            -1.0,
+            par,
+        );
+    }
+}
+
+/// Copies the strict lower triangle of `b` onto the strict upper one.
+fn mirror_lower(mut b: MatMut<'_, f64>) {
+    for j in 0..b.ncols() {
+        for i in 0..j {
+            b[(i, j)] = b[(j, i)];
+        }
+    }
 }
 
 /// A factored projected block `B` (stored in the trailing block of the
@@ -238,6 +286,8 @@ pub(crate) fn solve(
             build_projected(&mut a, positions, dim, kernel, smoothing, &qr);
             let am = MatMut::from_column_major_slice_mut(&mut a, n, n);
             let mut b = am.submatrix_mut(m, m, k, k);
+            // The indefinite factorization is given the whole symmetric block.
+            mirror_lower(b.rb_mut());
             if sign < 0.0 {
                 b.rb_mut().col_iter_mut().for_each(|c| c.iter_mut().for_each(|x| *x = -*x));
             }
@@ -308,10 +358,10 @@ pub(crate) fn solve(
     let mut weights = vec![0.0; n];
     weights[m..].copy_from_slice(&y2);
     qr.apply_q(&mut weights);
-    // R c = g[0..m] − (QᵀΦQ)[0..m, m..] y2
+    // R c = g[0..m] − (QᵀΦQ)[0..m, m..] y2, read from the lower block.
     let am = MatMut::from_column_major_slice_mut(&mut a, n, n);
     let mut rhs: Vec<f64> = (0..m)
-        .map(|i| g[i] - if k == 0 { 0.0 } else { (0..k).map(|j| am[(i, m + j)] * y2[j]).sum::<f64>() })
+        .map(|i| g[i] - if k == 0 { 0.0 } else { (0..k).map(|j| am[(m + j, i)] * y2[j]).sum::<f64>() })
         .collect();
     for i in (0..m).rev() {
         let s: f64 = (i + 1..m).map(|j| qr.r[(i, j)] * rhs[j]).sum();
@@ -323,12 +373,34 @@ pub(crate) fn solve(
     Ok(Solution { weights, poly: rhs, factorization, rcond })
 }
 
-/// The 1-norm (largest column sum of magnitudes) of a square matrix.
+/// The 1-norm (largest column sum of magnitudes) of a symmetric matrix
+/// given by its lower triangle: column `j` sums its lower part and row `j`
+/// of the strict lower part.
 fn one_norm(b: faer::MatRef<'_, f64>) -> f64 {
-    (0..b.ncols())
+    let k = b.ncols();
+    let sums = (0..k)
         .into_par_iter()
-        .map(|j| b.col(j).iter().map(|x| x.abs()).sum::<f64>())
-        .reduce(|| 0.0, f64::max)
+        .fold(
+            || vec![0.0f64; k],
+            |mut sums, j| {
+                let col = b.col(j);
+                sums[j] += col[j].abs();
+                for i in j + 1..k {
+                    let v = col[i].abs();
+                    sums[j] += v;
+                    sums[i] += v;
+                }
+                sums
+            },
+        )
+        .reduce(
+            || vec![0.0f64; k],
+            |mut a, b| {
+                a.iter_mut().zip(&b).for_each(|(x, y)| *x += y);
+                a
+            },
+        );
+    sums.into_iter().fold(0.0, f64::max)
 }
 
 /// Hager's (Higham's refinement) estimate of `‖B⁻¹‖₁` for symmetric `B`,

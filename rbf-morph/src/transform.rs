@@ -213,9 +213,7 @@ impl Morph for RbfMorph {
     /// [`Morph::bounds`] for fields without sub-block features, at a fraction
     /// of the O(n) kernel evaluations per node.
     fn frame_mesh(&self, t: f32, res: u32) -> Result<TriMesh, RbfError> {
-        let slice = self.slice(t)?;
-        let bounds = self.bounds.expanded(1e-4);
-        Ok(crate::polygonize::polygonize_near_surface(&slice, &bounds, res, 0.0, &Default::default())?.0)
+        crate::polygonize::zero_set_mesh(&self.slice(t)?, &self.bounds, res)
     }
 }
 
