@@ -299,7 +299,6 @@ mod tests {
             assert_eq!(sparse.positions, full.positions, "t={t}");
             assert_eq!(sparse.triangles, full.triangles, "t={t}");
             assert!(!full.triangles.is_empty());
-            eprintln!("STATS {stats:?}");
             // About 25–31 % of the nodes at 40³ (the saving grows with the resolution).
             assert!(stats.evaluated * 10 < stats.nodes * 4, "{stats:?}");
         }
