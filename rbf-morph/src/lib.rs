@@ -74,9 +74,9 @@
 //! | `fit/sphere_torus_4d/4000` | 0.666 s | 0.471 s | |
 //! | `fit/sphere_torus_4d/8000` | 4.61 s | 4.35 s | ≤ 2.5 s — **not met** |
 //! | `fit/sphere_torus_4d/16000` | 29.2 s | 24.2 s | |
-//! | `eval_grid/…/2000/64`, `eval_grid_r3/…/2000/64` | 0.377 s | 0.126 s | |
-//! | `eval_grid/…/8000/64`, `eval_grid_r3/…/8000/64` | 1.505 s | 0.498 s | ≤ 1.5 s / ≤ 0.5 s — at the target (`r² log r` 0.3 % over) |
-//! | `polygonize/sphere_torus_4d/8000/64` (near-surface, [`polygonize`]) | 0.301 s | | ≤ 0.3 s — at the target (0.3 % over) |
+//! | `eval_grid/…/2000/64`, `eval_grid_r3/…/2000/64` | 0.348 s | 0.090 s | |
+//! | `eval_grid/…/8000/64`, `eval_grid_r3/…/8000/64` | 1.394 s | 0.355 s | ≤ 1.5 s / ≤ 0.5 s — met |
+//! | `polygonize/sphere_torus_4d/8000/64` (near-surface, [`polygonize`]) | 0.281 s | | ≤ 0.3 s — met |
 //! | `polygonize/sphere_torus_4d/8000/full/64` (full grid + marching cubes) | 1.506 s | | |
 //!
 //! The fit grows like `n³` past 4000 (×6.9 from 4000 to 8000, ×6.3 to
