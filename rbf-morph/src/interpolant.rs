@@ -11,7 +11,7 @@ use crate::duplicates::{DuplicatePolicy, dedup};
 use crate::error::RbfError;
 use crate::kernel::Kernel;
 use crate::slice::{Slice2, Slice3, SliceEval};
-pub use crate::solve::Factorization;
+pub use crate::solve::{Factorization, Solver};
 use rayon::prelude::*;
 
 /// One interpolation constraint: `f(position) = value`.
@@ -48,6 +48,10 @@ pub struct FitSettings {
     /// Evaluate the fitted function at every constraint and report the
     /// largest residual (`O(n²)`, cheap next to the `O(n³)` solve). Default on.
     pub check_residual: bool,
+    /// How the system is solved (default [`Solver::Auto`]: the slab solver
+    /// for two separated groups of constraints, the dense Cholesky
+    /// otherwise).
+    pub solver: Solver,
 }
 
 impl Default for FitSettings {
@@ -58,6 +62,7 @@ impl Default for FitSettings {
             duplicate_tolerance: 1e-6,
             duplicates: DuplicatePolicy::MergeEqual,
             check_residual: true,
+            solver: Solver::Auto,
         }
     }
 }
@@ -167,7 +172,8 @@ impl<const D: usize> Interpolant<D> {
         let (kept, values) = dedup(&normalized, &values, settings.duplicate_tolerance, settings.duplicates)?;
         let centres: Vec<[f64; D]> = kept.iter().map(|&i| normalized[i]).collect();
         let flat: Vec<f64> = centres.iter().flatten().copied().collect();
-        let sol = crate::solve::solve(&flat, D, &values, settings.kernel, settings.smoothing)?;
+        let sol =
+            crate::solve::solve(&flat, D, &values, settings.kernel, settings.smoothing, settings.solver)?;
         let mut interpolant = Self {
             kernel: settings.kernel,
             weights: sol.weights,

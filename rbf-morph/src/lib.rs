@@ -130,6 +130,7 @@ pub mod transform;
 pub mod warp;
 
 mod duplicates;
+mod slab;
 mod solve;
 
 pub use duplicates::DuplicatePolicy;
@@ -139,6 +140,6 @@ pub use interpolant::{Constraint, FitReport, FitSettings, Interpolant};
 pub use kernel::Kernel;
 pub use reconstruct::{ContourSet, ContourSurface, Plane, ReconstructSettings};
 pub use slice::{Slice2, Slice3};
-pub use solve::Factorization;
+pub use solve::{Factorization, Solver};
 pub use transform::{ContourMorph, RbfMorph, TransformSettings};
 pub use warp::{DisplacementWarp, HalfwayWarps, WarpedMorph, WarpedSlice};
