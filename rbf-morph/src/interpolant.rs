@@ -211,17 +211,26 @@ impl<const D: usize> Interpolant<D> {
         const ROWS: usize = 256;
         let n = self.centres.len();
         let (c, d) = (&self.centres, &self.weights);
+        let coords: [Vec<f64>; D] = std::array::from_fn(|k| c.iter().map(|x| x[k]).collect());
         let partial: Vec<Vec<f64>> = (0..n.div_ceil(ROWS))
             .into_par_iter()
             .map(|block| {
                 let mut acc = vec![0.0f64; n];
+                let mut phi = vec![0.0f64; n];
                 for i in block * ROWS..((block + 1) * ROWS).min(n) {
-                    let mut own = d[i] * self.kernel.eval_r2(0.0);
-                    for j in 0..i {
-                        let r2: f64 = (0..D).map(|k| (c[i][k] - c[j][k]) * (c[i][k] - c[j][k])).sum();
-                        let phi = self.kernel.eval_r2(r2);
-                        own += d[j] * phi;
-                        acc[j] += d[i] * phi;
+                    // φ(|c_i − c_j|) for j ≤ i, vectorized.
+                    let phi = &mut phi[..=i];
+                    phi.fill(0.0);
+                    for xs in &coords {
+                        let xi = xs[i];
+                        phi.iter_mut().zip(xs).for_each(|(r2, x)| *r2 += (x - xi) * (x - xi));
+                    }
+                    self.kernel.eval_r2_in_place(phi);
+                    let (own_phi, others) = phi.split_last_mut().expect("j = i is included");
+                    let mut own = d[i] * *own_phi;
+                    for ((a, p), dj) in acc.iter_mut().zip(others.iter()).zip(d) {
+                        own += dj * p;
+                        *a += d[i] * p;
                     }
                     acc[i] += own;
                 }

