@@ -31,8 +31,17 @@
 //!   sides, and the remaining symmetric positive definite block is factored
 //!   by Cholesky (faer, f64, in place) — accurate to about 1e-10 where LU
 //!   loses 4–6 digits; Bunch–Kaufman `LBLᵀ` is the fallback when Cholesky
-//!   fails. The reciprocal condition number and the largest residual at the
-//!   constraints are reported in [`FitReport`].
+//!   fails. When the constraints form two groups well apart — the two
+//!   shapes at `t = 0` and `t = t_max` — the default [`Solver::Auto`] uses
+//!   the **slab solver** instead: each shape's diagonal block is factored by
+//!   Cholesky, the smooth coupling between the shapes is approximated at
+//!   rank 64 (randomized range finder), and together they precondition
+//!   conjugate gradients, run in f64 to the backward error of a direct
+//!   solve (4 iterations with `r² log r`, 8 with `r³` on the reference case).
+//!   That is about a quarter of the dense factorization's flops; if it does
+//!   not converge the dense Cholesky runs. The reciprocal condition number
+//!   and the largest residual at the constraints are reported in
+//!   [`FitReport`].
 //! - **Near-duplicate constraints** (shared mesh vertices) are merged when
 //!   their values agree and rejected with [`RbfError::NearDuplicate`] when
 //!   they contradict ([`DuplicatePolicy`]); **smoothing** `λ` is offered for
@@ -59,32 +68,36 @@
 //!
 //! Non-guarantees: the zero set of a slice between the two shapes has no
 //! bound on its distance to either input (that is the point of the method);
-//! fitting costs `O(n³)` time and `8 n²` bytes (2 GiB at 16000 constraints).
+//! fitting costs `O(n³)` time and `12 n²` bytes (3 GiB at 16000 constraints).
 //!
 //! # Cost
-//! Fitting is `O(n³)` (the Cholesky factorization of the projected block)
-//! plus `O(n²)` for the matrix, the condition estimate and the residual check;
-//! evaluating a slice is `O(n)` per point. Criterion medians on the 2-core
-//! machine, quiet (load ≈ 2), `cargo bench -p isomorph-benches --bench rbf`,
-//! reference case sphere → torus in 4D (`n` constraints):
+//! Fitting is `O(n³)`: the Cholesky factorizations (of the whole projected
+//! block, or of the two slab blocks with the slab solver, a quarter of the
+//! flops), plus `O(n²)` for the matrix, the conjugate-gradient iterations,
+//! the condition estimate and the residual check; evaluating a slice is
+//! `O(n)` per point. Criterion medians on the 2-core machine, quiet (other
+//! jobs paused), `cargo bench -p isomorph-benches --bench rbf`, reference
+//! case sphere → torus in 4D (`n` constraints):
 //!
 //! | bench | `r² log r` | `r³` | issue target |
 //! |---|---|---|---|
-//! | `fit/sphere_torus_4d/2000` | 0.112 s | 0.096 s | |
-//! | `fit/sphere_torus_4d/4000` | 0.666 s | 0.471 s | |
-//! | `fit/sphere_torus_4d/8000` | 4.61 s | 4.35 s | ≤ 2.5 s — **not met** |
-//! | `fit/sphere_torus_4d/16000` | 29.2 s | 24.2 s | |
+//! | `fit/sphere_torus_4d/2000` | 0.079 s | 0.076 s | |
+//! | `fit/sphere_torus_4d/4000` | 0.368 s | 0.362 s | |
+//! | `fit/sphere_torus_4d/8000` | 1.659 s | 1.642 s | ≤ 2.5 s — met |
+//! | `fit/sphere_torus_4d/16000` (one run each, `Interpolant::fit`) | 8.77 s | 8.69 s | |
 //! | `eval_grid/…/2000/64`, `eval_grid_r3/…/2000/64` | 0.348 s | 0.090 s | |
 //! | `eval_grid/…/8000/64`, `eval_grid_r3/…/8000/64` | 1.394 s | 0.355 s | ≤ 1.5 s / ≤ 0.5 s — met |
 //! | `polygonize/sphere_torus_4d/8000/64` (near-surface, [`polygonize`]) | 0.281 s | | ≤ 0.3 s — met |
 //! | `polygonize/sphere_torus_4d/8000/full/64` (full grid + marching cubes) | 1.506 s | | |
 //!
-//! The fit grows like `n³` past 4000 (×6.9 from 4000 to 8000, ×6.3 to
-//! 16000): the Cholesky factorization is about 75 % of it, and faer's
-//! parallel Cholesky scales only about 1.2× on these two cores (measured
-//! 37 GFlop/s on one thread, 45 on two); the 2.5 s target would need about
-//! 75 GFlop/s from it. Evaluation scales linearly in `n`.
-//!
+//! With [`Solver::Dense`] the 8000 fit takes 3.3 s (the f64 Cholesky alone
+//! 2.57 s, 66 GFlop/s from faer on both cores); the 16000 one took 24–29 s
+//! before the matrix build was vectorized. The fit grows like `n³` past
+//! 4000 (×4.5 from 4000 to 8000, ×5.3 to 16000, with the slab solver);
+//! evaluation scales linearly in `n`.
+//! Memory: `8 n²` bytes for the matrix plus `4 n²` for the slab factors
+//! (3 GiB at 16000).
+
 //! # Example: a 3D morph
 //! ```
 //! use isomorph_common::{Aabb, Morph, Shape};
