@@ -17,7 +17,7 @@
 //! | §4.2 constraints from points with normals / meshes | [`constraints`] |
 //! | §5.1, §5.2 shape transformation in N + 1 dimensions, §6.2 separation | [`transform`] ([`RbfMorph`], [`ContourMorph`]) |
 //! | §6, §6.1, §6.2 surface reconstruction from parallel (any spacing) and non-parallel contours | [`reconstruct`] ([`ContourSet`], [`Plane`], [`ContourSurface`]) |
-//! | appendix: warping by point correspondences, eq. 4–5 unwarping | [`warp`] ([`WarpedMorph`], [`HalfwayWarps`], [`DisplacementWarp`]) |
+//! | appendix: warping by point correspondences, eq. 4–5 unwarping | [`warp`] ([`WarpedContourMorph`] for 2D shapes as in Fig. 9, [`WarpedMorph`] for 3D, [`HalfwayWarps`], [`DisplacementWarp`]) |
 //! | §7 influence shapes (triangle in N + 2, tetrahedron in N + 3 dimensions) | [`influence`] ([`InfluenceShapes`], [`InfluencePath`]) |
 //! | §5.2 polygonizing only near the surface (the paper uses Bloomenthal's continuation polygonizer) | [`polygonize`] |
 //! | fast evaluation of slices (what the paper's Bloomenthal polygonizer calls) | [`slice`](mod@slice) ([`Slice3`], [`Slice2`]) |
@@ -155,4 +155,4 @@ pub use reconstruct::{ContourSet, ContourSurface, Plane, ReconstructSettings};
 pub use slice::{Slice2, Slice3};
 pub use solve::{Factorization, Solver};
 pub use transform::{ContourMorph, RbfMorph, TransformSettings};
-pub use warp::{DisplacementWarp, HalfwayWarps, WarpedMorph, WarpedSlice};
+pub use warp::{DisplacementWarp, HalfwayWarps, WarpedContourMorph, WarpedMorph, WarpedSlice, WarpedSlice2};

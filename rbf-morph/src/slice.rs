@@ -267,11 +267,22 @@ impl Slice2 {
     /// # Errors
     /// As [`Grid2::from_vec`] (zero dimension, bad spacing).
     pub fn sample(&self, dims: glam::UVec2, origin: Vec2, spacing: f32) -> Result<Grid2<f32>, GridError> {
-        let points: Vec<Vec2> = (0..dims.y)
-            .flat_map(|j| (0..dims.x).map(move |i| origin + spacing * Vec2::new(i as f32, j as f32)))
-            .collect();
-        let mut out = vec![0.0f32; points.len()];
-        self.values(&points, &mut out);
-        Grid2::from_vec(dims, origin, spacing, out)
+        sample_lattice(dims, origin, spacing, |points, out| self.values(points, out))
     }
+}
+
+/// A 2D field sampled by `values` on the `dims` lattice of nodes at
+/// `origin + spacing·(i, j)`, `i` fastest.
+pub(crate) fn sample_lattice(
+    dims: glam::UVec2,
+    origin: Vec2,
+    spacing: f32,
+    values: impl FnOnce(&[Vec2], &mut [f32]),
+) -> Result<Grid2<f32>, GridError> {
+    let points: Vec<Vec2> = (0..dims.y)
+        .flat_map(|j| (0..dims.x).map(move |i| origin + spacing * Vec2::new(i as f32, j as f32)))
+        .collect();
+    let mut out = vec![0.0f32; points.len()];
+    values(&points, &mut out);
+    Grid2::from_vec(dims, origin, spacing, out)
 }

@@ -275,13 +275,7 @@ impl ContourMorph {
     /// # Errors
     /// [`RbfError::InvalidTime`]; [`RbfError::Grid`] for `res < 2`.
     pub fn frame_grid(&self, t: f32, res: u32) -> Result<Grid2<f32>, RbfError> {
-        if res < 2 {
-            let dims = glam::UVec3::new(res, res, 1);
-            return Err(RbfError::Grid(isomorph_common::GridError::TooSmall { dims, min: 2 }));
-        }
-        let size = self.hi - self.lo;
-        let spacing = size.max_element() / (res - 1) as f32;
-        let dims = UVec2::new((size.x / spacing).ceil() as u32 + 1, (size.y / spacing).ceil() as u32 + 1);
+        let (dims, spacing) = frame_lattice(self.lo, self.hi, res)?;
         Ok(self.slice(t)?.sample(dims, self.lo, spacing)?)
     }
 
@@ -293,6 +287,18 @@ impl ContourMorph {
     pub fn contours(&self, t: f32, res: u32) -> Result<Vec<Polyline2>, RbfError> {
         Ok(marching_squares(&self.frame_grid(t, res)?, 0.0))
     }
+}
+
+/// The lattice of a 2D frame over the box `lo..hi` with `res` nodes along
+/// the longer edge: its node counts and spacing.
+pub(crate) fn frame_lattice(lo: Vec2, hi: Vec2, res: u32) -> Result<(UVec2, f32), RbfError> {
+    if res < 2 {
+        let dims = glam::UVec3::new(res, res, 1);
+        return Err(RbfError::Grid(isomorph_common::GridError::TooSmall { dims, min: 2 }));
+    }
+    let size = hi - lo;
+    let spacing = size.max_element() / (res - 1) as f32;
+    Ok((UVec2::new((size.x / spacing).ceil() as u32 + 1, (size.y / spacing).ceil() as u32 + 1), spacing))
 }
 
 #[cfg(test)]

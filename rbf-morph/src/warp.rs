@@ -25,11 +25,12 @@
 
 use crate::error::RbfError;
 use crate::interpolant::{Constraint, FitSettings, Interpolant};
-use crate::slice::Slice3;
-use crate::transform::{RbfMorph, TransformSettings};
-use glam::{Mat3, Vec3};
+use crate::slice::{Slice2, Slice3, sample_lattice};
+use crate::transform::{ContourMorph, RbfMorph, TransformSettings, frame_lattice};
+use glam::{Mat2, Mat3, Vec2, Vec3};
+use isomorph_common::marching_squares::{Polyline2, marching_squares};
 use isomorph_common::morph::check_time;
-use isomorph_common::{Aabb, Field3, Frame, Morph, TriMesh};
+use isomorph_common::{Aabb, Field3, Frame, Grid2, Morph, TriMesh};
 use rayon::prelude::*;
 use std::sync::Arc;
 
@@ -294,6 +295,161 @@ impl Field3 for WarpedSlice {
     }
 }
 
+/// Shape transformation between two 2D shapes with feature alignment by
+/// warping — the appendix as the paper describes it (Fig. 9: X → O): the 3D
+/// implicit is fitted between the half-way warped shapes
+/// ([`WarpedContourMorph::warped`], Fig. 9 top row) and its slices are
+/// unwarped (bottom row).
+///
+/// ```
+/// use glam::Vec2;
+/// use isomorph_rbf::warp::WarpedContourMorph;
+/// use isomorph_rbf::{Constraint, TransformSettings};
+///
+/// // A circle of radius 0.2 (boundary 0, centre 1), and the same moved by 0.3.
+/// let circle = |c: Vec2| -> Vec<Constraint<2>> {
+///     let mut cs: Vec<_> = (0..24)
+///         .map(|i| {
+///             let p = c + 0.2 * Vec2::from_angle(i as f32 * std::f32::consts::TAU / 24.0);
+///             Constraint::new(p.to_array(), 0.0)
+///         })
+///         .collect();
+///     cs.push(Constraint::new(c.to_array(), 1.0));
+///     cs
+/// };
+/// let shift = Vec2::new(0.3, 0.0);
+/// let on_a = [Vec2::X, Vec2::Y, -Vec2::X, -Vec2::Y].map(|d| 0.2 * d);
+/// let on_b = on_a.map(|p| p + shift);
+/// let settings = TransformSettings { separation: 0.2, ..Default::default() };
+/// let morph = WarpedContourMorph::new(&circle(Vec2::ZERO), &circle(shift), &on_a, &on_b, &settings)?;
+/// // Half-way the circle is centred half-way.
+/// let mid = morph.slice(0.5)?;
+/// assert!(mid.value(Vec2::new(0.15, 0.0)) > 0.0);
+/// assert!(mid.value(Vec2::new(0.32, 0.0)) > 0.0 && mid.value(Vec2::new(0.4, 0.0)) < 0.0);
+/// # Ok::<(), isomorph_rbf::RbfError>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct WarpedContourMorph {
+    warped: ContourMorph,
+    warps: Arc<HalfwayWarps<2>>,
+    lo: Vec2,
+    hi: Vec2,
+}
+
+impl WarpedContourMorph {
+    /// Fits the warps from the corresponding points `on_source[i] ↔
+    /// on_target[i]` (with [`TransformSettings::fit`]), displaces the
+    /// constraints of each shape half-way, and fits the 3D implicit between
+    /// the warped shapes.
+    ///
+    /// # Errors
+    /// Those of [`HalfwayWarps::new`] and [`ContourMorph::new`].
+    pub fn new(
+        source: &[Constraint<2>],
+        target: &[Constraint<2>],
+        on_source: &[Vec2],
+        on_target: &[Vec2],
+        settings: &TransformSettings,
+    ) -> Result<Self, RbfError> {
+        let arrays = |p: &[Vec2]| p.iter().map(|v| v.to_array()).collect::<Vec<_>>();
+        let warps = HalfwayWarps::new(&arrays(on_source), &arrays(on_target), &settings.fit)?;
+        let warped = ContourMorph::new(
+            &warps.source().displace(source, 1.0),
+            &warps.target().displace(target, 1.0),
+            settings,
+        )?;
+        let (mut lo, mut hi) = warped.bounds();
+        let inputs = source.iter().chain(target).map(|c| Vec2::from_array(c.position));
+        let (in_lo, in_hi) = inputs.fold((lo, hi), |(l, h), p| (l.min(p), h.max(p)));
+        let pad = settings.margin * (in_hi - in_lo).length();
+        (lo, hi) = (lo.min(in_lo - pad), hi.max(in_hi + pad));
+        Ok(Self { warped, warps: Arc::new(warps), lo, hi })
+    }
+
+    /// The transformation between the warped shapes, before unwarping (the
+    /// paper's Fig. 9, top row).
+    pub fn warped(&self) -> &ContourMorph {
+        &self.warped
+    }
+
+    /// The two half-way warps.
+    pub fn warps(&self) -> &HalfwayWarps<2> {
+        &self.warps
+    }
+
+    /// The box (min, max corners) containing both inputs, the warped shapes
+    /// and the margin.
+    pub fn bounds(&self) -> (Vec2, Vec2) {
+        (self.lo, self.hi)
+    }
+
+    /// The unwarped 2D field at morph time `t ∈ [0, 1]`.
+    ///
+    /// # Errors
+    /// [`RbfError::InvalidTime`] for NaN or `t ∉ [0, 1]`.
+    pub fn slice(&self, t: f32) -> Result<WarpedSlice2, RbfError> {
+        Ok(WarpedSlice2 { slice: self.warped.slice(t)?, warps: Arc::clone(&self.warps), tau: t })
+    }
+
+    /// The shape at `t` sampled over [`WarpedContourMorph::bounds`] with
+    /// `res` nodes along the longer edge.
+    ///
+    /// # Errors
+    /// [`RbfError::InvalidTime`]; [`RbfError::Grid`] for `res < 2`.
+    pub fn frame_grid(&self, t: f32, res: u32) -> Result<Grid2<f32>, RbfError> {
+        let (dims, spacing) = frame_lattice(self.lo, self.hi, res)?;
+        let slice = self.slice(t)?;
+        Ok(sample_lattice(dims, self.lo, spacing, |points, out| slice.values(points, out))?)
+    }
+
+    /// The contours (iso 0) of the shape at `t`, counter-clockwise around
+    /// inside regions (holes clockwise).
+    ///
+    /// # Errors
+    /// As [`WarpedContourMorph::frame_grid`].
+    pub fn contours(&self, t: f32, res: u32) -> Result<Vec<Polyline2>, RbfError> {
+        Ok(marching_squares(&self.frame_grid(t, res)?, 0.0))
+    }
+}
+
+/// An unwarped 2D frame `G(x) = F(u(x, τ), τ)` of a [`WarpedContourMorph`]:
+/// positive inside, curve at 0.
+#[derive(Debug, Clone)]
+pub struct WarpedSlice2 {
+    slice: Slice2,
+    warps: Arc<HalfwayWarps<2>>,
+    tau: f32,
+}
+
+impl WarpedSlice2 {
+    /// `u(p, τ)`: where `p` of the frame sits in the warped morph's slice.
+    pub fn unwarp(&self, p: Vec2) -> Vec2 {
+        let (warp, amount) = self.warps.unwarp_at(self.tau);
+        p + amount * Vec2::from_array(warp.displacement(p.to_array()))
+    }
+
+    /// The value at `p`.
+    pub fn value(&self, p: Vec2) -> f32 {
+        self.slice.value(self.unwarp(p))
+    }
+
+    /// The gradient `(I + amount · Dw(p))ᵀ ∇F(u(p))` (points inward).
+    pub fn gradient(&self, p: Vec2) -> Vec2 {
+        let (warp, amount) = self.warps.unwarp_at(self.tau);
+        let jacobian = Mat2::from_cols_array_2d(&warp.jacobian(p.to_array())).transpose();
+        (Mat2::IDENTITY + amount * jacobian).transpose() * self.slice.gradient(self.unwarp(p))
+    }
+
+    /// Values at `points` into `out`, parallel.
+    ///
+    /// # Panics
+    /// If `points` and `out` differ in length.
+    pub fn values(&self, points: &[Vec2], out: &mut [f32]) {
+        let moved: Vec<Vec2> = points.par_iter().map(|&p| self.unwarp(p)).collect();
+        self.slice.values(&moved, out);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -411,6 +567,67 @@ mod tests {
         let plain = RbfMorph::new(&a, &b, &settings).unwrap();
         let (lo, hi) = crossings(&plain.frame(0.5).unwrap().field);
         assert!(hi - lo > 0.5, "plain half-way length {}", hi - lo);
+    }
+
+    /// A circle of radius 0.2 around `c`: boundary constraints and 1 at
+    /// the centre.
+    fn circle(c: Vec2) -> Vec<Constraint<2>> {
+        let mut cs: Vec<Constraint<2>> = (0..32)
+            .map(|i| Constraint::new((c + 0.2 * Vec2::from_angle(i as f32 * 0.196_349_55)).to_array(), 0.0))
+            .collect();
+        cs.push(Constraint::new(c.to_array(), 1.0));
+        cs
+    }
+
+    #[test]
+    fn translated_circle_moves_along_its_correspondences_in_2d() {
+        let shift = Vec2::new(0.3, 0.0);
+        let (a, b) = (circle(Vec2::ZERO), circle(shift));
+        let on_a: Vec<Vec2> = [Vec2::X, Vec2::Y, -Vec2::X, -Vec2::Y].map(|d| 0.2 * d).to_vec();
+        let on_b: Vec<Vec2> = on_a.iter().map(|p| *p + shift).collect();
+        let settings = TransformSettings { separation: 0.2, ..Default::default() };
+        let morph = WarpedContourMorph::new(&a, &b, &on_a, &on_b, &settings).unwrap();
+        // The ends reproduce the inputs' constraints, although the fitted
+        // (warped) shapes are both centred half-way.
+        for (t, input) in [(0.0, &a), (1.0, &b)] {
+            let frame = morph.slice(t).unwrap();
+            let worst = input.iter().map(|c| (frame.value(Vec2::from_array(c.position)) - c.value).abs());
+            assert!(worst.fold(0.0, f32::max) < 2e-3, "t={t}");
+            let warped = morph.warped().slice(t).unwrap();
+            assert!(warped.value(Vec2::new(0.15, 0.0)) > 0.9, "t={t}: warped shapes are centred half-way");
+        }
+        // Along x the frame's curve crosses at centre ± 0.2 with the centre
+        // at 0.3 τ (bisection from the centre outwards).
+        for tau in [0.25f32, 0.5, 0.75] {
+            let f = morph.slice(tau).unwrap();
+            let centre = 0.3 * tau;
+            assert!(f.value(Vec2::new(centre, 0.0)) > 0.5, "τ={tau}");
+            let crossing = |dir: f32| {
+                let (mut lo, mut hi) = (centre, centre + dir * 0.4);
+                for _ in 0..40 {
+                    let mid = 0.5 * (lo + hi);
+                    if f.value(Vec2::new(mid, 0.0)) > 0.0 { lo = mid } else { hi = mid }
+                }
+                lo
+            };
+            let (left, right) = (crossing(-1.0), crossing(1.0));
+            assert!((0.5 * (left + right) - centre).abs() < 0.005, "τ={tau}: {left} .. {right}");
+            assert!((right - left - 0.4).abs() < 0.03, "τ={tau}: diameter {}", right - left);
+            let p = Vec2::new(right, 0.07);
+            let e = 1e-3;
+            let fd = Vec2::new(
+                f.value(p + Vec2::X * e) - f.value(p - Vec2::X * e),
+                f.value(p + Vec2::Y * e) - f.value(p - Vec2::Y * e),
+            ) / (2.0 * e);
+            assert!((f.gradient(p) - fd).length() < 0.02 * fd.length(), "τ={tau}: {} vs {fd}", f.gradient(p));
+        }
+        assert_eq!(morph.contours(0.5, 64).unwrap().len(), 1);
+        // Without the warp the two circles blend in place: half-way the
+        // shape is dented or split instead of a circle at 0.15.
+        let plain = ContourMorph::new(&a, &b, &settings).unwrap().slice(0.5).unwrap();
+        assert!(
+            plain.value(Vec2::new(0.15, 0.0)) < 0.5 * morph.slice(0.5).unwrap().value(Vec2::new(0.15, 0.0))
+        );
     }
 
     #[test]
