@@ -86,7 +86,9 @@
 //! | `fit/sphere_torus_4d/8000` | 1.659 s | 1.642 s | ≤ 2.5 s — met |
 //! | `fit/sphere_torus_4d/16000` (one run each, `Interpolant::fit`) | 8.77 s | 8.69 s | |
 //! | `eval_grid/…/2000/64`, `eval_grid_r3/…/2000/64` | 0.348 s | 0.090 s | |
+//! | `eval_grid/…/4000/64`, `eval_grid_r3/…/4000/64` | 0.697 s | 0.179 s | |
 //! | `eval_grid/…/8000/64`, `eval_grid_r3/…/8000/64` | 1.394 s | 0.355 s | ≤ 1.5 s / ≤ 0.5 s — met |
+//! | `eval_grid/…/16000/64`, `eval_grid_r3/…/16000/64` | 2.80 s | 0.715 s | |
 //! | `polygonize/sphere_torus_4d/8000/64` (near-surface, [`polygonize`]) | 0.281 s | | ≤ 0.3 s — met |
 //! | `polygonize/sphere_torus_4d/8000/full/64` (full grid + marching cubes) | 1.506 s | | |
 //!
@@ -94,7 +96,7 @@
 //! 2.57 s, 66 GFlop/s from faer on both cores); the 16000 one took 24–29 s
 //! before the matrix build was vectorized. The fit grows like `n³` past
 //! 4000 (×4.5 from 4000 to 8000, ×5.3 to 16000, with the slab solver);
-//! evaluation scales linearly in `n`.
+//! evaluation scales linearly in `n` (×2.0 per doubling).
 //! Memory: `8 n²` bytes for the matrix plus `4 n²` for the slab factors
 //! (3 GiB at 16000).
 
