@@ -3,7 +3,6 @@
 //! with first and second derivatives (note §2.2), evaluated only for the few
 //! anchors whose support meets the leaf containing the point.
 
-use crate::bspline::cubic;
 use crate::tmesh::{Anchor, TMesh};
 use glam::{DMat3, DVec3};
 
@@ -18,12 +17,12 @@ pub(crate) fn sym_to_mat(s: &Sym3) -> DMat3 {
 /// `B`, `∇B` and the Hessian of one anchor's blending function at `p`.
 #[inline]
 pub(crate) fn blend(anchor: &Anchor, p: DVec3) -> (f64, DVec3, Sym3) {
-    let [x0, x1, x2] = cubic(&anchor.knots[0], p.x);
+    let [x0, x1, x2] = anchor.pieces[0].eval(p.x);
     if x0 == 0.0 && x1 == 0.0 && x2 == 0.0 {
         return (0.0, DVec3::ZERO, [0.0; 6]);
     }
-    let [y0, y1, y2] = cubic(&anchor.knots[1], p.y);
-    let [z0, z1, z2] = cubic(&anchor.knots[2], p.z);
+    let [y0, y1, y2] = anchor.pieces[1].eval(p.y);
+    let [z0, z1, z2] = anchor.pieces[2].eval(p.z);
     let b = x0 * y0 * z0;
     let g = DVec3::new(x1 * y0 * z0, x0 * y1 * z0, x0 * y0 * z1);
     let h = [x2 * y0 * z0, x0 * y2 * z0, x0 * y0 * z2, x1 * y1 * z0, x1 * y0 * z1, x0 * y1 * z1];

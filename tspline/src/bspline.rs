@@ -37,10 +37,61 @@ pub(crate) fn cubic(k: &[f64; 5], x: f64) -> [f64; 3] {
     [value, d1, d2]
 }
 
-/// Value only (the cheap path of grid evaluation).
-#[inline]
-pub(crate) fn cubic_value(k: &[f64; 5], x: f64) -> f64 {
-    cubic(k, x)[0]
+/// One cubic B-spline on five strictly increasing knots as its four
+/// polynomial pieces, precomputed once per anchor: evaluation is a span
+/// lookup and a Horner step, with no division (Cox–de Boor in [`cubic`]
+/// costs ten divisions per call, and the blending functions are evaluated
+/// millions of times per evolution step).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct CubicPieces {
+    /// The knots `k0 < … < k4`.
+    knots: [f64; 5],
+    /// Per span `[k_j, k_{j+1})`: `c0 + c1 u + c2 u² + c3 u³` with `u = x − k_j`.
+    coeffs: [[f64; 4]; 4],
+}
+
+impl CubicPieces {
+    /// The pieces of the B-spline on `knots` (strictly increasing): on each
+    /// span the value and the first two derivatives at its left knot from
+    /// [`cubic`], and the constant third derivative from the second
+    /// derivative's change across the span (it is continuous at simple knots
+    /// and vanishes at `k4`).
+    pub(crate) fn new(knots: &[f64; 5]) -> Self {
+        let coeffs = std::array::from_fn(|j| {
+            let [v, d1, d2] = cubic(knots, knots[j]);
+            let d2_end = if j == 3 { 0.0 } else { cubic(knots, knots[j + 1])[2] };
+            let h = knots[j + 1] - knots[j];
+            [v, d1, 0.5 * d2, (d2_end - d2) / (6.0 * h)]
+        });
+        Self { knots: *knots, coeffs }
+    }
+
+    /// Value, first and second derivative at `x` (zero outside `[k0, k4)`),
+    /// as [`cubic`] to round-off.
+    #[inline]
+    pub(crate) fn eval(&self, x: f64) -> [f64; 3] {
+        let k = &self.knots;
+        if !(x >= k[0] && x < k[4]) {
+            return [0.0; 3];
+        }
+        let span = usize::from(x >= k[1]) + usize::from(x >= k[2]) + usize::from(x >= k[3]);
+        let [c0, c1, c2, c3] = self.coeffs[span];
+        let u = x - k[span];
+        [((c3 * u + c2) * u + c1) * u + c0, (3.0 * c3 * u + 2.0 * c2) * u + c1, 6.0 * c3 * u + 2.0 * c2]
+    }
+
+    /// The value at `x` only.
+    #[inline]
+    pub(crate) fn value(&self, x: f64) -> f64 {
+        let k = &self.knots;
+        if !(x >= k[0] && x < k[4]) {
+            return 0.0;
+        }
+        let span = usize::from(x >= k[1]) + usize::from(x >= k[2]) + usize::from(x >= k[3]);
+        let [c0, c1, c2, c3] = self.coeffs[span];
+        let u = x - k[span];
+        ((c3 * u + c2) * u + c1) * u + c0
+    }
 }
 
 #[cfg(test)]
@@ -74,6 +125,31 @@ mod tests {
             let fd2 = (cubic(&k, x + e)[1] - cubic(&k, x - e)[1]) / (2.0 * e);
             assert!((d1 - fd1).abs() < 1e-6, "x {x}: d1 {d1} fd {fd1}");
             assert!((d2 - fd2).abs() < 1e-5, "x {x}: d2 {d2} fd {fd2}");
+        }
+    }
+
+    #[test]
+    fn pieces_match_cox_de_boor() {
+        for k in [[0.0, 1.0, 2.0, 3.0, 4.0], [-0.3, 0.1, 0.25, 0.9, 1.0], [-1.0, -0.875, -0.75, -0.5, 0.0]] {
+            let pieces = CubicPieces::new(&k);
+            let scale = 1.0 / (k[4] - k[0]);
+            for i in 0..=400 {
+                let x = k[0] - 0.1 + (k[4] - k[0] + 0.2) * i as f64 / 400.0;
+                let (got, want) = (pieces.eval(x), cubic(&k, x));
+                for d in 0..3 {
+                    let tol = 1e-12 * scale.powi(d as i32).max(1.0);
+                    assert!(
+                        (got[d] - want[d]).abs() < tol,
+                        "knots {k:?} x {x} derivative {d}: {got:?} vs {want:?}"
+                    );
+                }
+                assert_eq!(pieces.value(x), got[0]);
+            }
+            // Exactly at the knots (the half-open spans).
+            for &x in &k {
+                let (got, want) = (pieces.eval(x), cubic(&k, x));
+                assert!((0..3).all(|d| (got[d] - want[d]).abs() < 1e-12 * scale.powi(d as i32).max(1.0)));
+            }
         }
     }
 

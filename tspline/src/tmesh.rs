@@ -8,6 +8,7 @@
 //! is the point `−1 + 2k/M`. A dense `M³` table maps each finest cell to its
 //! leaf, which makes point location O(1) ("an octree or equivalent").
 
+use crate::bspline::CubicPieces;
 use crate::error::{TsplineError, check_range};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -75,6 +76,8 @@ pub(crate) struct Anchor {
     pub pos: [i64; 3],
     /// Knot vectors per axis, domain units, strictly increasing.
     pub knots: [[f64; 5]; 3],
+    /// The univariate B-splines on those knots as polynomial pieces.
+    pub pieces: [CubicPieces; 3],
 }
 
 /// The octree T-mesh with anchors, knot vectors and per-leaf lists of the
@@ -271,7 +274,7 @@ impl TMesh {
                     let k = self.knot_vector(pos, axis);
                     k.map(|v| self.coord(v))
                 });
-                Anchor { pos, knots }
+                Anchor { pos, knots, pieces: knots.map(|k| CubicPieces::new(&k)) }
             })
             .collect();
         self.anchors = anchors;

@@ -81,13 +81,11 @@ impl TSpline {
         let (mut n, mut d) = (0.0, 0.0);
         for &i in self.mesh.leaf_anchors(leaf) {
             let a = &anchors[i as usize];
-            let x = crate::bspline::cubic_value(&a.knots[0], p.x);
+            let x = a.pieces[0].value(p.x);
             if x == 0.0 {
                 continue;
             }
-            let b = x
-                * crate::bspline::cubic_value(&a.knots[1], p.y)
-                * crate::bspline::cubic_value(&a.knots[2], p.z);
+            let b = x * a.pieces[1].value(p.y) * a.pieces[2].value(p.z);
             n += self.coeffs[i as usize] * b;
             d += b;
         }
