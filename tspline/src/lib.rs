@@ -141,7 +141,7 @@ mod tspline;
 pub use basis::Eval;
 pub use error::TsplineError;
 pub use evolution::{Evolution, EvolveSettings, Outcome, Speed, StepStats, evolve};
-pub use fit::{FitReport, FitSettings, fit};
+pub use fit::{FitReport, FitRound, FitSettings, Refinement, fit};
 pub use morph::{FrameField, MorphSettings, TsplineMorph, morph};
 pub use tmesh::{MAX_DEPTH, TMesh, TMeshSettings};
 pub use tspline::TSpline;
