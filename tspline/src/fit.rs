@@ -55,10 +55,12 @@ impl Default for FitSettings {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Refinement {
     /// Split the leaves holding a source surface sample whose first-order
-    /// distance `|f|/|∇f|` to the zero set exceeds this (domain units, e.g.
-    /// a tenth of the finest cell).
+    /// distance `|f|/|∇f|` to the zero set exceeds this (domain units, in
+    /// `(0, 2]`; e.g. a tenth of the finest cell).
     pub tolerance: f64,
-    /// At most this many refine-and-refit rounds.
+    /// At most this many refine-and-refit rounds (0–7: each round halves
+    /// the leaves it splits, and the octree is at most
+    /// [`crate::MAX_DEPTH`] deep). Stops early when no leaf can be split.
     pub max_rounds: usize,
 }
 

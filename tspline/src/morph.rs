@@ -220,6 +220,8 @@ pub fn morph(
 ) -> Result<TsplineMorph, TsplineError> {
     check_range("margin", settings.margin, 0.0, 10.0, "0..=10")?;
     settings.tmesh.validate()?;
+    settings.fit.validate()?;
+    settings.evolve.validate()?;
     for (name, m) in [("source", source), ("target", target)] {
         m.validate()?;
         if m.is_empty() || surface_samples(m, 1).is_none() {
