@@ -58,6 +58,8 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
             nt: None,
             depth: Some(4),
             step: None,
+            refine: None,
+            refine_rounds: 3,
         };
         let report = morph(&morph_args)?;
         print_summary(&report, &morph_args);

@@ -109,6 +109,14 @@ pub struct MorphArgs {
     /// T-spline only: morph step size h (units of the [−1, 1]³ domain).
     #[arg(long)]
     pub step: Option<f64>,
+    /// T-spline only: the paper's final refinement of the initial fit: split
+    /// the octree cells where the fitted surface is farther than this from
+    /// the source (units of the [−1, 1]³ domain) and refit.
+    #[arg(long)]
+    pub refine: Option<f64>,
+    /// T-spline only: at most this many refinement rounds (with `--refine`).
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(0..=7))]
+    pub refine_rounds: u32,
     /// BlobTree only: the animator's links, speed curves and trajectories
     /// (a RON or JSON morph spec); automatic correspondence without it.
     #[arg(long)]
@@ -197,8 +205,13 @@ pub fn morph(args: &MorphArgs) -> anyhow::Result<Report> {
             export(&rbf::build(&source, &target, options)?, &settings, &label)
         }
         Method::Tspline => {
-            let options =
-                tspline::Options { nt: args.nt, depth: args.depth, step: args.step, speed: args.speed };
+            let options = tspline::Options {
+                nt: args.nt,
+                depth: args.depth,
+                step: args.step,
+                speed: args.speed,
+                refine: args.refine.map(|tolerance| (tolerance, args.refine_rounds)),
+            };
             export(&tspline::build(&source, &target, options)?, &settings, &label)
         }
         Method::Blobtree => bail!("BlobTree morphs take BlobTree scenes"),

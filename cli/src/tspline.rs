@@ -5,7 +5,7 @@ use crate::inputs::Input;
 use anyhow::Context;
 use clap::ValueEnum;
 use indicatif::{ProgressBar, ProgressStyle};
-use isomorph_tspline::{MorphSettings, Speed, TsplineMorph, morph};
+use isomorph_tspline::{MorphSettings, Refinement, Speed, TsplineMorph, morph};
 use std::ops::ControlFlow;
 
 /// The evolution speeds on the command line.
@@ -32,6 +32,9 @@ pub struct Options {
     pub step: Option<f64>,
     /// The speed function.
     pub speed: SpeedArg,
+    /// The final refinement of the initial fit: surface error tolerance
+    /// (domain units) and the maximum number of rounds.
+    pub refine: Option<(f64, u32)>,
 }
 
 /// Runs the T-spline morph of `source` into `target` (both as meshes: a
@@ -40,7 +43,7 @@ pub struct Options {
 ///
 /// # Errors
 /// T-spline errors: shapes that do not overlap, empty shapes, singular
-/// systems, bad settings.
+/// systems, bad settings (including a refinement tolerance outside (0, 2]).
 pub fn build(source: &Input, target: &Input, options: Options) -> anyhow::Result<TsplineMorph> {
     let (a, b) = (source.reference(64)?, target.reference(64)?);
     let mut settings = MorphSettings::default();
@@ -51,6 +54,8 @@ pub fn build(source: &Input, target: &Input, options: Options) -> anyhow::Result
         settings.tmesh.max_depth = depth;
     }
     settings.evolve.step = options.step;
+    settings.fit.refinement =
+        options.refine.map(|(tolerance, rounds)| Refinement { tolerance, max_rounds: rounds as usize });
     // The finest cell of the T-mesh over [−1, 1]³ is 2 / 2^depth.
     let finest = 2.0 / f64::from(1u32 << settings.tmesh.max_depth.min(16));
     settings.evolve.speed = match options.speed {

@@ -143,6 +143,12 @@ fn bad_input_is_one_clear_line_and_nonzero_exit() {
 
     let o = isomorph(&["morph", "--source", "sphere", "--target", "torus", "--res", "2"]);
     assert!(!o.status.success(), "resolution below the minimum is rejected");
+
+    let o = isomorph(&[
+        "morph", "--method", "tspline", "--source", "sphere", "--target", "torus", "--refine", "0",
+    ]);
+    assert!(!o.status.success(), "a zero refinement tolerance is rejected");
+    assert!(String::from_utf8_lossy(&o.stderr).contains("refinement tolerance"));
 }
 
 /// Splits `.npy` bytes into the header text and the f32 values.

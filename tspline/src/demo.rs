@@ -1,7 +1,7 @@
 //! The paper's example shapes that the shared models do not have, built from
 //! the shared CSG primitives or as parametric meshes.
 
-use glam::{DVec3, Quat, Vec3};
+use glam::{DVec3, Quat, Vec2, Vec3};
 use isomorph_common::{Shape, TriMesh};
 use std::f32::consts::{FRAC_PI_2, TAU};
 
@@ -47,6 +47,36 @@ pub fn petal_torus(major: f32, minor: f32, amplitude: f32, petals: u32, segments
     TriMesh { positions, triangles, ..TriMesh::default() }
 }
 
+/// Half thickness along z of the extruded letters [`letter_t`] and
+/// [`letter_c`] (world units).
+pub const LETTER_HALF_DEPTH: f32 = 0.1;
+
+/// The source of the paper's Fig. 2–3: a letter "T" lying on its side
+/// ("├"), extruded to `|z| ≤ LETTER_HALF_DEPTH` (world units): a vertical
+/// bar `x ∈ [−0.45, −0.3]`, `|y| ≤ 0.3` and a horizontal bar
+/// `x ∈ [−0.3, 0.33]`, `|y| ≤ 0.07` pointing right. The horizontal bar
+/// crosses the inside of [`letter_c`] and ends in the C's opening.
+pub fn letter_t() -> Shape {
+    let bar = |lo: Vec2, hi: Vec2| {
+        let centre = (0.5 * (lo + hi)).extend(0.0);
+        Shape::cuboid((0.5 * (hi - lo)).extend(LETTER_HALF_DEPTH)).translated(centre)
+    };
+    bar(Vec2::new(-0.45, -0.3), Vec2::new(-0.3, 0.3))
+        .union(bar(Vec2::new(-0.3, -0.07), Vec2::new(0.33, 0.07)))
+}
+
+/// The target of the paper's Fig. 2–3: a round letter "C", the annulus
+/// `0.32 ≤ r ≤ 0.45` about the z axis without the opening `x > 0`,
+/// `|y| < 0.2`, extruded to `|z| ≤ LETTER_HALF_DEPTH` (world units). Its left
+/// arc overlaps the "T"'s vertical bar. The "T"'s horizontal bar lies outside
+/// the "C": 0.25 from it at the C's centre, 0.11–0.13 where it passes between
+/// the C's ends, so the distance speed cuts the bar in its middle (Fig. 2).
+pub fn letter_c() -> Shape {
+    let z = LETTER_HALF_DEPTH;
+    let opening = Shape::cuboid(Vec3::new(0.25, 0.2, 2.0 * z)).translated(Vec3::new(0.25, 0.0, 0.0));
+    Shape::cylinder(0.45, z).subtract(Shape::cylinder(0.32, 2.0 * z)).subtract(opening)
+}
+
 /// `n` nearly uniform points on the sphere of radius `r` about `center`
 /// (Fibonacci spiral), e.g. to build a [`crate::TMesh`] in domain units.
 pub fn sphere_samples(n: usize, r: f64, center: DVec3) -> Vec<DVec3> {
@@ -71,6 +101,21 @@ mod tests {
         let m = polygonize(&holed_cube(), &Aabb::cube(0.5), 48, 0.0).unwrap();
         assert_eq!(m.genus(), Some(3));
         assert_eq!(m.connected_components(), 1);
+    }
+
+    #[test]
+    fn letters_overlap_and_are_single_genus_zero_solids() {
+        let (t, c) = (letter_t(), letter_c());
+        for shape in [&t, &c] {
+            let m = polygonize(shape, &Aabb::cube(0.5), 48, 0.0).unwrap();
+            assert_eq!((m.connected_components(), m.genus()), (1, Some(0)));
+        }
+        // The T's vertical bar lies in the C's left arc; its horizontal bar
+        // (centre, between the C's ends) lies outside the C.
+        assert!(c.distance(Vec3::new(-0.38, 0.0, 0.0)) > 0.0);
+        // (CSG distances are bounds: the points avoid the cut's faces.)
+        assert!(c.distance(Vec3::new(-0.05, 0.07, 0.0)) < -0.15);
+        assert!(c.distance(Vec3::new(0.3, 0.07, 0.0)) < -0.1);
     }
 
     #[test]

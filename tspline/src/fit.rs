@@ -11,6 +11,18 @@
 //! A small Tikhonov term towards `d_A` at each anchor keeps the system
 //! positive definite even where blending functions are linearly dependent
 //! (note §3.4).
+//!
+//! # Final refinement
+//! "If the accuracy of the approximation is not sufficient, a better `L₀`
+//! can be found by using more degrees of freedom … and applying the 'final
+//! refinement' step" (§3.2). With [`FitSettings::refinement`] set, every
+//! leaf of the T-mesh that contains a source surface sample whose
+//! first-order distance `|f|/|∇f|` exceeds the tolerance is split into
+//! eight (the tree is 2:1 balanced again), and the fit is repeated on the
+//! finer T-mesh, for at most the given number of rounds. Leaves at the
+//! T-mesh's maximum depth cannot be split: refinement adds degrees of
+//! freedom where the octree stopped early (few samples per cell, large
+//! `n_T`), not beyond the depth limit.
 
 use crate::error::{TsplineError, check_range};
 use crate::lsq::{self, LeafRows};
@@ -28,12 +40,28 @@ pub struct FitSettings {
     pub quadrature: u32,
     /// Tikhonov weight relative to the mean diagonal of the data term.
     pub tikhonov: f64,
+    /// The "final refinement" (§3.2, module docs); `None` fits once on the
+    /// given T-mesh.
+    pub refinement: Option<Refinement>,
 }
 
 impl Default for FitSettings {
     fn default() -> Self {
-        Self { quadrature: 2, tikhonov: 1e-6 }
+        Self { quadrature: 2, tikhonov: 1e-6, refinement: None }
     }
+}
+
+/// When and how often the fit refines its T-mesh (module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Refinement {
+    /// Split the leaves holding a source surface sample whose first-order
+    /// distance `|f|/|∇f|` to the zero set exceeds this (domain units, in
+    /// `(0, 2]`; e.g. a tenth of the finest cell).
+    pub tolerance: f64,
+    /// At most this many refine-and-refit rounds (0–7: each round halves
+    /// the leaves it splits, and the octree is at most
+    /// [`crate::MAX_DEPTH`] deep). Stops early when no leaf can be split.
+    pub max_rounds: usize,
 }
 
 impl FitSettings {
@@ -43,12 +71,33 @@ impl FitSettings {
     /// [`TsplineError::BadSetting`].
     pub fn validate(&self) -> Result<(), TsplineError> {
         check_range("quadrature", f64::from(self.quadrature), 1.0, 8.0, "1..=8")?;
-        check_range("tikhonov", self.tikhonov, 1e-14, 1.0, "1e-14..=1")
+        check_range("tikhonov", self.tikhonov, 1e-14, 1.0, "1e-14..=1")?;
+        if let Some(r) = self.refinement {
+            check_range("refinement tolerance", r.tolerance, 1e-12, 2.0, "(0, 2]")?;
+            check_range("refinement rounds", r.max_rounds as f64, 0.0, f64::from(crate::MAX_DEPTH), "0..=7")?;
+        }
+        Ok(())
     }
 }
 
-/// How well the fit approximates the source.
+/// The accuracy of one fit on one T-mesh: the initial fit, or the fit after
+/// one refinement round.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub struct FitRound {
+    /// Coefficients (`n`) of this round's T-mesh.
+    pub coefficients: usize,
+    /// Leaves split before this round's fit, including the splits that
+    /// restore the 2:1 balance (0 for the initial fit).
+    pub leaves_split: usize,
+    /// Largest `|f| / |∇f|` over the source surface samples, domain units.
+    pub max_surface_error: f64,
+    /// Mean of the same.
+    pub mean_surface_error: f64,
+}
+
+/// How well the fit approximates the source (the last round's fit).
+#[derive(Debug, Clone, PartialEq)]
 #[non_exhaustive]
 pub struct FitReport {
     /// Quadrature points used (`N₀`).
@@ -65,11 +114,16 @@ pub struct FitReport {
     /// Smallest and largest `|∇f|` on the source surface samples (≈ 1 for a
     /// good distance fit).
     pub gradient_range: (f64, f64),
+    /// Every fit made: the initial one first, then one per refinement round
+    /// (just the initial one without [`FitSettings::refinement`]).
+    pub rounds: Vec<FitRound>,
 }
 
-/// Fits `f ≈ d_A` (paper eq. 3–4). `distance` is the source's signed
-/// distance in domain units (positive inside); `surface` are samples of the
-/// source surface, used to report the error.
+/// Fits `f ≈ d_A` (paper eq. 3–4), then applies the final refinement when
+/// [`FitSettings::refinement`] asks for it (the returned spline's T-mesh is
+/// then finer than `mesh`). `distance` is the source's signed distance in
+/// domain units (positive inside); `surface` are samples of the source
+/// surface, used to measure the error.
 ///
 /// # Errors
 /// [`TsplineError::BadSetting`] for bad settings, [`TsplineError::NonFinite`]
@@ -82,6 +136,54 @@ pub fn fit<D: Fn(DVec3) -> f64 + Sync>(
     settings: &FitSettings,
 ) -> Result<(TSpline, FitReport), TsplineError> {
     settings.validate()?;
+    let (mut spline, mut stats) = fit_once(mesh, &distance, settings)?;
+    let mut errors = surface_errors(&spline, surface);
+    let mut rounds = vec![round(&spline, &errors, 0)];
+    if let Some(refinement) = settings.refinement {
+        for _ in 0..refinement.max_rounds {
+            let bad: Vec<DVec3> = surface
+                .iter()
+                .zip(&errors)
+                .filter(|(_, e)| e.0 > refinement.tolerance)
+                .map(|(p, _)| *p)
+                .collect();
+            let finer = spline.mesh().refined(&bad);
+            let leaves_split = (finer.leaf_count() - spline.mesh().leaf_count()) / 7;
+            if leaves_split == 0 {
+                break;
+            }
+            (spline, stats) = fit_once(Arc::new(finer), &distance, settings)?;
+            errors = surface_errors(&spline, surface);
+            rounds.push(round(&spline, &errors, leaves_split));
+        }
+    }
+    let last = rounds[rounds.len() - 1];
+    Ok((
+        spline,
+        FitReport {
+            samples: stats.samples,
+            coefficients: last.coefficients,
+            nonzeros: stats.nonzeros,
+            max_surface_error: last.max_surface_error,
+            mean_surface_error: last.mean_surface_error,
+            gradient_range: gradient_range(&errors),
+            rounds,
+        },
+    ))
+}
+
+/// Quadrature points and normal-matrix non-zeros of one fit.
+struct FitStats {
+    samples: usize,
+    nonzeros: usize,
+}
+
+/// One weighted least-squares fit of eq. 3–4 on `mesh`.
+fn fit_once<D: Fn(DVec3) -> f64 + Sync>(
+    mesh: Arc<TMesh>,
+    distance: &D,
+    settings: &FitSettings,
+) -> Result<(TSpline, FitStats), TsplineError> {
     let q = settings.quadrature as usize;
     let blocks: Vec<LeafRows> = (0..mesh.leaf_count())
         .into_par_iter()
@@ -118,39 +220,47 @@ pub fn fit<D: Fn(DVec3) -> f64 + Sync>(
         })
         .collect();
     let (coeffs, stats) = lsq::solve(&mesh, &blocks, settings.tikhonov, &reference, "fit")?;
-    let spline = TSpline::new(mesh, coeffs)?;
-    let (max_surface_error, mean_surface_error, gradient_range) = surface_error(&spline, surface);
-    Ok((
-        spline,
-        FitReport {
-            samples,
-            coefficients: stats.unknowns,
-            nonzeros: stats.nonzeros,
-            max_surface_error,
-            mean_surface_error,
-            gradient_range,
-        },
-    ))
+    Ok((TSpline::new(mesh, coeffs)?, FitStats { samples, nonzeros: stats.nonzeros }))
 }
 
-/// Max and mean of `|f|/|∇f|` and the range of `|∇f|` over `points`.
-pub(crate) fn surface_error(spline: &TSpline, points: &[DVec3]) -> (f64, f64, (f64, f64)) {
-    if points.is_empty() {
-        return (0.0, 0.0, (0.0, 0.0));
+/// The error summary of one fit from its per-sample errors.
+fn round(spline: &TSpline, errors: &[(f64, f64)], leaves_split: usize) -> FitRound {
+    let (max_surface_error, mean_surface_error) = error_summary(errors);
+    FitRound {
+        coefficients: spline.coefficients().len(),
+        leaves_split,
+        max_surface_error,
+        mean_surface_error,
     }
-    let errs: Vec<(f64, f64)> = points
+}
+
+/// Per point: the first-order distance `|f|/|∇f|` and `|∇f|`.
+fn surface_errors(spline: &TSpline, points: &[DVec3]) -> Vec<(f64, f64)> {
+    points
         .par_iter()
         .map(|&p| {
             let e = spline.eval(p);
             let g = e.gradient.length();
             (e.value.abs() / g.max(1e-12), g)
         })
-        .collect();
-    let max = errs.iter().fold(0.0f64, |m, e| m.max(e.0));
-    let mean = errs.iter().map(|e| e.0).sum::<f64>() / errs.len() as f64;
-    let gmin = errs.iter().fold(f64::MAX, |m, e| m.min(e.1));
-    let gmax = errs.iter().fold(0.0f64, |m, e| m.max(e.1));
-    (max, mean, (gmin, gmax))
+        .collect()
+}
+
+/// Max and mean of the first-order distances (0 for no points).
+fn error_summary(errors: &[(f64, f64)]) -> (f64, f64) {
+    if errors.is_empty() {
+        return (0.0, 0.0);
+    }
+    let max = errors.iter().fold(0.0f64, |m, e| m.max(e.0));
+    (max, errors.iter().map(|e| e.0).sum::<f64>() / errors.len() as f64)
+}
+
+/// Smallest and largest `|∇f|` ((0, 0) for no points).
+fn gradient_range(errors: &[(f64, f64)]) -> (f64, f64) {
+    if errors.is_empty() {
+        return (0.0, 0.0);
+    }
+    errors.iter().fold((f64::MAX, 0.0f64), |(lo, hi), e| (lo.min(e.1), hi.max(e.1)))
 }
 
 #[cfg(test)]
@@ -190,6 +300,41 @@ mod tests {
         assert!(report.gradient_range.0 > 0.99 && report.gradient_range.1 < 1.01, "{report:?}");
         let worst = pts.iter().fold(0.0f64, |m, &p| m.max((f.eval(p).mean_curvature() + 2.0).abs()));
         assert!(worst < 0.1, "worst κ error {worst}");
+    }
+
+    #[test]
+    fn final_refinement_reduces_the_surface_error() {
+        // A thin torus on an octree that stopped at depth 2 (every cell holds
+        // fewer samples than n_T): the unrefined fit cannot resolve the tube.
+        let (major, minor) = (0.5, 0.12);
+        let torus = move |p: DVec3| minor - DVec3::new(p.truncate().length() - major, 0.0, p.z).length();
+        let pts: Vec<DVec3> = (0..4000)
+            .map(|i| {
+                let (u, v) =
+                    (i as f64 * 0.618_034 * std::f64::consts::TAU, i as f64 * 0.021 * std::f64::consts::TAU);
+                let rho = major + minor * v.cos();
+                DVec3::new(rho * u.cos(), rho * u.sin(), minor * v.sin())
+            })
+            .collect();
+        assert!(pts.iter().all(|&p| torus(p).abs() < 1e-12));
+        let s =
+            TMeshSettings { max_depth: 5, min_depth: 2, max_samples_per_cell: 100_000, ..Default::default() };
+        let mesh = Arc::new(TMesh::build(&pts, &s).unwrap());
+        let refinement = Refinement { tolerance: 0.005, max_rounds: 3 };
+        let settings = FitSettings { refinement: Some(refinement), ..Default::default() };
+        let (f, report) = fit(mesh.clone(), torus, &pts, &settings).unwrap();
+        let r = &report.rounds;
+        eprintln!("{r:#?}");
+        assert_eq!(r.len(), 4, "three refinement rounds");
+        assert!(r[0].max_surface_error > 0.04, "the unrefined fit is poor: {r:?}");
+        assert!(r.windows(2).all(|w| w[1].coefficients > w[0].coefficients && w[1].leaves_split > 0));
+        assert!(report.max_surface_error < 0.2 * r[0].max_surface_error, "{r:?}");
+        assert!(report.mean_surface_error < 0.1 * r[0].mean_surface_error, "{r:?}");
+        assert_eq!(report.coefficients, f.coefficients().len());
+        assert!(f.mesh().is_balanced() && f.mesh().leaf_count() > mesh.leaf_count());
+        // Without refinement the report has the initial round only.
+        let (_, plain) = fit(mesh, torus, &pts, &FitSettings::default()).unwrap();
+        assert_eq!(plain.rounds, vec![r[0]]);
     }
 
     #[test]

@@ -220,6 +220,8 @@ pub fn morph(
 ) -> Result<TsplineMorph, TsplineError> {
     check_range("margin", settings.margin, 0.0, 10.0, "0..=10")?;
     settings.tmesh.validate()?;
+    settings.fit.validate()?;
+    settings.evolve.validate()?;
     for (name, m) in [("source", source), ("target", target)] {
         m.validate()?;
         if m.is_empty() || surface_samples(m, 1).is_none() {
@@ -264,7 +266,9 @@ pub fn morph(
     }
     let all: Vec<DVec3> = samples_a.iter().chain(&samples_b).copied().collect();
     let mesh = Arc::new(TMesh::build(&all, &settings.tmesh)?);
-    let (initial, fit_report) = fit(mesh.clone(), da, &samples_a, &settings.fit)?;
+    let (initial, fit_report) = fit(mesh, da, &samples_a, &settings.fit)?;
+    // The final refinement may have refined the T-mesh; it stays fixed from here on.
+    let mesh = initial.mesh().clone();
     let evolution = evolve(&initial, db, &samples_b, &settings.evolve, progress)?;
     let h = settings.evolve.step.unwrap_or(mesh.finest_cell());
     let mut frames = Vec::new();

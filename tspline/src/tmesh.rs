@@ -121,19 +121,42 @@ impl TMesh {
         subdivide(Leaf { min: [0; 3], size: res }, 0, cells, settings, &mut leaves);
         let mut lookup = build_lookup(&leaves, res);
         if settings.balance {
-            while let Some(split) = unbalanced(&leaves, &lookup, res) {
-                let mut next = Vec::with_capacity(leaves.len() + 7 * split.len());
-                for (i, leaf) in leaves.iter().enumerate() {
-                    if split.binary_search(&i).is_ok() {
-                        next.extend(children(leaf));
-                    } else {
-                        next.push(*leaf);
-                    }
-                }
-                leaves = next;
-                lookup = build_lookup(&leaves, res);
-            }
+            (leaves, lookup) = balance(leaves, lookup, res);
         }
+        Ok(Self::with_leaves(depth, res, leaves, lookup))
+    }
+
+    /// A finer T-mesh (the paper's "final refinement", §3.2): the leaves
+    /// containing one of `points` (domain coordinates) are split into eight,
+    /// then the tree is 2:1 balanced again. Leaves already at the maximum
+    /// depth stay as they are, so the result may equal `self`; points
+    /// outside the domain are ignored.
+    ///
+    /// The 2:1 balance of the result holds even when `self` was built
+    /// without it (refinement never leaves an unbalanced tree behind).
+    pub fn refined(&self, points: &[DVec3]) -> TMesh {
+        let mut split: Vec<usize> = points
+            .iter()
+            .filter(|p| p.abs().max_element() <= 1.0)
+            .map(|&p| self.locate(p))
+            .filter(|&l| self.leaves[l].size > 1)
+            .collect();
+        split.sort_unstable();
+        split.dedup();
+        let leaves = split_leaves(&self.leaves, &split);
+        let lookup = build_lookup(&leaves, self.res);
+        let (leaves, lookup) = balance(leaves, lookup, self.res);
+        Self::with_leaves(self.depth, self.res, leaves, lookup)
+    }
+
+    /// Whether neighbouring leaves (face, edge or corner) differ by at most
+    /// one level.
+    pub fn is_balanced(&self) -> bool {
+        unbalanced(&self.leaves, &self.lookup, self.res).is_none()
+    }
+
+    /// Completes a tree from its leaves: anchors, knots, incidence lists.
+    fn with_leaves(depth: u32, res: i64, leaves: Vec<Leaf>, lookup: Vec<u32>) -> TMesh {
         let mut mesh = TMesh {
             depth,
             res,
@@ -144,7 +167,7 @@ impl TMesh {
             anchor_leaves: Vec::new(),
         };
         mesh.build_anchors();
-        Ok(mesh)
+        mesh
     }
 
     /// A uniform T-mesh: every cell at `depth` (a tensor-product tricubic
@@ -421,6 +444,30 @@ fn subdivide(leaf: Leaf, depth: u32, cells: Vec<[i64; 3]>, settings: &TMeshSetti
     }
 }
 
+/// `leaves` with the leaves at the sorted indices `split` replaced by their
+/// eight children.
+fn split_leaves(leaves: &[Leaf], split: &[usize]) -> Vec<Leaf> {
+    let mut next = Vec::with_capacity(leaves.len() + 7 * split.len());
+    for (i, leaf) in leaves.iter().enumerate() {
+        if split.binary_search(&i).is_ok() {
+            next.extend(children(leaf));
+        } else {
+            next.push(*leaf);
+        }
+    }
+    next
+}
+
+/// Splits leaves until neighbours differ by at most one level; returns the
+/// leaves and their lookup table.
+fn balance(mut leaves: Vec<Leaf>, mut lookup: Vec<u32>, res: i64) -> (Vec<Leaf>, Vec<u32>) {
+    while let Some(split) = unbalanced(&leaves, &lookup, res) {
+        leaves = split_leaves(&leaves, &split);
+        lookup = build_lookup(&leaves, res);
+    }
+    (leaves, lookup)
+}
+
 fn build_lookup(leaves: &[Leaf], res: i64) -> Vec<u32> {
     let mut lookup = vec![0u32; (res * res * res) as usize];
     for (i, l) in leaves.iter().enumerate() {
@@ -530,7 +577,27 @@ mod tests {
             }
         }
         // Balanced: neighbours differ by at most one level.
-        assert!(unbalanced(&m.leaves, &m.lookup, m.resolution()).is_none());
+        assert!(m.is_balanced());
+    }
+
+    #[test]
+    fn refinement_splits_the_leaves_at_the_points_and_keeps_the_balance() {
+        let coarse =
+            TMesh::build(&[], &TMeshSettings { max_depth: 4, min_depth: 1, ..Default::default() }).unwrap();
+        assert_eq!(coarse.leaf_count(), 8);
+        let p = DVec3::new(0.3, 0.3, 0.3);
+        let once = coarse.refined(&[p]);
+        assert_eq!(once.leaf_count(), 15);
+        assert!(once.leaf_sizes()[once.locate(p)] < coarse.leaf_sizes()[coarse.locate(p)]);
+        // Refining the same corner twice more forces balancing splits around it.
+        let deep = once.refined(&[p]).refined(&[p]);
+        assert!((deep.leaf_sizes()[deep.locate(p)] - 0.125).abs() < 1e-12);
+        assert!(deep.is_balanced());
+        assert!(deep.leaf_count() > 15 + 7 + 7, "balancing split neighbours: {}", deep.leaf_count());
+        // At the maximum depth nothing changes; outside points are ignored.
+        let finest = TMesh::uniform(2).unwrap().refined(&[p]);
+        assert_eq!(finest.leaf_count(), 64);
+        assert_eq!(coarse.refined(&[DVec3::splat(3.0)]).leaf_count(), 8);
     }
 
     #[test]
