@@ -54,7 +54,34 @@ pub(crate) fn solve(
     what: &'static str,
 ) -> Result<(Vec<f64>, SolveStats), TsplineError> {
     let n = mesh.anchor_count();
-    // Column a of the lower triangle: Σ over the rows touching a.
+    // Per leaf, the dense Gram matrix `RᵀWR` (m × m, rank-one updates over
+    // contiguous rows, vectorized) and `RᵀWb` of its rows, so that the
+    // global assembly below touches each leaf's m² entries once instead of
+    // once per row.
+    let grams: Vec<(Vec<f64>, Vec<f64>)> = blocks
+        .par_iter()
+        .enumerate()
+        .map(|(leaf, blk)| {
+            if blk.weights.is_empty() {
+                return (Vec::new(), Vec::new());
+            }
+            let m = mesh.leaf_anchors(leaf).len();
+            let (mut gram, mut rhs) = (vec![0.0f64; m * m], vec![0.0f64; m]);
+            for (r, row) in blk.rows.chunks_exact(m).enumerate() {
+                let w = blk.weights[r];
+                for (q, &x) in row.iter().enumerate() {
+                    let wx = w * x;
+                    if wx == 0.0 {
+                        continue;
+                    }
+                    rhs[q] += wx * blk.rhs[r];
+                    gram[q * m..(q + 1) * m].iter_mut().zip(row).for_each(|(g, y)| *g += wx * y);
+                }
+            }
+            (gram, rhs)
+        })
+        .collect();
+    // Column a of the lower triangle: the Gram rows of a in every leaf.
     let columns: Vec<(Vec<u32>, Vec<f64>, f64)> = (0..n)
         .into_par_iter()
         .map_init(
@@ -62,28 +89,22 @@ pub(crate) fn solve(
             |(acc, seen, touched), a| {
                 let mut rhs = 0.0;
                 for &(leaf, pos) in mesh.anchor_leaves(a) {
-                    let blk = &blocks[leaf as usize];
-                    if blk.weights.is_empty() {
+                    let (gram, leaf_rhs) = &grams[leaf as usize];
+                    if gram.is_empty() {
                         continue;
                     }
                     let list = mesh.leaf_anchors(leaf as usize);
                     let m = list.len();
-                    for r in 0..blk.len() {
-                        let row = &blk.rows[r * m..(r + 1) * m];
-                        let wa = blk.weights[r] * row[pos as usize];
-                        if wa == 0.0 {
+                    let pos = pos as usize;
+                    rhs += leaf_rhs[pos];
+                    for (&b, &g) in list.iter().zip(&gram[pos * m..(pos + 1) * m]) {
+                        if (b as usize) < a {
                             continue;
                         }
-                        rhs += wa * blk.rhs[r];
-                        for (q, &b) in list.iter().enumerate() {
-                            if (b as usize) < a {
-                                continue;
-                            }
-                            acc[b as usize] += wa * row[q];
-                            if !seen[b as usize] {
-                                seen[b as usize] = true;
-                                touched.push(b);
-                            }
+                        acc[b as usize] += g;
+                        if !seen[b as usize] {
+                            seen[b as usize] = true;
+                            touched.push(b);
                         }
                     }
                 }
