@@ -59,6 +59,10 @@ const SLAB_PLANES: usize = 3;
 /// Number of z-slabs a grid is cut into when its planes allow.
 const SLABS: usize = 32;
 
+/// Nodes improved by one relaxation task in one z-slab, queued for the
+/// current shell (`[0]`) and the next (`[1]`).
+type Improved = [Vec<u32>; 2];
+
 /// One node: unsigned distance (voxels) and tag (`source << FLAG_BITS | flags`).
 /// Stored packed in an [`AtomicU64`] (distance bits high, tag low) so that
 /// slabs of a shell can be relaxed from several threads in safe code.
@@ -319,17 +323,24 @@ impl Marcher {
             // this shell are relaxed in a further round.
             std::mem::swap(&mut round, &mut self.shells[shell]);
             let improved = if queued >= PARALLEL_MIN && self.slabs >= 4 {
-                self.relax_slabs(&round)
+                self.relax_slabs(&round, shell)
             } else {
-                let mut out = Vec::new();
+                let mut out = vec![Improved::default(); self.slabs];
                 for slab in &round {
-                    self.relax_all(slab, &mut out);
+                    self.relax_all(slab, shell, &mut out);
                 }
                 vec![out]
             };
             round.iter_mut().for_each(Vec::clear);
-            for (m, d) in improved.into_iter().flatten() {
-                self.enqueue(m, d, shell);
+            if self.shells.len() < shell + 2 {
+                self.shells.push(vec![Vec::new(); self.slabs]);
+            }
+            for (slab, lists) in improved.into_iter().flat_map(|task| task.into_iter().enumerate()) {
+                for (offset, list) in lists.into_iter().enumerate() {
+                    if !list.is_empty() {
+                        self.shells[shell + offset][slab].extend_from_slice(&list);
+                    }
+                }
             }
         }
     }
@@ -338,17 +349,17 @@ impl Marcher {
     /// the odd ones. A node only touches its own and the two neighbouring
     /// planes, and slabs are at least [`SLAB_PLANES`] thick, so slabs running
     /// together never touch the same cell and plain loads and stores suffice.
-    fn relax_slabs(&self, slabs: &[Vec<u32>]) -> Vec<Vec<(u32, f32)>> {
+    fn relax_slabs(&self, slabs: &[Vec<u32>], shell: usize) -> Vec<Vec<Improved>> {
         let mut improved = Vec::with_capacity(slabs.len());
         for parity in 0..2 {
-            let part: Vec<Vec<(u32, f32)>> = slabs
+            let part: Vec<Vec<Improved>> = slabs
                 .par_iter()
                 .skip(parity)
                 .step_by(2)
                 .filter(|slab| !slab.is_empty())
                 .map(|slab| {
-                    let mut out = Vec::new();
-                    self.relax_all(slab, &mut out);
+                    let mut out = vec![Improved::default(); self.slabs];
+                    self.relax_all(slab, shell, &mut out);
                     out
                 })
                 .collect();
@@ -357,17 +368,18 @@ impl Marcher {
         improved
     }
 
-    /// Relaxes the nodes of `list` in order.
-    fn relax_all(&self, list: &[u32], out: &mut Vec<(u32, f32)>) {
+    /// Relaxes the nodes of `list` in order during shell `shell`.
+    fn relax_all(&self, list: &[u32], shell: usize, out: &mut [Improved]) {
         for &n in list {
-            self.relax(n, out);
+            self.relax(n, shell, out);
         }
     }
 
-    /// Accepts node `n` and offers its surface element to its neighbours;
-    /// improved neighbours go to `out` with their new distance. Callers make
-    /// sure no other thread touches the same cells meanwhile.
-    fn relax(&self, n: u32, out: &mut Vec<(u32, f32)>) {
+    /// Accepts node `n` during shell `shell` and offers its surface element
+    /// to its neighbours; improved neighbours are queued in `out` by their
+    /// slab. Callers make sure no other thread touches the same cells
+    /// meanwhile.
+    fn relax(&self, n: u32, shell: usize, out: &mut [Improved]) {
         let cell = self.cell(n);
         if cell.state() == KNOWN || cell.dist > self.limit {
             return;
@@ -395,7 +407,11 @@ impl Marcher {
                 flags |= SIGNED | (cell.flags() & INSIDE);
             }
             self.set(m, Cell { dist, tag: cell.source() << FLAG_BITS | flags });
-            out.push((m, dist));
+            // The new distance is at most one voxel more than this node's,
+            // which is below the end of this shell: it belongs to this shell
+            // or the next (rounding errors go to the next as well).
+            let next = usize::from((dist / SHELL_WIDTH) as usize > shell);
+            out[(m / self.slab_nodes) as usize][next].push(m);
         }
     }
 
