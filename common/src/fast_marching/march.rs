@@ -184,12 +184,21 @@ pub(crate) struct Marcher {
     slab_nodes: u32,
     /// Number of z-slabs.
     slabs: usize,
+    /// Every node's side was given up front.
+    sided: bool,
 }
 
 impl Marcher {
     /// A run over `dims` nodes, every node Far. `limit` in voxels (may be
-    /// infinite).
-    pub(crate) fn new(dims: UVec3, update: Update, limit: f32) -> Result<Self, FastMarchingError> {
+    /// infinite). With `sides`, every node's side is fixed from the sign of
+    /// its value there (positive inside); without, nodes take the side of
+    /// the seeds that reach them.
+    pub(crate) fn new(
+        dims: UVec3,
+        update: Update,
+        limit: f32,
+        sides: Option<&[f32]>,
+    ) -> Result<Self, FastMarchingError> {
         let nodes = dims.x as u64 * dims.y as u64 * dims.z as u64;
         if nodes > u32::MAX as u64 {
             return Err(FastMarchingError::TooManyNodes(nodes));
@@ -199,7 +208,13 @@ impl Marcher {
         if requested > memory_limit() {
             return Err(GridError::TooLarge { dims, requested, limit: memory_limit() }.into());
         }
-        let cells = (0..nodes as usize).into_par_iter().map(|_| AtomicU64::new(far)).collect();
+        let cells = match sides {
+            Some(values) => values
+                .par_iter()
+                .map(|&v| AtomicU64::new(far | u64::from(SIGNED | if v > 0.0 { INSIDE } else { 0 })))
+                .collect(),
+            None => (0..nodes as usize).into_par_iter().map(|_| AtomicU64::new(far)).collect(),
+        };
         let thickness = SLAB_PLANES.max(dims.z as usize / SLABS).min(dims.z.max(1) as usize);
         let slab_nodes = (dims.x as usize * dims.y as usize * thickness).max(1);
         Ok(Self {
@@ -214,6 +229,7 @@ impl Marcher {
             shells: Vec::new(),
             slab_nodes: slab_nodes as u32,
             slabs: (nodes as usize).div_ceil(slab_nodes).max(1),
+            sided: sides.is_some(),
         })
     }
 
@@ -227,15 +243,6 @@ impl Marcher {
     #[inline]
     fn set(&self, n: u32, cell: Cell) {
         self.cells[n as usize].store(cell.pack(), Relaxed);
-    }
-
-    /// Fixes every node's side from `values` (positive inside).
-    pub(crate) fn set_sides(&mut self, values: &[f32]) {
-        self.cells.par_iter_mut().zip(values.par_iter()).for_each(|(c, &v)| {
-            let mut cell = Cell::unpack(*c.get_mut());
-            cell.tag = (cell.tag & !(INSIDE | SIGNED)) | SIGNED | if v > 0.0 { INSIDE } else { 0 };
-            *c.get_mut() = cell.pack();
-        });
     }
 
     /// Adds a seed (its distance stays as given).
@@ -511,7 +518,7 @@ impl Marcher {
     /// fill from the nodes whose side is known); nodes with no known side
     /// anywhere stay outside.
     fn flood_sides(&mut self) {
-        if self.cells.par_iter().all(|c| Cell::unpack(c.load(Relaxed)).flags() & SIGNED != 0) {
+        if self.sided || self.cells.par_iter().all(|c| Cell::unpack(c.load(Relaxed)).flags() & SIGNED != 0) {
             return;
         }
         let mut stack: Vec<u32> =

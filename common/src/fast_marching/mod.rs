@@ -216,7 +216,7 @@ pub(crate) fn march_with_discs(
     if seeds.is_empty() {
         return Err(FastMarchingError::NoSeeds);
     }
-    let mut marcher = Marcher::new(dims, settings.update, limit)?;
+    let mut marcher = Marcher::new(dims, settings.update, limit, None)?;
     for (number, seed) in seeds.iter().enumerate() {
         let n = seed.node;
         let cp_ok = seed.closest_point.is_none_or(|c| c.is_finite());
@@ -278,8 +278,7 @@ pub(crate) fn march_band(
     if seeds.is_empty() {
         return Err(FastMarchingError::NoInterface);
     }
-    let mut marcher = Marcher::new(lattice.dims(), settings.update, limit)?;
-    marcher.set_sides(values);
+    let mut marcher = Marcher::new(lattice.dims(), settings.update, limit, Some(values))?;
     for (number, &seed) in seeds.iter().enumerate() {
         marcher.add_seed(seed, number)?;
     }
