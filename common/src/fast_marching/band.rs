@@ -136,12 +136,12 @@ impl Sampler<'_> {
     /// grid). The gradient is the interpolant's own, so a Newton step lands
     /// on the interpolated zero set.
     fn trilinear(&self, p: Vec3) -> (f32, Vec3) {
-        let max = (self.dims - UVec3::ONE).as_vec3();
-        let p = p.clamp(Vec3::ZERO, max);
-        let base = p.floor().min((max - Vec3::ONE).max(Vec3::ZERO));
-        let w = p - base;
-        let b = base.as_uvec3();
-        let hi = (b + UVec3::ONE).min(self.dims - UVec3::ONE);
+        let last = self.dims - UVec3::ONE;
+        let p = p.clamp(Vec3::ZERO, last.as_vec3());
+        // The cell's lowest corner; truncation is the floor of p ≥ 0.
+        let b = p.as_uvec3().min(last.saturating_sub(UVec3::ONE));
+        let w = p - b.as_vec3();
+        let hi = (b + UVec3::ONE).min(last);
         let c = |x: bool, y: bool, z: bool| {
             self.at(if x { hi.x } else { b.x }, if y { hi.y } else { b.y }, if z { hi.z } else { b.z })
         };
