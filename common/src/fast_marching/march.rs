@@ -12,12 +12,14 @@
 //!   monotone radix heap, the smallest accepted (Known) and never revisited.
 //! - Closest-point propagation runs the same front in *shells* one voxel
 //!   wide (a bucketed queue in the manner of Kim's group marching and
-//!   Δ-stepping): the nodes of a shell are relaxed in memory order, and a node
+//!   Δ-stepping): the nodes of a shell are relaxed in rounds, and a node
 //!   whose distance drops after it was accepted is relaxed again, so every
-//!   node ends with the best surface element among its neighbours'. Walking
-//!   the front in memory order instead of heap order keeps the working set
-//!   in cache, and a large shell is relaxed in parallel by z-slabs (even
-//!   slabs together, then odd ones, so no two threads touch the same cell).
+//!   node ends with the best surface element among its neighbours'. Each
+//!   shell's queue is kept per z-slab of whole planes, in the order the
+//!   nodes were reached, which is close to memory order and needs no sort; a
+//!   large round is relaxed in parallel by z-slabs (even slabs together, then
+//!   odd ones, so no two threads touch the same cell), each task queueing the
+//!   nodes it improves by slab and shell itself.
 
 use super::heap::RadixHeap;
 use super::{FastMarchingError, Update};
