@@ -55,7 +55,7 @@ const NO_SOURCE: u32 = u32::MAX >> FLAG_BITS;
 const SHELL_WIDTH: f32 = 1.0;
 /// Rounds with fewer nodes run on one thread: the front takes thousands of
 /// rounds, and a fork-join per small round costs more than it saves.
-const PARALLEL_MIN: usize = 32_768;
+const PARALLEL_MIN: usize = 8_192;
 /// Thinnest z-slab (planes) of a parallel round.
 const SLAB_PLANES: usize = 3;
 /// Number of z-slabs a grid is cut into when its planes allow.
