@@ -37,10 +37,10 @@
 //! | grid | CPU time per run | max error, within 2 voxels |
 //! |---|---|---|
 //! | 256³ | 2.3–2.5 s: band ≈ 10 %, shells ≈ 75 %, allocation and output the rest | 0.18, 0.015 voxel |
-//! | 128³ | 0.30 s | 0.18, 0.03 voxel |
+//! | 128³ | 0.23 s | 0.18, 0.03 voxel |
 //!
-//! (The bench measured 3.5 s of wall time with the machine's two cores
-//! shared with three to four other busy threads, load average 5–6; before
+//! (The bench measured 3.3–3.5 s of wall time with the machine's two cores
+//! shared with three to eight other busy threads, load average 5–10; before
 //! the shell queues were kept per z-slab it took 3.9 s of CPU time per run.)
 //!
 //! [`redistance`] turns any grid whose zero level set is right but whose
