@@ -136,12 +136,12 @@ impl Sampler<'_> {
     /// grid). The gradient is the interpolant's own, so a Newton step lands
     /// on the interpolated zero set.
     fn trilinear(&self, p: Vec3) -> (f32, Vec3) {
-        let max = (self.dims - UVec3::ONE).as_vec3();
-        let p = p.clamp(Vec3::ZERO, max);
-        let base = p.floor().min((max - Vec3::ONE).max(Vec3::ZERO));
-        let w = p - base;
-        let b = base.as_uvec3();
-        let hi = (b + UVec3::ONE).min(self.dims - UVec3::ONE);
+        let last = self.dims - UVec3::ONE;
+        let p = p.clamp(Vec3::ZERO, last.as_vec3());
+        // The cell's lowest corner; truncation is the floor of p ≥ 0.
+        let b = p.as_uvec3().min(last.saturating_sub(UVec3::ONE));
+        let w = p - b.as_vec3();
+        let hi = (b + UVec3::ONE).min(last);
         let c = |x: bool, y: bool, z: bool| {
             self.at(if x { hi.x } else { b.x }, if y { hi.y } else { b.y }, if z { hi.z } else { b.z })
         };
@@ -244,6 +244,39 @@ fn second_layer<S: Surface + ?Sized>(surface: &S, first: &[BandSeed]) -> Vec<Ban
         .collect()
 }
 
+/// True when no node of `row` (index `j + ny · k`) is in the band: all its
+/// values are nonzero and on one side, and so are those of the (up to four)
+/// rows next to it. Most rows are, and this test costs a few instructions a
+/// node.
+fn far_row(values: &[f32], dims: UVec3, row: usize) -> bool {
+    let (nx, ny, nz) = (dims.x as usize, dims.y as usize, dims.z as usize);
+    let line = |r: usize| &values[r * nx..(r + 1) * nx];
+    let inside = values[row * nx] > 0.0;
+    let same = |r: usize| line(r).iter().fold(true, |all, &v| all & ((v > 0.0) == inside));
+    let (j, k) = (row % ny, row / ny);
+    line(row).iter().fold(true, |all, &v| all & (v != 0.0))
+        && same(row)
+        && (j == 0 || same(row - 1))
+        && (j + 1 == ny || same(row + 1))
+        && (k == 0 || same(row - ny))
+        && (k + 1 == nz || same(row + ny))
+}
+
+/// True when node `n` (linear `index`) has a 6-neighbour on the other side
+/// (`> 0` vs `≤ 0`): the quick test that keeps the scan of the whole grid cheap.
+#[inline]
+fn has_crossing(values: &[f32], dims: UVec3, index: usize, n: UVec3) -> bool {
+    let inside = values[index] > 0.0;
+    let (row, plane) = (dims.x as usize, dims.x as usize * dims.y as usize);
+    let differs = |m: usize| (values[m] > 0.0) != inside;
+    (n.x > 0 && differs(index - 1))
+        || (n.x + 1 < dims.x && differs(index + 1))
+        || (n.y > 0 && differs(index - row))
+        || (n.y + 1 < dims.y && differs(index + row))
+        || (n.z > 0 && differs(index - plane))
+        || (n.z + 1 < dims.z && differs(index + plane))
+}
+
 /// The first band layer: nodes with a sign change to a neighbour, and zero nodes.
 fn crossing_seeds<S: Surface + ?Sized>(surface: &S) -> Vec<BandSeed> {
     let (values, dims) = (surface.values(), surface.dims());
@@ -253,7 +286,8 @@ fn crossing_seeds<S: Surface + ?Sized>(surface: &S) -> Vec<BandSeed> {
         .into_par_iter()
         .flat_map_iter(|row| {
             let (j, k) = ((row % ny) as u32, (row / ny) as u32);
-            (0..dims.x).filter_map(move |i| {
+            let span = if far_row(values, dims, row) { 0..0 } else { 0..dims.x };
+            span.filter_map(move |i| {
                 let index = i as usize + nx * row;
                 let v = values[index];
                 let x = Vec3::new(i as f32, j as f32, k as f32);
@@ -267,6 +301,9 @@ fn crossing_seeds<S: Surface + ?Sized>(surface: &S) -> Vec<BandSeed> {
                         closest: Some(x),
                         disc,
                     });
+                }
+                if !has_crossing(values, dims, index, UVec3::new(i, j, k)) {
+                    return None;
                 }
                 // Crossings of the node's grid edges: exact zero-set points.
                 let mut best: Option<(f32, Vec3)> = None;

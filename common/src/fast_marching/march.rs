@@ -12,12 +12,14 @@
 //!   monotone radix heap, the smallest accepted (Known) and never revisited.
 //! - Closest-point propagation runs the same front in *shells* one voxel
 //!   wide (a bucketed queue in the manner of Kim's group marching and
-//!   Δ-stepping): the nodes of a shell are relaxed in memory order, and a node
+//!   Δ-stepping): the nodes of a shell are relaxed in rounds, and a node
 //!   whose distance drops after it was accepted is relaxed again, so every
-//!   node ends with the best surface element among its neighbours'. Walking
-//!   the front in memory order instead of heap order keeps the working set
-//!   in cache, and a large shell is relaxed in parallel by z-slabs (even
-//!   slabs together, then odd ones, so no two threads touch the same cell).
+//!   node ends with the best surface element among its neighbours'. Each
+//!   shell's queue is kept per z-slab of whole planes, in the order the
+//!   nodes were reached, which is close to memory order and needs no sort; a
+//!   large round is relaxed in parallel by z-slabs (even slabs together, then
+//!   odd ones, so no two threads touch the same cell), each task queueing the
+//!   nodes it improves by slab and shell itself.
 
 use super::heap::RadixHeap;
 use super::{FastMarchingError, Update};
@@ -53,19 +55,15 @@ const NO_SOURCE: u32 = u32::MAX >> FLAG_BITS;
 const SHELL_WIDTH: f32 = 1.0;
 /// Rounds with fewer nodes run on one thread: the front takes thousands of
 /// rounds, and a fork-join per small round costs more than it saves.
-const PARALLEL_MIN: usize = 32_768;
-/// Thinnest slab (z-planes) of a parallel round.
+const PARALLEL_MIN: usize = 8_192;
+/// Thinnest z-slab (planes) of a parallel round.
 const SLAB_PLANES: usize = 3;
-/// Offsets of the six neighbours, in the order of `Marcher::neighbour`'s
-/// `(axis, forward)` pairs `(d / 2, d % 2 == 1)`.
-const STEPS: [Vec3; 6] = [
-    Vec3::new(-1.0, 0.0, 0.0),
-    Vec3::new(1.0, 0.0, 0.0),
-    Vec3::new(0.0, -1.0, 0.0),
-    Vec3::new(0.0, 1.0, 0.0),
-    Vec3::new(0.0, 0.0, -1.0),
-    Vec3::new(0.0, 0.0, 1.0),
-];
+/// Number of z-slabs a grid is cut into when its planes allow.
+const SLABS: usize = 32;
+
+/// Nodes improved by one relaxation task in one z-slab, queued for the
+/// current shell (`[0]`) and the next (`[1]`).
+type Improved = [Vec<u32>; 2];
 
 /// One node: unsigned distance (voxels) and tag (`source << FLAG_BITS | flags`).
 /// Stored packed in an [`AtomicU64`] (distance bits high, tag low) so that
@@ -139,19 +137,33 @@ impl Surfel {
         Self { point, normal, radius }
     }
 
-    /// Distance (voxels) from `x` to the nearest point of the tangent disc.
+    /// Distances (voxels) from the six neighbours of `x` to the nearest
+    /// point of the tangent disc, neighbour `d` being one step along axis
+    /// `d / 2`, forward when `d` is odd (the order of `Marcher::neighbour`'s
+    /// `(axis, forward)` pairs).
     ///
     /// A bare point would sample the surface too coarsely near it: a node
     /// `d` voxels away whose propagated point is off by `δ` tangentially is
     /// off by `δ² / 2d`. The disc cuts that to the disc's own deviation from
-    /// the surface.
+    /// the surface. With `q = y − point`, normal part `s = q · normal` and
+    /// tangential length `t = √(|q|² − s²)`, the distance is
+    /// `√(s² + max(t − radius, 0)²)`; the six neighbours share `q · normal`
+    /// and `|q|²` up to one axis term, so all six cost little more than one.
     #[inline]
-    fn distance(&self, x: Vec3) -> f32 {
+    fn neighbour_distances(&self, x: Vec3) -> [f32; 6] {
         let q = x - self.point;
-        let tangential = q - q.dot(self.normal) * self.normal;
-        let t = tangential.length();
-        let slide = if t > self.radius { tangential * (self.radius / t) } else { tangential };
-        (q - slide).length()
+        let (s, qq) = (q.dot(self.normal), q.length_squared());
+        let (q, n) = (q.to_array(), self.normal.to_array());
+        let mut out = [0.0; 6];
+        for (d, o) in out.iter_mut().enumerate() {
+            let (axis, sign) = (d / 2, if d % 2 == 1 { 1.0 } else { -1.0 });
+            let sd = s + sign * n[axis];
+            let qd = qq + sign * 2.0 * q[axis] + 1.0;
+            let t = (qd - sd * sd).max(0.0).sqrt();
+            let over = (t - self.radius).max(0.0);
+            *o = (sd * sd + over * over).sqrt();
+        }
+        out
     }
 }
 
@@ -168,14 +180,27 @@ pub(crate) struct Marcher {
     limit: f32,
     /// Eikonal updates: the Trial nodes.
     heap: RadixHeap,
-    /// Closest-point propagation: the nodes queued in each shell.
-    shells: Vec<Vec<u32>>,
+    /// Closest-point propagation: the nodes queued in each shell, by z-slab.
+    shells: Vec<Vec<Vec<u32>>>,
+    /// Nodes per z-slab: whole planes, at least [`SLAB_PLANES`] of them.
+    slab_nodes: u32,
+    /// Number of z-slabs.
+    slabs: usize,
+    /// Every node's side was given up front.
+    sided: bool,
 }
 
 impl Marcher {
     /// A run over `dims` nodes, every node Far. `limit` in voxels (may be
-    /// infinite).
-    pub(crate) fn new(dims: UVec3, update: Update, limit: f32) -> Result<Self, FastMarchingError> {
+    /// infinite). With `sides`, every node's side is fixed from the sign of
+    /// its value there (positive inside); without, nodes take the side of
+    /// the seeds that reach them.
+    pub(crate) fn new(
+        dims: UVec3,
+        update: Update,
+        limit: f32,
+        sides: Option<&[f32]>,
+    ) -> Result<Self, FastMarchingError> {
         let nodes = dims.x as u64 * dims.y as u64 * dims.z as u64;
         if nodes > u32::MAX as u64 {
             return Err(FastMarchingError::TooManyNodes(nodes));
@@ -185,7 +210,15 @@ impl Marcher {
         if requested > memory_limit() {
             return Err(GridError::TooLarge { dims, requested, limit: memory_limit() }.into());
         }
-        let cells = (0..nodes as usize).into_par_iter().map(|_| AtomicU64::new(far)).collect();
+        let cells = match sides {
+            Some(values) => values
+                .par_iter()
+                .map(|&v| AtomicU64::new(far | u64::from(SIGNED | if v > 0.0 { INSIDE } else { 0 })))
+                .collect(),
+            None => (0..nodes as usize).into_par_iter().map(|_| AtomicU64::new(far)).collect(),
+        };
+        let thickness = SLAB_PLANES.max(dims.z as usize / SLABS).min(dims.z.max(1) as usize);
+        let slab_nodes = (dims.x as usize * dims.y as usize * thickness).max(1);
         Ok(Self {
             nx: dims.x,
             ny: dims.y,
@@ -196,6 +229,9 @@ impl Marcher {
             limit,
             heap: RadixHeap::new(),
             shells: Vec::new(),
+            slab_nodes: slab_nodes as u32,
+            slabs: (nodes as usize).div_ceil(slab_nodes).max(1),
+            sided: sides.is_some(),
         })
     }
 
@@ -209,15 +245,6 @@ impl Marcher {
     #[inline]
     fn set(&self, n: u32, cell: Cell) {
         self.cells[n as usize].store(cell.pack(), Relaxed);
-    }
-
-    /// Fixes every node's side from `values` (positive inside).
-    pub(crate) fn set_sides(&mut self, values: &[f32]) {
-        self.cells.par_iter_mut().zip(values.par_iter()).for_each(|(c, &v)| {
-            let mut cell = Cell::unpack(*c.get_mut());
-            cell.tag = (cell.tag & !(INSIDE | SIGNED)) | SIGNED | if v > 0.0 { INSIDE } else { 0 };
-            *c.get_mut() = cell.pack();
-        });
     }
 
     /// Adds a seed (its distance stays as given).
@@ -284,85 +311,84 @@ impl Marcher {
     fn enqueue(&mut self, n: u32, d: f32, current: usize) {
         let shell = ((d / SHELL_WIDTH) as usize).max(current);
         if shell >= self.shells.len() {
-            self.shells.resize_with(shell + 1, Vec::new);
+            let slabs = self.slabs;
+            self.shells.resize_with(shell + 1, || vec![Vec::new(); slabs]);
         }
-        self.shells[shell].push(n);
+        self.shells[shell][(n / self.slab_nodes) as usize].push(n);
     }
 
     /// Closest-point propagation, one shell at a time (see the module docs).
     fn run_shells(&mut self) {
         let mut shell = 0;
+        // The lists being relaxed; their buffers are reused round to round.
+        let mut round: Vec<Vec<u32>> = vec![Vec::new(); self.slabs];
         while shell < self.shells.len() {
-            if self.shells[shell].is_empty() {
+            let queued: usize = self.shells[shell].iter().map(Vec::len).sum();
+            if queued == 0 {
                 shell += 1;
                 continue;
             }
-            // Relax the shell's nodes in memory order; nodes re-queued into
+            // Relax the shell's nodes slab by slab; nodes re-queued into
             // this shell are relaxed in a further round.
-            let mut list = std::mem::take(&mut self.shells[shell]);
-            let parallel = list.len() >= PARALLEL_MIN && self.nz as usize >= 4 * SLAB_PLANES;
-            if parallel {
-                list.par_sort_unstable();
+            std::mem::swap(&mut round, &mut self.shells[shell]);
+            let improved = if queued >= PARALLEL_MIN && self.slabs >= 4 {
+                self.relax_slabs(&round, shell)
             } else {
-                list.sort_unstable();
-            }
-            list.dedup();
-            let queued: Vec<Vec<(u32, f32)>> = if parallel {
-                self.relax_slabs(&list)
-            } else {
-                let mut out = Vec::new();
-                for &n in &list {
-                    self.relax(n, &mut out);
+                let mut out = vec![Improved::default(); self.slabs];
+                for slab in &round {
+                    self.relax_all(slab, shell, &mut out);
                 }
                 vec![out]
             };
-            for (m, d) in queued.into_iter().flatten() {
-                self.enqueue(m, d, shell);
+            round.iter_mut().for_each(Vec::clear);
+            if self.shells.len() < shell + 2 {
+                self.shells.push(vec![Vec::new(); self.slabs]);
+            }
+            for (slab, lists) in improved.into_iter().flat_map(|task| task.into_iter().enumerate()) {
+                for (offset, list) in lists.into_iter().enumerate() {
+                    if !list.is_empty() {
+                        self.shells[shell + offset][slab].extend_from_slice(&list);
+                    }
+                }
             }
         }
     }
 
-    /// Relaxes the sorted `list` in parallel: it is cut into slabs of whole
-    /// z-planes, at least [`SLAB_PLANES`] thick, and the even slabs run
-    /// together, then the odd ones. A node only touches its own and the two
-    /// neighbouring planes, so slabs running together never touch the same
-    /// cell and plain loads and stores suffice.
-    fn relax_slabs(&self, list: &[u32]) -> Vec<Vec<(u32, f32)>> {
-        let plane = self.nx as u64 * self.ny as u64;
-        let thickness = SLAB_PLANES.max(self.nz as usize / 16);
-        let mut slabs = Vec::new();
-        let mut rest = list;
-        let mut k = thickness as u64;
-        while !rest.is_empty() {
-            let cut = rest.partition_point(|&n| (n as u64) < k * plane);
-            let (slab, tail) = rest.split_at(cut);
-            slabs.push(slab);
-            rest = tail;
-            k += thickness as u64;
-        }
-        let mut queued = Vec::with_capacity(slabs.len());
+    /// Relaxes the z-slabs' lists in parallel: the even slabs together, then
+    /// the odd ones. A node only touches its own and the two neighbouring
+    /// planes, and slabs are at least [`SLAB_PLANES`] thick, so slabs running
+    /// together never touch the same cell and plain loads and stores suffice.
+    fn relax_slabs(&self, slabs: &[Vec<u32>], shell: usize) -> Vec<Vec<Improved>> {
+        let mut improved = Vec::with_capacity(slabs.len());
         for parity in 0..2 {
-            let part: Vec<Vec<(u32, f32)>> = slabs
+            let part: Vec<Vec<Improved>> = slabs
                 .par_iter()
                 .skip(parity)
                 .step_by(2)
+                .filter(|slab| !slab.is_empty())
                 .map(|slab| {
-                    let mut out = Vec::new();
-                    for &n in *slab {
-                        self.relax(n, &mut out);
-                    }
+                    let mut out = vec![Improved::default(); self.slabs];
+                    self.relax_all(slab, shell, &mut out);
                     out
                 })
                 .collect();
-            queued.extend(part);
+            improved.extend(part);
         }
-        queued
+        improved
     }
 
-    /// Accepts node `n` and offers its surface element to its neighbours;
-    /// improved neighbours go to `out` with their new distance. Callers make
-    /// sure no other thread touches the same cells meanwhile.
-    fn relax(&self, n: u32, out: &mut Vec<(u32, f32)>) {
+    /// Relaxes the nodes of `list` in order during shell `shell`.
+    fn relax_all(&self, list: &[u32], shell: usize, out: &mut [Improved]) {
+        for &n in list {
+            self.relax(n, shell, out);
+        }
+    }
+
+    /// Accepts node `n` during shell `shell` and offers its surface element
+    /// to its neighbours; improved neighbours are queued in `out` by their
+    /// slab. Callers make sure no other thread touches the same cells
+    /// meanwhile.
+    fn relax(&self, n: u32, shell: usize, out: &mut [Improved]) {
         let cell = self.cell(n);
         if cell.state() == KNOWN || cell.dist > self.limit {
             return;
@@ -376,12 +402,12 @@ impl Marcher {
         for (d, t) in targets.iter_mut().enumerate() {
             *t = self.neighbour(n, c, d / 2, d % 2 == 1).map(|m| (m, self.cell(m)));
         }
-        for (d, target) in targets.into_iter().enumerate() {
+        let distances = surfel.neighbour_distances(x);
+        for (target, dist) in targets.into_iter().zip(distances) {
             let Some((m, nb)) = target else { continue };
             if nb.flags() & FIXED != 0 || nb.source() == cell.source() {
                 continue;
             }
-            let dist = surfel.distance(x + STEPS[d]);
             if dist >= nb.dist {
                 continue;
             }
@@ -390,7 +416,11 @@ impl Marcher {
                 flags |= SIGNED | (cell.flags() & INSIDE);
             }
             self.set(m, Cell { dist, tag: cell.source() << FLAG_BITS | flags });
-            out.push((m, dist));
+            // The new distance is at most one voxel more than this node's,
+            // which is below the end of this shell: it belongs to this shell
+            // or the next (rounding errors go to the next as well).
+            let next = usize::from((dist / SHELL_WIDTH) as usize > shell);
+            out[(m / self.slab_nodes) as usize][next].push(m);
         }
     }
 
@@ -490,7 +520,7 @@ impl Marcher {
     /// fill from the nodes whose side is known); nodes with no known side
     /// anywhere stay outside.
     fn flood_sides(&mut self) {
-        if self.cells.par_iter().all(|c| Cell::unpack(c.load(Relaxed)).flags() & SIGNED != 0) {
+        if self.sided || self.cells.par_iter().all(|c| Cell::unpack(c.load(Relaxed)).flags() & SIGNED != 0) {
             return;
         }
         let mut stack: Vec<u32> =

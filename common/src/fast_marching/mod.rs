@@ -14,7 +14,7 @@
 //! |---|---|---|---|
 //! | [`Update::FirstOrder`] | first-order upwind Eikonal `\|∇u\| = 1`, quadratic over 1–3 upwind axes; O(h), the error grows with the distance | 0.88, 0.14 voxel | 0.59, 0.07 voxel |
 //! | [`Update::SecondOrder`] | Sethian's second-order one-sided stencil, first order where the second upwind node is not Known; O(h²) in smooth regions | 0.31, 0.05 voxel | 0.19, 0.03 voxel |
-//! | [`Update::ClosestPoint`] (default) | each node inherits the surface element (closest point and tangent disc) of a neighbour; distance = to that disc; ≲ 0.06 voxel for planes | 0.26, 0.22 voxel | 0.15, 0.05 voxel |
+//! | [`Update::ClosestPoint`] (default) | each node inherits the surface element (closest point and tangent disc) of a neighbour; distance = to that disc; ≲ 0.06 voxel for planes | 0.26, 0.22 voxel | 0.16, 0.05 voxel |
 //!
 //! (Bounds asserted by the tests: first order < 1 voxel, second order
 //! < 0.35, closest point < 0.3 from one seed layer; [`redistance`] < 0.25
@@ -23,8 +23,27 @@
 //! through its neighbours (near medial axes, and next to a single seed
 //! layer on the concave side, which is why [`redistance`] and scan
 //! conversion seed two layers). It is also the faster mode: its front is
-//! relaxed shell by shell in memory order, large shells in parallel by
-//! z-slabs, while the Eikonal updates run the classic sequential heap.
+//! relaxed shell by shell, large shells in parallel by z-slabs, while the
+//! Eikonal updates run the classic sequential heap.
+//!
+//! Cost of [`redistance`] with closest points on the bench's 256³ torus
+//! (scaled distance field, 2 cores), measured with `cargo run --release -p
+//! isomorph-common --example redistance_timing` (CPU time of all threads per
+//! run, which the other load of a shared machine disturbs far less than the
+//! wall time) and `cargo bench -p isomorph-benches --bench common --
+//! redistance/torus/256`; the example also reports the error against the
+//! exact torus distance:
+//!
+//! | grid | CPU time per run | max error, within 2 voxels |
+//! |---|---|---|
+//! | 256³ | 2.1–2.5 s: band ≈ 10 %, shells ≈ 75 %, allocation and output the rest | 0.18, 0.015 voxel |
+//! | 128³ | 0.22 s | 0.18, 0.03 voxel |
+//! | 64³ | 0.03 s | 0.16, 0.05 voxel |
+//!
+//! The bench measured 1.22 s of wall time on the quiet machine (criterion
+//! interval 1.21–1.23 s), and 3.3–3.5 s with its two cores shared with
+//! three to eight other busy threads; before the shell queues were kept per
+//! z-slab it took 3.9 s (3.9 s of CPU time per run).
 //!
 //! [`redistance`] turns any grid whose zero level set is right but whose
 //! values are not distances (a sign field, a scaled or clamped field) into a
@@ -216,7 +235,7 @@ pub(crate) fn march_with_discs(
     if seeds.is_empty() {
         return Err(FastMarchingError::NoSeeds);
     }
-    let mut marcher = Marcher::new(dims, settings.update, limit)?;
+    let mut marcher = Marcher::new(dims, settings.update, limit, None)?;
     for (number, seed) in seeds.iter().enumerate() {
         let n = seed.node;
         let cp_ok = seed.closest_point.is_none_or(|c| c.is_finite());
@@ -278,8 +297,7 @@ pub(crate) fn march_band(
     if seeds.is_empty() {
         return Err(FastMarchingError::NoInterface);
     }
-    let mut marcher = Marcher::new(lattice.dims(), settings.update, limit)?;
-    marcher.set_sides(values);
+    let mut marcher = Marcher::new(lattice.dims(), settings.update, limit, Some(values))?;
     for (number, &seed) in seeds.iter().enumerate() {
         marcher.add_seed(seed, number)?;
     }
