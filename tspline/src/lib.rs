@@ -89,20 +89,33 @@
 //!   zero-set lattice has the smallest leaf's spacing everywhere, so steps
 //!   cost more with the number of surface samples than with `n`.
 //!
-//! # Performance (measured under load: 2 cores shared with 3 other jobs)
-//! `cargo bench -p isomorph-benches --bench tspline -- --warm-up-time 1
-//! --measurement-time 3 --sample-size 10 step/`: one step with 499 / 997 /
-//! 1992 / 4002 coefficients took 0.48 / 0.56 / 4.0 / 3.3 s (not linear in
-//! `n`; dominated by the sample count, see above). A `perf` profile of the
-//! sphere → holed cube run (release, under load, first 40 s) puts 32 % of the
-//! time in the cubic B-spline factors and 10 % in gathering a leaf's blending
-//! functions (Newton projection of every marching-cubes vertex with full
-//! Hessians, plus the three band rows per sample), 9 % in the target's
-//! winding-number sign, and only ≈ 12 % in the sparse Cholesky (dense
-//! supernode kernels and AMD ordering): the step cost follows the number of
-//! zero-set samples (∝ area / h_min²), not `n`. The whole sphere → holed
-//! cube morph (4794 coefficients, 22 steps) took about 66 s per run
-//! (criterion's estimate from the warm-up), far from the 2 s target.
+//! # Performance (quiet machine, 2 cores)
+//! `cargo bench -p isomorph-benches --bench tspline -- step/`: one step with
+//! 499 / 997 / 1992 / 4002 coefficients takes 125 / 135 / 555 / 634 ms
+//! (not linear in `n`: the cost follows the number of zero-set samples,
+//! ∝ area / h_min², and the T-meshes of this bench reach a finer cell at
+//! 2000). The whole sphere → holed cube morph (4794 coefficients, 23
+//! steps, projection frames; the bench's settings) took 12.1 s in one run,
+//! about 0.46 s per step, against the 2 s target — **not met**.
+//!
+//! What made it faster (same algorithm, same results up to round-off):
+//! - the univariate B-splines are precomputed per anchor as four polynomial
+//!   pieces (span lookup + Horner) instead of Cox–de Boor with ten
+//!   divisions per call — they were 61 % of a step's profile;
+//! - the inputs' exact signed distances are sampled once on a lattice four
+//!   times finer than the finest cell and interpolated trilinearly (the
+//!   BVH and winding-number queries were about 15 % of the morph);
+//! - the least-squares normal equations are assembled from dense per-leaf
+//!   Gram matrices (the per-row assembly loop was 26 % of the profile).
+//!
+//! A `perf` profile of the morph now puts 30 % in evaluating a leaf's
+//! blending functions with their Hessians (Newton projection of every
+//! marching-cubes vertex, three band rows per sample, the two-sided error),
+//! about 18 % in the sparse Cholesky (supernodal kernels and a fresh AMD
+//! ordering each step), 8 % in the zero-set lattice values and 7 % in the
+//! Gram matrices. Next steps, not done: evaluate each distinct knot vector
+//! once per point (anchors of a leaf share them), value-and-gradient-only
+//! Newton steps, and a symbolic factorization reused across steps.
 //! - Not implemented: marching triangulation (frames are polygonized by the
 //!   shared marching cubes).
 //!
