@@ -17,12 +17,17 @@ pub(crate) fn sym_to_mat(s: &Sym3) -> DMat3 {
 /// `B`, `∇B` and the Hessian of one anchor's blending function at `p`.
 #[inline]
 pub(crate) fn blend(anchor: &Anchor, p: DVec3) -> (f64, DVec3, Sym3) {
-    let [x0, x1, x2] = anchor.pieces[0].eval(p.x);
-    if x0 == 0.0 && x1 == 0.0 && x2 == 0.0 {
+    let x = anchor.pieces[0].eval(p.x);
+    if x == [0.0; 3] {
         return (0.0, DVec3::ZERO, [0.0; 6]);
     }
-    let [y0, y1, y2] = anchor.pieces[1].eval(p.y);
-    let [z0, z1, z2] = anchor.pieces[2].eval(p.z);
+    product(x, anchor.pieces[1].eval(p.y), anchor.pieces[2].eval(p.z))
+}
+
+/// `B = N(x) N(y) N(z)` with its gradient and Hessian from the univariate
+/// factors' values and first and second derivatives.
+#[inline]
+fn product([x0, x1, x2]: [f64; 3], [y0, y1, y2]: [f64; 3], [z0, z1, z2]: [f64; 3]) -> (f64, DVec3, Sym3) {
     let b = x0 * y0 * z0;
     let g = DVec3::new(x1 * y0 * z0, x0 * y1 * z0, x0 * y0 * z1);
     let h = [x2 * y0 * z0, x0 * y2 * z0, x0 * y0 * z2, x1 * y1 * z0, x1 * y0 * z1, x0 * y1 * z1];
@@ -47,22 +52,34 @@ pub(crate) struct LocalBasis {
     pub dd: DVec3,
     /// `H D`.
     pub hd: Sym3,
+    /// Per axis: the leaf's distinct univariate factors at the point.
+    factors: [Vec<[f64; 3]>; 3],
 }
 
 impl LocalBasis {
+    /// Evaluates the distinct univariate factors of the leaf containing `p`
+    /// (value, first and second derivative) into `self.factors`.
+    fn factors_at(&mut self, mesh: &TMesh, p: DVec3) {
+        self.leaf = mesh.locate(p);
+        let f = mesh.leaf_factors(self.leaf);
+        for (axis, out) in self.factors.iter_mut().enumerate() {
+            out.clear();
+            out.extend(f.axes[axis].iter().map(|pc| pc.eval(p[axis])));
+        }
+    }
+
     /// Evaluates every blending function of the leaf containing `p`.
     pub fn at(&mut self, mesh: &TMesh, p: DVec3) {
-        self.leaf = mesh.locate(p);
-        let list = mesh.leaf_anchors(self.leaf);
-        let anchors = mesh.anchors();
+        self.factors_at(mesh, p);
         self.b.clear();
         self.db.clear();
         self.hb.clear();
         self.d = 0.0;
         self.dd = DVec3::ZERO;
         self.hd = [0.0; 6];
-        for &i in list {
-            let (b, g, h) = blend(&anchors[i as usize], p);
+        let [fx, fy, fz] = &self.factors;
+        for index in &mesh.leaf_factors(self.leaf).index {
+            let (b, g, h) = product(fx[index[0] as usize], fy[index[1] as usize], fz[index[2] as usize]);
             self.b.push(b);
             self.db.push(g);
             self.hb.push(h);
@@ -72,6 +89,21 @@ impl LocalBasis {
                 *acc += v;
             }
         }
+    }
+
+    /// `f(p) = Σ c_i B_i / Σ B_i` alone (no derivatives), from the leaf's
+    /// distinct factors.
+    pub fn value(&mut self, mesh: &TMesh, coeffs: &[f64], p: DVec3) -> f64 {
+        self.factors_at(mesh, p);
+        let [fx, fy, fz] = &self.factors;
+        let list = mesh.leaf_anchors(self.leaf);
+        let (mut n, mut d) = (0.0, 0.0);
+        for (&i, index) in list.iter().zip(&mesh.leaf_factors(self.leaf).index) {
+            let b = fx[index[0] as usize][0] * fy[index[1] as usize][0] * fz[index[2] as usize][0];
+            n += coeffs[i as usize] * b;
+            d += b;
+        }
+        if d > 0.0 { n / d } else { 0.0 }
     }
 
     /// The rational basis `R_i = B_i / D` and its gradients

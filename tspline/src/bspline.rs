@@ -79,19 +79,6 @@ impl CubicPieces {
         let u = x - k[span];
         [((c3 * u + c2) * u + c1) * u + c0, (3.0 * c3 * u + 2.0 * c2) * u + c1, 6.0 * c3 * u + 2.0 * c2]
     }
-
-    /// The value at `x` only.
-    #[inline]
-    pub(crate) fn value(&self, x: f64) -> f64 {
-        let k = &self.knots;
-        if !(x >= k[0] && x < k[4]) {
-            return 0.0;
-        }
-        let span = usize::from(x >= k[1]) + usize::from(x >= k[2]) + usize::from(x >= k[3]);
-        let [c0, c1, c2, c3] = self.coeffs[span];
-        let u = x - k[span];
-        ((c3 * u + c2) * u + c1) * u + c0
-    }
 }
 
 #[cfg(test)]
@@ -143,7 +130,6 @@ mod tests {
                         "knots {k:?} x {x} derivative {d}: {got:?} vs {want:?}"
                     );
                 }
-                assert_eq!(pieces.value(x), got[0]);
             }
             // Exactly at the knots (the half-open spans).
             for &x in &k {

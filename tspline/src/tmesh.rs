@@ -96,6 +96,22 @@ pub struct TMesh {
     leaf_anchors: Vec<Vec<u32>>,
     /// Per anchor: (leaf, position in that leaf's list).
     anchor_leaves: Vec<Vec<(u32, u32)>>,
+    /// Per leaf: the distinct univariate factors of its blending functions.
+    leaf_factors: Vec<LeafFactors>,
+}
+
+/// The univariate factors of a leaf's blending functions: per axis the
+/// distinct B-splines among its anchors (neighbouring anchors share knot
+/// vectors: a uniform region has 4 per axis for 64 anchors), and for each
+/// anchor of the leaf's list its index into each axis. Evaluating the
+/// distinct factors once per point, instead of three per anchor, makes a
+/// leaf's basis cheap.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct LeafFactors {
+    /// Distinct B-splines per axis.
+    pub axes: [Vec<CubicPieces>; 3],
+    /// Per anchor of the leaf (list order): its factor per axis.
+    pub index: Vec<[u16; 3]>,
 }
 
 impl TMesh {
@@ -165,6 +181,7 @@ impl TMesh {
             anchors: Vec::new(),
             leaf_anchors: Vec::new(),
             anchor_leaves: Vec::new(),
+            leaf_factors: Vec::new(),
         };
         mesh.build_anchors();
         mesh
@@ -240,6 +257,10 @@ impl TMesh {
 
     pub(crate) fn anchor_leaves(&self, anchor: usize) -> &[(u32, u32)] {
         &self.anchor_leaves[anchor]
+    }
+
+    pub(crate) fn leaf_factors(&self, leaf: usize) -> &LeafFactors {
+        &self.leaf_factors[leaf]
     }
 
     /// Finest lattice cells per axis.
@@ -353,6 +374,25 @@ impl TMesh {
                 anchor_leaves[a as usize].push((li as u32, pos as u32));
             }
         }
+        self.leaf_factors = leaf_anchors
+            .par_iter()
+            .map(|list| {
+                let mut f = LeafFactors::default();
+                for &i in list {
+                    let a = &self.anchors[i as usize];
+                    let index = std::array::from_fn(|axis| {
+                        let distinct = &mut f.axes[axis];
+                        let at = distinct.iter().position(|pc| *pc == a.pieces[axis]).unwrap_or_else(|| {
+                            distinct.push(a.pieces[axis]);
+                            distinct.len() - 1
+                        });
+                        u16::try_from(at).expect("fewer than 2^16 knot vectors per leaf")
+                    });
+                    f.index.push(index);
+                }
+                f
+            })
+            .collect();
         self.leaf_anchors = leaf_anchors;
         self.anchor_leaves = anchor_leaves;
     }

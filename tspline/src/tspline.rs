@@ -76,20 +76,7 @@ impl TSpline {
     /// The value at a point of the domain (clamped), without derivatives.
     pub fn value_at(&self, p: DVec3) -> f64 {
         let p = p.clamp(DVec3::splat(-1.0), DVec3::ONE);
-        let leaf = self.mesh.locate(p);
-        let anchors = self.mesh.anchors();
-        let (mut n, mut d) = (0.0, 0.0);
-        for &i in self.mesh.leaf_anchors(leaf) {
-            let a = &anchors[i as usize];
-            let x = a.pieces[0].value(p.x);
-            if x == 0.0 {
-                continue;
-            }
-            let b = x * a.pieces[1].value(p.y) * a.pieces[2].value(p.z);
-            n += self.coeffs[i as usize] * b;
-            d += b;
-        }
-        if d > 0.0 { n / d } else { 0.0 }
+        SCRATCH.with(|s| s.borrow_mut().value(&self.mesh, &self.coeffs, p))
     }
 
     /// Reference evaluation: the sums over **all** anchors (O(n) per point).
