@@ -82,7 +82,7 @@
 //!   release, so the test `sphere_becomes_a_genus_three_holed_cube` that
 //!   asserts it is `#[ignore]`d for its run time only and passes with
 //!   `cargo test --release -p isomorph-tspline --test sphere_holed_cube --
-//!   --ignored` (59 s). At depth 4 with margin 0.5: 2569 coefficients,
+//!   --ignored` (59 s before the last speed-up). At depth 4 with margin 0.5: 2569 coefficients,
 //!   stalled after 22 steps, one component, still genus 0.
 //!   Tried and rejected (no gain, or the sphere → torus test lost its hole):
 //!   the level-set equation `ḟ = v|∇f|` at every leaf centre (creates voids
@@ -97,37 +97,40 @@
 //!
 //! # Performance (quiet machine, 2 cores)
 //! `cargo bench -p isomorph-benches --bench tspline -- step/`: one step with
-//! 499 / 997 / 1992 / 4002 coefficients takes 125 / 135 / 555 / 634 ms
-//! (not linear in `n`: the cost follows the number of zero-set samples,
+//! 499 / 997 / 1992 / 4002 coefficients takes 75 / 89 / 354 / 477 ms (not
+//! linear in `n`: the cost follows the number of zero-set samples,
 //! ∝ area / h_min², and the T-meshes of this bench reach a finer cell at
-//! 2000). The sphere → holed cube morph at depth 4 (4794 coefficients, 23
-//! steps, projection frames; it stays genus 0) took 12.1 s in one run,
-//! about 0.46 s per step; the depth-5 morph that reaches genus 3 (the
-//! settings of `morph/sphere_holed_cube` and of the test) took 54 s without
-//! and 59 s with projection frames. The issue's 2 s target is **not met**.
-//! Bunny → petal torus with the settings of `morph/bunny_petal_torus`
-//! (depth 5, 7129 coefficients): converged after 20 steps in 24.7 s (one
-//! run), the last level set genus 1 with one component; the issue's target
-//! is 10 s with about 2500 coefficients — **not met** either.
+//! 2000). Whole morphs, one run each (scratch programs with the benches'
+//! settings):
 //!
-//! What made it faster (same algorithm, same results up to round-off):
+//! | morph | coefficients | steps | time | result | issue target |
+//! |---|---|---|---|---|---|
+//! | sphere → holed cube, depth 5, margin 0.5 (`morph/sphere_holed_cube`, the test) | 14744 | 15 | 47 s without projection frames | converged, genus 3 | 2 s — **not met** |
+//! | sphere → holed cube, depth 4, margin 0.2 | 4794 | 23 | 9.9 s | stalled, genus 0 + strays | |
+//! | bunny → petal torus, depth 5 (`morph/bunny_petal_torus`) | 7129 | 20 | 18.8 s with projection frames | converged, genus 1, one component | 10 s — **not met** |
+//!
+//! What made it faster this session (same algorithm, same results up to
+//! round-off; the depth-4 holed cube took 16.1 s before):
 //! - the univariate B-splines are precomputed per anchor as four polynomial
 //!   pieces (span lookup + Horner) instead of Cox–de Boor with ten
 //!   divisions per call — they were 61 % of a step's profile;
+//! - each leaf keeps its distinct univariate factors per axis (a uniform
+//!   region has 4 per axis for 64 anchors); a point evaluates those once
+//!   and forms the anchors' products;
 //! - the inputs' exact signed distances are sampled once on a lattice four
 //!   times finer than the finest cell and interpolated trilinearly (the
 //!   BVH and winding-number queries were about 15 % of the morph);
 //! - the least-squares normal equations are assembled from dense per-leaf
 //!   Gram matrices (the per-row assembly loop was 26 % of the profile).
 //!
-//! A `perf` profile of the morph now puts 30 % in evaluating a leaf's
-//! blending functions with their Hessians (Newton projection of every
-//! marching-cubes vertex, three band rows per sample, the two-sided error),
-//! about 18 % in the sparse Cholesky (supernodal kernels and a fresh AMD
-//! ordering each step), 8 % in the zero-set lattice values and 7 % in the
-//! Gram matrices. Next steps, not done: evaluate each distinct knot vector
-//! once per point (anchors of a leaf share them), value-and-gradient-only
-//! Newton steps, and a symbolic factorization reused across steps.
+//! A `perf` profile of the depth-5 holed cube now puts about 60 % in the
+//! sparse Cholesky factorization of the normal matrix (supernodal dense
+//! kernels; a fresh AMD ordering each step adds 2–3 %) and under 10 % in
+//! the blending functions. Next steps, not done: a solver that exploits
+//! the small change of the system from step to step (warm-started
+//! preconditioned CG, or a symbolic factorization reused across steps),
+//! and fewer degrees of freedom where the surfaces are flat (the paper
+//! needs 651 coefficients for this example).
 //! - Not implemented: marching triangulation (frames are polygonized by the
 //!   shared marching cubes).
 //!
