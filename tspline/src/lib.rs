@@ -82,7 +82,7 @@
 //!   release, so the test `sphere_becomes_a_genus_three_holed_cube` that
 //!   asserts it is `#[ignore]`d for its run time only and passes with
 //!   `cargo test --release -p isomorph-tspline --test sphere_holed_cube --
-//!   --ignored` (59 s before the last speed-up). At depth 4 with margin 0.5: 2569 coefficients,
+//!   --ignored` (45 s). At depth 4 with margin 0.5: 2569 coefficients,
 //!   stalled after 22 steps, one component, still genus 0.
 //!   Tried and rejected (no gain, or the sphere → torus test lost its hole):
 //!   the level-set equation `ḟ = v|∇f|` at every leaf centre (creates voids
