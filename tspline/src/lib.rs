@@ -80,7 +80,7 @@
 //!   14744 coefficients, converged after 15 steps, genus 3, one component,
 //!   mean surface distance 0.0079 (Hausdorff 0.063); about a minute in
 //!   release, so the test `sphere_becomes_a_genus_three_holed_cube` that
-//!   asserts it is `#[ignore]`d for its run time only and passes with
+//!   asserts it is ignored by default for its run time only and passes with
 //!   `cargo test --release -p isomorph-tspline --test sphere_holed_cube --
 //!   --ignored` (45 s). At depth 4 with margin 0.5: 2569 coefficients,
 //!   stalled after 22 steps, one component, still genus 0.
