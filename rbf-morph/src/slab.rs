@@ -87,13 +87,17 @@ pub(crate) fn find_split(positions: &[f64], dim: usize) -> Option<Split> {
     Some(Split { order, first })
 }
 
+/// Column ranges of [`symmetric_matvec`]: a fixed count, so that the
+/// summation order (and the result) does not depend on the thread count.
+const MATVEC_PARTS: usize = 8;
+
 /// `y ← S x` for the symmetric `S` given by its lower triangle (columns
 /// contiguous): one pass over the triangle, each column contributing a dot
-/// product and an axpy, in parallel over column ranges of equal area with
-/// one accumulator each, summed in a fixed order.
+/// product and an axpy, in parallel over [`MATVEC_PARTS`] column ranges of
+/// equal area with one accumulator each, summed in a fixed order.
 fn symmetric_matvec(s: MatRef<'_, f64>, x: &[f64], y: &mut [f64]) {
     let k = x.len();
-    let parts = 4 * rayon::current_num_threads();
+    let parts = MATVEC_PARTS;
     // Column j holds k − j entries: split the triangle into equal areas.
     let total = (k * (k + 1) / 2) as f64;
     let mut bounds = vec![0usize];
