@@ -69,12 +69,14 @@ pub struct EvolveSettings {
     /// The speed function.
     pub speed: Speed,
     /// Morph step size `h` of `Δτ = min(1, h / max |v|)` (domain units);
-    /// `None` uses the finest cell size.
+    /// `None` uses half the finest cell size.
     pub step: Option<f64>,
     /// Step cap.
     pub max_steps: usize,
     /// Stop when the RMS distance between the zero set and the target
-    /// (both ways) is below this (domain units); `None` uses half the
+    /// (both ways) is below this (domain units) and no zero-set sample is
+    /// farther than half the finest cell from the target (so that pinched-off
+    /// pieces vanish before the morph stops); `None` uses a tenth of the
     /// finest cell size.
     pub tolerance: Option<f64>,
     /// Weight `ω_D` of the distance-field constraint.
@@ -102,7 +104,7 @@ impl Default for EvolveSettings {
             step: None,
             max_steps: 200,
             tolerance: None,
-            distance_weight: 0.1,
+            distance_weight: 0.001,
             relaxation: 1.0,
             tikhonov: 1e-2,
             far_field_weight: 0.1,
@@ -113,6 +115,12 @@ impl Default for EvolveSettings {
 }
 
 impl EvolveSettings {
+    /// The morph step size `h` on a T-mesh whose finest cell is `finest`
+    /// (domain units).
+    pub fn step_size(&self, finest: f64) -> f64 {
+        self.step.unwrap_or(0.5 * finest)
+    }
+
     /// Checks the ranges.
     ///
     /// # Errors
@@ -166,6 +174,8 @@ pub struct StepStats {
     pub dt: f64,
     /// RMS of `d_B` over the zero-set samples before the step.
     pub rms_to_target: f64,
+    /// Largest `|d_B|` over the zero-set samples before the step.
+    pub max_to_target: f64,
     /// RMS first-order distance `|f|/|∇f|` of the target samples to the zero
     /// set before the step.
     pub rms_from_target: f64,
@@ -214,8 +224,8 @@ pub fn evolve<D: Fn(DVec3) -> f64 + Sync>(
 ) -> Result<Evolution, TsplineError> {
     settings.validate()?;
     let h_min = initial.mesh().finest_cell();
-    let h = settings.step.unwrap_or(h_min);
-    let tol = settings.tolerance.unwrap_or(0.5 * h_min);
+    let h = settings.step_size(h_min);
+    let tol = settings.tolerance.unwrap_or(0.1 * h_min);
     let mut spline = initial.clone();
     let mut frames = vec![spline.coefficients().to_vec()];
     let mut steps: Vec<StepStats> = Vec::new();
@@ -230,9 +240,10 @@ pub fn evolve<D: Fn(DVec3) -> f64 + Sync>(
         }
         let d_b: Vec<f64> = samples.par_iter().map(|s| target(s.p)).collect();
         let rms_to = (d_b.iter().map(|d| d * d).sum::<f64>() / d_b.len() as f64).sqrt();
+        let max_to = d_b.iter().fold(0.0f64, |m, d| m.max(d.abs()));
         let rms_from = rms_first_order(&spline, target_surface);
         let error = rms_to.max(rms_from);
-        if error < tol {
+        if error < tol && max_to < 0.5 * h_min {
             final_error = error;
             break Outcome::Converged;
         }
@@ -263,6 +274,7 @@ pub fn evolve<D: Fn(DVec3) -> f64 + Sync>(
             max_speed,
             dt,
             rms_to_target: rms_to,
+            max_to_target: max_to,
             rms_from_target: rms_from,
             gradient_range,
             nonzeros,

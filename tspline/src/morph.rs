@@ -278,7 +278,7 @@ pub fn morph(
     // The final refinement may have refined the T-mesh; it stays fixed from here on.
     let mesh = initial.mesh().clone();
     let evolution = evolve(&initial, db, &samples_b, &settings.evolve, progress)?;
-    let h = settings.evolve.step.unwrap_or(mesh.finest_cell());
+    let h = settings.evolve.step_size(mesh.finest_cell());
     let mut frames = Vec::new();
     let (mut source_frames, mut target_frames) = (0, 0);
     if settings.projection_frames {

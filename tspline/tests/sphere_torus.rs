@@ -34,11 +34,10 @@ fn sphere_becomes_a_torus() {
     assert_eq!(last.genus(), Some(1), "the final level set is a torus ({:?})", ev.outcome);
     let d = surface_distance(&last, &target, 2000).unwrap();
     assert!(d.mean < 0.05, "{d:?} {:?} {} components", ev.outcome, last.connected_components());
-    // Known issue (crate docs): the mostly-distance robust speed pinches off
-    // two small blobs near the sphere's poles (as Breen's speed does in the
-    // paper's Fig. 2) and the least squares does not remove them on this
-    // coarse mesh. Measured: 3 components, the torus plus two blobs.
-    assert!(last.connected_components() <= 3, "{} components", last.connected_components());
+    // No piece pinched off on the way stays behind: the evolution only
+    // converges when every zero-set sample is near the target.
+    assert_eq!(last.connected_components(), 1);
+    assert_eq!(ev.outcome, isomorph_tspline::Outcome::Converged);
     // The projection frames end exactly at the inputs.
     let close = |a: &[glam::Vec3], b: &[glam::Vec3]| {
         a.len() == b.len() && a.iter().zip(b).all(|(p, q)| (*p - *q).length() < 1e-5)
