@@ -5,7 +5,7 @@
 use isomorph_common::marching_cubes::polygonize;
 use isomorph_common::mesh::distance::surface_distance;
 use isomorph_common::{Aabb, Morph, Shape};
-use isomorph_tspline::{MorphSettings, Outcome, Speed, demo, morph};
+use isomorph_tspline::{Outcome, Speed, demo, morph};
 use std::ops::ControlFlow;
 
 #[test]
