@@ -28,15 +28,26 @@ pub struct DemoArgs {
 pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
     // Ball → C overlaps as modelled (Breen Fig. 4); the mug is placed on the
     // chain by moment alignment so that every link overlaps it.
+    // The T-spline morphs: sphere → torus at depth 4, and Yang & Jüttler's
+    // Example 2, sphere → holed cube, with `isomorph_tspline::demo::
+    // holed_cube_settings` (depth 3, margin 0.5).
     let demos = [
-        (Method::Baseline, "ball", "c-shape", Align::None, "baseline_ball_to_c"),
-        (Method::LevelSet, "ball", "c-shape", Align::None, "level_set_ball_to_c"),
-        (Method::LevelSet, "mug", "chain", Align::Auto, "level_set_mug_to_chain"),
-        (Method::Blobtree, "rook", "queen", Align::None, "blobtree_rook_to_queen"),
-        (Method::Rbf, "sphere", "torus", Align::None, "rbf_sphere_to_torus"),
-        (Method::Tspline, "sphere", "torus", Align::None, "tspline_sphere_to_torus"),
+        (Method::Baseline, "ball", "c-shape", Align::None, "baseline_ball_to_c", None),
+        (Method::LevelSet, "ball", "c-shape", Align::None, "level_set_ball_to_c", None),
+        (Method::LevelSet, "mug", "chain", Align::Auto, "level_set_mug_to_chain", None),
+        (Method::Blobtree, "rook", "queen", Align::None, "blobtree_rook_to_queen", None),
+        (Method::Rbf, "sphere", "torus", Align::None, "rbf_sphere_to_torus", None),
+        (Method::Tspline, "sphere", "torus", Align::None, "tspline_sphere_to_torus", Some((4, None))),
+        (
+            Method::Tspline,
+            "sphere",
+            "holed-cube",
+            Align::None,
+            "tspline_sphere_to_holed_cube",
+            Some((3, Some(0.5))),
+        ),
     ];
-    for (method, source, target, align, folder) in demos {
+    for (method, source, target, align, folder, tspline) in demos {
         let morph_args = MorphArgs {
             method,
             source: source.into(),
@@ -54,10 +65,11 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
             points: 300,
             separation: 1.0,
             kernel: KernelArg::Tps,
-            speed: SpeedArg::Robust,
+            speed: Some(SpeedArg::Robust),
             nt: None,
-            depth: Some(4),
+            depth: tspline.map(|(depth, _)| depth),
             step: None,
+            margin: tspline.and_then(|(_, margin)| margin),
             refine: None,
             refine_rounds: 3,
         };

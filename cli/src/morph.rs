@@ -58,7 +58,7 @@ pub struct MorphArgs {
     #[arg(long, value_enum, default_value_t = Method::Baseline)]
     pub method: Method,
     /// Source: a built-in shape (sphere, torus, ball, c-shape, mug, chain,
-    /// cube, bunny) or a mesh file (.obj, .ply, .stl; closed and outward
+    /// cube, holed-cube, bunny) or a mesh file (.obj, .ply, .stl; closed and outward
     /// oriented); for `--method blobtree`, a BlobTree scene (.ron, .json or a
     /// built-in scene such as rook).
     #[arg(long)]
@@ -83,10 +83,13 @@ pub struct MorphArgs {
     /// Level-set only: the solver.
     #[arg(long, value_enum, default_value_t = Solver::Sparse)]
     pub solver: Solver,
-    /// Level-set only: weight of a mean-curvature term that smooths the
-    /// evolving surface away from the target (Yang & Jüttler's weighting).
-    #[arg(long, value_parser = parse_weight)]
-    pub curvature: Option<f32>,
+    /// The curvature term: `on`, `off` or (level set only) a weight. Level
+    /// set: a mean-curvature term that smooths the evolving surface away
+    /// from the target (Yang & Jüttler's weighting), `on` = weight 1.
+    /// T-spline: `on` is the paper's speed (eq. 8, `--speed paper`), `off`
+    /// the distance speed of its Fig. 2 (`--speed distance`).
+    #[arg(long, value_parser = parse_curvature, conflicts_with = "speed")]
+    pub curvature: Option<CurvatureArg>,
     /// RBF only: surface points per shape (each a boundary and a normal
     /// constraint).
     #[arg(long, default_value_t = 400, value_parser = clap::value_parser!(u32).range(4..=20_000))]
@@ -97,9 +100,9 @@ pub struct MorphArgs {
     /// RBF only: the radial kernel.
     #[arg(long, value_enum, default_value_t = KernelArg::Tps)]
     pub kernel: KernelArg,
-    /// T-spline only: the evolution speed.
-    #[arg(long, value_enum, default_value_t = SpeedArg::Robust)]
-    pub speed: SpeedArg,
+    /// T-spline only: the evolution speed [default: robust].
+    #[arg(long, value_enum)]
+    pub speed: Option<SpeedArg>,
     /// T-spline only: largest number of surface samples per octree cell.
     #[arg(long)]
     pub nt: Option<usize>,
@@ -109,6 +112,10 @@ pub struct MorphArgs {
     /// T-spline only: morph step size h (units of the [−1, 1]³ domain).
     #[arg(long)]
     pub step: Option<f64>,
+    /// T-spline only: empty margin around the shapes in the [−1, 1]³
+    /// domain, as a fraction of their half size [default: 0.2].
+    #[arg(long)]
+    pub margin: Option<f64>,
     /// T-spline only: the paper's final refinement of the initial fit: split
     /// the octree cells where the fitted surface is farther than this from
     /// the source (units of the [−1, 1]³ domain) and refit.
@@ -141,9 +148,41 @@ fn parse_separation(s: &str) -> Result<f32, String> {
 }
 
 /// Accepts a finite weight in `[0, 100]`.
-fn parse_weight(s: &str) -> Result<f32, String> {
-    let w: f32 = s.parse().map_err(|e| format!("{e}"))?;
-    if (0.0..=100.0).contains(&w) { Ok(w) } else { Err(format!("{w} is not in [0, 100]")) }
+/// The value of `--curvature`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum CurvatureArg {
+    /// No curvature term.
+    Off,
+    /// The method's own curvature term (level set: weight 1).
+    On,
+    /// Level set only: this weight (in `[0, 100]`).
+    Weight(f32),
+}
+
+impl CurvatureArg {
+    /// The level-set weight (`None` when off).
+    pub fn weight(self) -> Option<f32> {
+        match self {
+            CurvatureArg::Off => None,
+            CurvatureArg::On => Some(1.0),
+            CurvatureArg::Weight(w) => Some(w),
+        }
+    }
+}
+
+fn parse_curvature(s: &str) -> Result<CurvatureArg, String> {
+    match s {
+        "on" => Ok(CurvatureArg::On),
+        "off" => Ok(CurvatureArg::Off),
+        _ => {
+            let w: f32 = s.parse().map_err(|e| format!("not on, off or a weight: {e}"))?;
+            if (0.0..=100.0).contains(&w) {
+                Ok(CurvatureArg::Weight(w))
+            } else {
+                Err(format!("{w} is not in [0, 100]"))
+            }
+        }
+    }
 }
 
 /// Runs `isomorph morph`.
@@ -192,7 +231,7 @@ pub fn morph(args: &MorphArgs) -> anyhow::Result<Report> {
                 align: args.align.clone(),
                 solver: args.solver,
                 res: args.res,
-                curvature: args.curvature,
+                curvature: args.curvature.and_then(CurvatureArg::weight),
             };
             export(&level_set::build(&source, &target, &options)?, &settings, &label)
         }
@@ -209,7 +248,16 @@ pub fn morph(args: &MorphArgs) -> anyhow::Result<Report> {
                 nt: args.nt,
                 depth: args.depth,
                 step: args.step,
-                speed: args.speed,
+                margin: args.margin,
+                speed: match (args.speed, args.curvature) {
+                    (Some(speed), _) => speed,
+                    (None, None) => SpeedArg::Robust,
+                    (None, Some(CurvatureArg::On)) => SpeedArg::Paper,
+                    (None, Some(CurvatureArg::Off)) => SpeedArg::Distance,
+                    (None, Some(CurvatureArg::Weight(_))) => {
+                        bail!("the T-spline morph takes --curvature on or off, not a weight")
+                    }
+                },
                 refine: args.refine.map(|tolerance| (tolerance, args.refine_rounds)),
             };
             export(&tspline::build(&source, &target, options)?, &settings, &label)

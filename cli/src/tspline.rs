@@ -30,6 +30,9 @@ pub struct Options {
     pub depth: Option<u32>,
     /// Morph step size `h` (domain units of `[−1, 1]³`).
     pub step: Option<f64>,
+    /// Empty margin around the shapes in the domain (fraction of their half
+    /// size).
+    pub margin: Option<f64>,
     /// The speed function.
     pub speed: SpeedArg,
     /// The final refinement of the initial fit: surface error tolerance
@@ -54,6 +57,9 @@ pub fn build(source: &Input, target: &Input, options: Options) -> anyhow::Result
         settings.tmesh.max_depth = depth;
     }
     settings.evolve.step = options.step;
+    if let Some(margin) = options.margin {
+        settings.margin = margin;
+    }
     settings.fit.refinement =
         options.refine.map(|(tolerance, rounds)| Refinement { tolerance, max_rounds: rounds as usize });
     // The finest cell of the T-mesh over [−1, 1]³ is 2 / 2^depth.

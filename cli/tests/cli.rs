@@ -73,6 +73,13 @@ fn demo_writes_frames_sheet_and_report() {
             assert!(r["endpoints"][end]["mean_voxels"].as_f64().unwrap() < 0.5, "{dir} {end}: {r}");
         }
     }
+    // Yang & Jüttler's Example 2: the sphere becomes the genus-3 holed cube.
+    let holed: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("tspline_sphere_to_holed_cube/report.json")).unwrap())
+            .unwrap();
+    let frames = holed["frames"].as_array().unwrap();
+    assert_eq!(frames[0]["genus"], 0, "{holed}");
+    assert_eq!(frames[frames.len() - 1]["genus"], 3, "{holed}");
     for f in ["frame_000.png", "contact_sheet.png", "spacetime.ply"] {
         assert!(out.join("rbf_x_to_o").join(f).is_file(), "missing rbf_x_to_o/{f}");
     }
@@ -149,6 +156,22 @@ fn bad_input_is_one_clear_line_and_nonzero_exit() {
     ]);
     assert!(!o.status.success(), "a zero refinement tolerance is rejected");
     assert!(String::from_utf8_lossy(&o.stderr).contains("refinement tolerance"));
+
+    // `--curvature` is on, off or a weight; the T-spline morph takes on or
+    // off (its speed), and not together with `--speed`.
+    let tspline = ["morph", "--method", "tspline", "--source", "sphere", "--target", "torus"];
+    let o = isomorph(&[&tspline[..], &["--curvature", "2"]].concat());
+    assert!(!o.status.success());
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("on or off"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let o = isomorph(&[&tspline[..], &["--curvature", "on", "--speed", "paper"]].concat());
+    assert!(!o.status.success(), "--curvature and --speed conflict");
+    let o = isomorph(&[&tspline[..], &["--curvature", "sometimes"]].concat());
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("not on, off or a weight"));
 }
 
 /// Splits `.npy` bytes into the header text and the f32 values.

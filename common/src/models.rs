@@ -9,7 +9,7 @@ use glam::{Quat, Vec3};
 use std::f32::consts::FRAC_PI_2;
 
 /// Names accepted by [`by_name`], in display order.
-pub const NAMES: [&str; 7] = ["sphere", "torus", "ball", "c-shape", "mug", "chain", "cube"];
+pub const NAMES: [&str; 8] = ["sphere", "torus", "ball", "c-shape", "mug", "chain", "cube", "holed-cube"];
 
 /// The built-in model called `name` (see [`NAMES`]), or `None`.
 pub fn by_name(name: &str) -> Option<Shape> {
@@ -21,6 +21,7 @@ pub fn by_name(name: &str) -> Option<Shape> {
         "mug" => mug(),
         "chain" => chain(),
         "cube" => cube(),
+        "holed-cube" => holed_cube(),
         _ => return None,
     })
 }
@@ -38,6 +39,19 @@ pub fn torus() -> Shape {
 /// A rounded cube of half edge 0.3.
 pub fn cube() -> Shape {
     Shape::rounded_cuboid(Vec3::splat(0.3), 0.04)
+}
+
+/// Yang & Jüttler's Example 2 target (Fig. 5): a cube of half edge 0.3
+/// with three cylindrical holes of radius 0.08, one along each axis, offset
+/// from the centre so that they do not meet (three crossing holes would
+/// make genus 5): genus 3.
+pub fn holed_cube() -> Shape {
+    let drill =
+        |rotation: Quat, offset: Vec3| Shape::cylinder(0.08, 0.5).rotated(rotation).translated(offset);
+    Shape::cuboid(Vec3::splat(0.3))
+        .subtract(drill(Quat::IDENTITY, Vec3::new(0.12, -0.12, 0.0)))
+        .subtract(drill(Quat::from_rotation_y(FRAC_PI_2), Vec3::new(0.0, 0.12, -0.12)))
+        .subtract(drill(Quat::from_rotation_x(FRAC_PI_2), Vec3::new(-0.12, 0.0, 0.12)))
 }
 
 /// Breen's ball (Fig. 4): a small sphere lying mostly inside the left half of

@@ -3,22 +3,13 @@
 
 use crate::evolution::Speed;
 use crate::morph::MorphSettings;
-use glam::{DVec3, Quat, Vec2, Vec3};
+use glam::{DVec3, Vec2, Vec3};
 use isomorph_common::{Shape, TriMesh};
-use std::f32::consts::{FRAC_PI_2, TAU};
+use std::f32::consts::TAU;
 
-/// Example 2's target (Fig. 5): a cube of half edge 0.3 with three
-/// cylindrical holes of radius 0.08, one along each axis, offset from the
-/// centre so that they do not meet (three crossing holes would make genus
-/// 5): genus 3, inside `[−0.5, 0.5]³`.
-pub fn holed_cube() -> Shape {
-    let drill =
-        |rotation: Quat, offset: Vec3| Shape::cylinder(0.08, 0.5).rotated(rotation).translated(offset);
-    Shape::cuboid(Vec3::splat(0.3))
-        .subtract(drill(Quat::IDENTITY, Vec3::new(0.12, -0.12, 0.0)))
-        .subtract(drill(Quat::from_rotation_y(FRAC_PI_2), Vec3::new(0.0, 0.12, -0.12)))
-        .subtract(drill(Quat::from_rotation_x(FRAC_PI_2), Vec3::new(-0.12, 0.0, 0.12)))
-}
+/// Example 2's target (Fig. 5), genus 3, inside `[−0.5, 0.5]³` (the shared
+/// built-in model `holed-cube`).
+pub use isomorph_common::models::holed_cube;
 
 /// The settings that morph a sphere of radius 0.3 into [`holed_cube`]
 /// (tested in `tests/sphere_holed_cube.rs`, benched as
