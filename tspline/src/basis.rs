@@ -68,8 +68,32 @@ impl LocalBasis {
         }
     }
 
-    /// Evaluates every blending function of the leaf containing `p`.
+    /// Evaluates every blending function of the leaf containing `p` with
+    /// its gradient (`b`, `db`, `d`, `dd`; no Hessians).
     pub fn at(&mut self, mesh: &TMesh, p: DVec3) {
+        self.factors_at(mesh, p);
+        self.b.clear();
+        self.db.clear();
+        self.hb.clear();
+        self.d = 0.0;
+        self.dd = DVec3::ZERO;
+        self.hd = [0.0; 6];
+        let [fx, fy, fz] = &self.factors;
+        for index in &mesh.leaf_factors(self.leaf).index {
+            let ([x0, x1, _], [y0, y1, _], [z0, z1, _]) =
+                (fx[index[0] as usize], fy[index[1] as usize], fz[index[2] as usize]);
+            let b = x0 * y0 * z0;
+            let g = DVec3::new(x1 * y0 * z0, x0 * y1 * z0, x0 * y0 * z1);
+            self.b.push(b);
+            self.db.push(g);
+            self.d += b;
+            self.dd += g;
+        }
+    }
+
+    /// As [`Self::at`], plus the Hessians `hb` and `hd` that
+    /// [`Self::combine`] needs.
+    pub fn at_with_hessians(&mut self, mesh: &TMesh, p: DVec3) {
         self.factors_at(mesh, p);
         self.b.clear();
         self.db.clear();
@@ -124,9 +148,26 @@ impl LocalBasis {
         true
     }
 
-    /// Value, gradient and Hessian of `f = Σ c_i B_i / D` for the
-    /// coefficients of the leaf's anchors, `coeff(i)` by global index.
+    /// Value and gradient of `f = Σ c_i B_i / D` (after [`Self::at`] or
+    /// [`Self::at_with_hessians`]), `coeffs` by global anchor index.
+    pub fn value_gradient(&self, mesh: &TMesh, coeffs: &[f64]) -> (f64, DVec3) {
+        if self.d <= 0.0 {
+            return (0.0, DVec3::ZERO);
+        }
+        let (mut n, mut dn) = (0.0, DVec3::ZERO);
+        for ((&i, b), db) in mesh.leaf_anchors(self.leaf).iter().zip(&self.b).zip(&self.db) {
+            let c = coeffs[i as usize];
+            n += c * b;
+            dn += c * *db;
+        }
+        let f = n / self.d;
+        (f, (dn - f * self.dd) / self.d)
+    }
+
+    /// Value, gradient and Hessian of `f = Σ c_i B_i / D` (after
+    /// [`Self::at_with_hessians`]), `coeffs` by global anchor index.
     pub fn combine(&self, mesh: &TMesh, coeffs: &[f64]) -> Eval {
+        debug_assert_eq!(self.hb.len(), self.b.len(), "combine needs at_with_hessians");
         if self.d <= 0.0 {
             return Eval::default();
         }
@@ -143,6 +184,54 @@ impl LocalBasis {
             }
         }
         rational_derivatives(n, dn, &hn, self.d, self.dd, &self.hd)
+    }
+}
+
+/// Values of `f` along a lattice row parallel to x (fixed `y`, `z`) inside
+/// one leaf: the anchors' `c_i N(y) N(z)` and `N(y) N(z)` are summed per
+/// distinct x factor once per row and leaf, so a point costs one univariate
+/// evaluation per distinct x factor (about four) instead of one product per
+/// anchor (64 or more).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct RowValues {
+    /// The leaf and `(y, z)` the sums belong to.
+    key: Option<(usize, f64, f64)>,
+    /// `Σ c_i N(y) N(z)` per distinct x factor.
+    num: Vec<f64>,
+    /// `Σ N(y) N(z)` per distinct x factor.
+    den: Vec<f64>,
+    /// The leaf's distinct y and z factors at `(y, z)`.
+    fy: Vec<f64>,
+    fz: Vec<f64>,
+}
+
+impl RowValues {
+    /// `f(p)` for `p` in `leaf` (as [`LocalBasis::value`], to round-off).
+    pub fn value(&mut self, mesh: &TMesh, coeffs: &[f64], leaf: usize, p: DVec3) -> f64 {
+        let factors = mesh.leaf_factors(leaf);
+        if self.key != Some((leaf, p.y, p.z)) {
+            self.key = Some((leaf, p.y, p.z));
+            self.fy.clear();
+            self.fy.extend(factors.axes[1].iter().map(|pc| pc.value(p.y)));
+            self.fz.clear();
+            self.fz.extend(factors.axes[2].iter().map(|pc| pc.value(p.z)));
+            self.num.clear();
+            self.num.resize(factors.axes[0].len(), 0.0);
+            self.den.clear();
+            self.den.resize(factors.axes[0].len(), 0.0);
+            for (&i, index) in mesh.leaf_anchors(leaf).iter().zip(&factors.index) {
+                let yz = self.fy[index[1] as usize] * self.fz[index[2] as usize];
+                self.num[index[0] as usize] += coeffs[i as usize] * yz;
+                self.den[index[0] as usize] += yz;
+            }
+        }
+        let (mut n, mut d) = (0.0, 0.0);
+        for ((pc, num), den) in factors.axes[0].iter().zip(&self.num).zip(&self.den) {
+            let x = pc.value(p.x);
+            n += x * num;
+            d += x * den;
+        }
+        if d > 0.0 { n / d } else { 0.0 }
     }
 }
 

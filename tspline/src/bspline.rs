@@ -66,6 +66,19 @@ impl CubicPieces {
         Self { knots: *knots, coeffs }
     }
 
+    /// The value alone at `x` (zero outside `[k0, k4)`).
+    #[inline]
+    pub(crate) fn value(&self, x: f64) -> f64 {
+        let k = &self.knots;
+        if !(x >= k[0] && x < k[4]) {
+            return 0.0;
+        }
+        let span = usize::from(x >= k[1]) + usize::from(x >= k[2]) + usize::from(x >= k[3]);
+        let [c0, c1, c2, c3] = self.coeffs[span];
+        let u = x - k[span];
+        ((c3 * u + c2) * u + c1) * u + c0
+    }
+
     /// Value, first and second derivative at `x` (zero outside `[k0, k4)`),
     /// as [`cubic`] to round-off.
     #[inline]

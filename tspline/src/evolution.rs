@@ -231,6 +231,9 @@ pub fn evolve<D: Fn(DVec3) -> f64 + Sync>(
     let mut steps: Vec<StepStats> = Vec::new();
     let mut best = f64::INFINITY;
     let mut best_step = 0;
+    // The normal matrix keeps its sparsity pattern while the same leaves
+    // hold rows, so its symbolic factorization is reused.
+    let mut symbolic = lsq::SymbolicCache::default();
     let final_error;
     let outcome = loop {
         let samples = zero_set_samples(&spline, settings.samples_per_cell)?;
@@ -260,7 +263,7 @@ pub fn evolve<D: Fn(DVec3) -> f64 + Sync>(
         }
         let speeds: Vec<f64> =
             samples.iter().zip(&d_b).map(|(s, &d)| speed(settings.speed, d, s, h_min)).collect();
-        let (cdot, nonzeros) = velocity(&spline, &samples, &speeds, h_min, settings)?;
+        let (cdot, nonzeros) = velocity(&spline, &samples, &speeds, h_min, settings, &mut symbolic)?;
         let max_speed = speeds.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let dt = if max_speed > 0.0 { (h / max_speed).min(1.0) } else { 1.0 };
         let c: Vec<f64> = spline.coefficients().iter().zip(&cdot).map(|(c, d)| c + dt * d).collect();
@@ -331,6 +334,7 @@ fn velocity(
     speeds: &[f64],
     h_min: f64,
     settings: &EvolveSettings,
+    symbolic: &mut lsq::SymbolicCache,
 ) -> Result<(Vec<f64>, usize), TsplineError> {
     let mesh = spline.mesh();
     let m = samples.len() as f64;
@@ -362,8 +366,7 @@ fn velocity(
                         if !local.rational(r, dr) {
                             continue;
                         }
-                        let e = local.combine(mesh, spline.coefficients());
-                        let gq = e.gradient;
+                        let (_, gq) = local.value_gradient(mesh, spline.coefficients());
                         let entries = dr.iter().map(|d| 2.0 * gq.dot(*d)).collect();
                         let rhs = -(gq.length_squared() - 1.0) / tau;
                         out.push(Row { leaf: local.leaf, entries, weight: w_dist, rhs });
@@ -398,7 +401,7 @@ fn velocity(
         }
     }
     let zero = vec![0.0; mesh.anchor_count()];
-    let (x, stats) = lsq::solve(mesh, &blocks, settings.tikhonov, &zero, "evolution")?;
+    let (x, stats) = lsq::solve(mesh, &blocks, settings.tikhonov, &zero, "evolution", symbolic)?;
     Ok((x, stats.nonzeros))
 }
 

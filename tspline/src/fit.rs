@@ -219,7 +219,8 @@ fn fit_once<D: Fn(DVec3) -> f64 + Sync>(
             if d.is_finite() { d } else { 0.0 }
         })
         .collect();
-    let (coeffs, stats) = lsq::solve(&mesh, &blocks, settings.tikhonov, &reference, "fit")?;
+    let (coeffs, stats) =
+        lsq::solve(&mesh, &blocks, settings.tikhonov, &reference, "fit", &mut Default::default())?;
     Ok((TSpline::new(mesh, coeffs)?, FitStats { samples, nonzeros: stats.nonzeros }))
 }
 

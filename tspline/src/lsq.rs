@@ -6,9 +6,12 @@
 
 use crate::error::TsplineError;
 use crate::tmesh::TMesh;
-use faer::Side;
+use faer::linalg::matmul::matmul;
 use faer::prelude::*;
+use faer::sparse::linalg::LltError;
+use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use faer::{Accum, MatMut, MatRef, Par, Side};
 use rayon::prelude::*;
 
 /// The rows of one leaf: `rows` is row-major with one entry per anchor of
@@ -34,6 +37,39 @@ impl LeafRows {
     }
 }
 
+/// The symbolic Cholesky factorization (fill-reducing ordering and
+/// supernodal structure) of the last normal matrix, reused while the
+/// sparsity pattern stays the same, as it does from one evolution step to
+/// the next.
+#[derive(Debug, Default)]
+pub(crate) struct SymbolicCache {
+    last: Option<(Vec<usize>, Vec<usize>, SymbolicLlt<usize>)>,
+}
+
+impl SymbolicCache {
+    /// The Cholesky factorization of the lower triangle `(col_ptr, row_idx,
+    /// vals)`, with the symbolic part reused when the pattern is the last
+    /// one's.
+    fn factor(
+        &mut self,
+        col_ptr: Vec<usize>,
+        row_idx: Vec<usize>,
+        vals: &[f64],
+    ) -> Result<Llt<usize, f64>, LltError> {
+        let n = col_ptr.len() - 1;
+        let same = matches!(&self.last, Some((c, r, _)) if *c == col_ptr && *r == row_idx);
+        if !same {
+            let pattern = SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, &row_idx);
+            let symbolic = SymbolicLlt::try_new(pattern, Side::Lower)?;
+            self.last = Some((col_ptr, row_idx, symbolic));
+        }
+        let Some((col_ptr, row_idx, symbolic)) = &self.last else { unreachable!("set above") };
+        let matrix =
+            SparseColMatRef::new(SymbolicSparseColMatRef::new_checked(n, n, col_ptr, None, row_idx), vals);
+        Llt::try_new_with_symbolic(symbolic.clone(), matrix, Side::Lower)
+    }
+}
+
 /// How a solve went.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct SolveStats {
@@ -52,12 +88,14 @@ pub(crate) fn solve(
     tikhonov: f64,
     reference: &[f64],
     what: &'static str,
+    cache: &mut SymbolicCache,
 ) -> Result<(Vec<f64>, SolveStats), TsplineError> {
     let n = mesh.anchor_count();
-    // Per leaf, the dense Gram matrix `RᵀWR` (m × m, rank-one updates over
-    // contiguous rows, vectorized) and `RᵀWb` of its rows, so that the
-    // global assembly below touches each leaf's m² entries once instead of
-    // once per row.
+    // Per leaf, the dense Gram matrix `RᵀWR` (m × m, one GEMM of the
+    // weighted rows `W^½ R`) and `RᵀWb` of its rows, so that the global
+    // assembly below touches each leaf's m² entries once instead of once
+    // per row. The Gram matrix is symmetric, so its column-major storage
+    // also holds its rows.
     let grams: Vec<(Vec<f64>, Vec<f64>)> = blocks
         .par_iter()
         .enumerate()
@@ -66,18 +104,26 @@ pub(crate) fn solve(
                 return (Vec::new(), Vec::new());
             }
             let m = mesh.leaf_anchors(leaf).len();
-            let (mut gram, mut rhs) = (vec![0.0f64; m * m], vec![0.0f64; m]);
-            for (r, row) in blk.rows.chunks_exact(m).enumerate() {
-                let w = blk.weights[r];
-                for (q, &x) in row.iter().enumerate() {
-                    let wx = w * x;
-                    if wx == 0.0 {
-                        continue;
-                    }
-                    rhs[q] += wx * blk.rhs[r];
-                    gram[q * m..(q + 1) * m].iter_mut().zip(row).for_each(|(g, y)| *g += wx * y);
+            let k = blk.len();
+            let mut rhs = vec![0.0f64; m];
+            let mut scaled = blk.rows.clone();
+            for ((row, &w), &b) in scaled.chunks_exact_mut(m).zip(&blk.weights).zip(&blk.rhs) {
+                for (r, x) in rhs.iter_mut().zip(row.iter()) {
+                    *r += w * b * x;
                 }
+                let s = w.sqrt();
+                row.iter_mut().for_each(|x| *x *= s);
             }
+            let mut gram = vec![0.0f64; m * m];
+            let rows = MatRef::from_row_major_slice(&scaled, k, m);
+            matmul(
+                MatMut::from_column_major_slice_mut(&mut gram, m, m),
+                Accum::Replace,
+                rows.transpose(),
+                rows,
+                1.0,
+                Par::Seq,
+            );
             (gram, rhs)
         })
         .collect();
@@ -87,21 +133,25 @@ pub(crate) fn solve(
         .map_init(
             || (vec![0.0f64; n], vec![false; n], Vec::<u32>::new()),
             |(acc, seen, touched), a| {
+                // Every leaf of `a` contributes to the pattern, with or
+                // without rows, so that the pattern is the T-mesh's and the
+                // symbolic factorization can be reused.
                 let mut rhs = 0.0;
                 for &(leaf, pos) in mesh.anchor_leaves(a) {
                     let (gram, leaf_rhs) = &grams[leaf as usize];
-                    if gram.is_empty() {
-                        continue;
-                    }
                     let list = mesh.leaf_anchors(leaf as usize);
                     let m = list.len();
                     let pos = pos as usize;
-                    rhs += leaf_rhs[pos];
-                    for (&b, &g) in list.iter().zip(&gram[pos * m..(pos + 1) * m]) {
+                    if !gram.is_empty() {
+                        rhs += leaf_rhs[pos];
+                    }
+                    for (q, &b) in list.iter().enumerate() {
                         if (b as usize) < a {
                             continue;
                         }
-                        acc[b as usize] += g;
+                        if !gram.is_empty() {
+                            acc[b as usize] += gram[pos * m + q];
+                        }
                         if !seen[b as usize] {
                             seen[b as usize] = true;
                             touched.push(b);
@@ -142,13 +192,56 @@ pub(crate) fn solve(
         return Err(TsplineError::NonFinite(what));
     }
     let nonzeros = vals.len();
-    let symbolic = SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, &row_idx);
-    let matrix = SparseColMatRef::new(symbolic, &vals);
-    let llt = matrix.sp_cholesky(Side::Lower).map_err(|_| TsplineError::Singular(what))?;
+    let llt = cache.factor(col_ptr, row_idx, &vals).map_err(|_| TsplineError::Singular(what))?;
     llt.solve_in_place(rhs.as_mat_mut());
     let x: Vec<f64> = (0..n).map(|i| rhs[i]).collect();
     if x.iter().any(|v| !v.is_finite()) {
         return Err(TsplineError::Singular(what));
     }
     Ok((x, SolveStats { unknowns: n, nonzeros }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One row per leaf centre and corner with pseudo-random values.
+    fn blocks(mesh: &TMesh, seed: f64) -> Vec<LeafRows> {
+        let mut local = crate::basis::LocalBasis::default();
+        let (mut r, mut dr) = (Vec::new(), Vec::new());
+        (0..mesh.leaf_count())
+            .map(|leaf| {
+                let (lo, hi) = mesh.leaf_box(leaf);
+                let mut blk = LeafRows::default();
+                for t in [0.5, 0.2, 0.8] {
+                    local.at(mesh, lo + t * (hi - lo));
+                    if local.rational(&mut r, &mut dr) {
+                        blk.push(&r, 1.0, ((leaf as f64 + seed) * 12.9898).sin());
+                    }
+                }
+                blk
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_reused_symbolic_factorization_solves_a_new_system() {
+        let mesh = TMesh::uniform(2).unwrap();
+        let reference = vec![0.0; mesh.anchor_count()];
+        let mut warm = SymbolicCache::default();
+        let (first, _) = solve(&mesh, &blocks(&mesh, 0.0), 1e-3, &reference, "test", &mut warm).unwrap();
+        // Same pattern, other values: the cached symbolic part is reused and
+        // the solution equals a cold solve's.
+        let other = blocks(&mesh, 0.5);
+        let (again, _) = solve(&mesh, &other, 1e-3, &reference, "test", &mut warm).unwrap();
+        let (cold, _) = solve(&mesh, &other, 1e-3, &reference, "test", &mut Default::default()).unwrap();
+        assert!(first.iter().zip(&again).any(|(a, b)| (a - b).abs() > 1e-3), "a different system");
+        assert!(again.iter().zip(&cold).all(|(a, b)| (a - b).abs() < 1e-12));
+        // Rows in only some leaves: the pattern is still the whole T-mesh's.
+        let mut sparse = blocks(&mesh, 0.0);
+        sparse.iter_mut().step_by(2).for_each(|b| *b = LeafRows::default());
+        let (_, full) = solve(&mesh, &blocks(&mesh, 0.0), 1e-3, &reference, "test", &mut warm).unwrap();
+        let (_, part) = solve(&mesh, &sparse, 1e-3, &reference, "test", &mut warm).unwrap();
+        assert_eq!(full.nonzeros, part.nonzeros);
+    }
 }

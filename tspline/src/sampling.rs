@@ -7,7 +7,7 @@
 //! leaf's anchors (`R_i ≥ 0`, `Σ R_i = 1`), so a leaf whose coefficients all
 //! have one sign contains no zero.
 
-use crate::basis::Eval;
+use crate::basis::{Eval, RowValues};
 use crate::tspline::TSpline;
 use glam::{DVec3, UVec3, Vec3};
 use isomorph_common::marching_cubes::marching_cubes;
@@ -44,20 +44,34 @@ pub(crate) fn zero_set_mesh(spline: &TSpline, sub: u32) -> Result<TriMesh, GridE
         .collect();
     let mut grid = Grid3::new(UVec3::splat(n), Vec3::splat(-1.0), step as f32, 0.0f32)?;
     let nn = n as usize;
-    grid.data_mut().par_chunks_mut(nn * nn).enumerate().for_each(|(k, slab)| {
-        for (idx, out) in slab.iter_mut().enumerate() {
-            let (i, j) = (idx % nn, idx / nn);
-            let p = DVec3::new(i as f64, j as f64, k as f64) * step - DVec3::ONE;
-            let (lo, hi) = ranges[mesh.locate(p)];
-            *out = if lo > 0.0 {
-                lo as f32
-            } else if hi < 0.0 {
-                hi as f32
-            } else {
-                spline.value_at(p) as f32
-            };
-        }
-    });
+    // Row by row along x, one leaf at a time: a leaf without a zero fills
+    // its run of nodes with a bound of the right sign (exact on the closed
+    // leaf, so nodes on its faces may go to either neighbour).
+    grid.data_mut().par_chunks_mut(nn * nn).enumerate().for_each_init(
+        RowValues::default,
+        |row, (k, slab)| {
+            for (j, out) in slab.chunks_exact_mut(nn).enumerate() {
+                let mut i = 0;
+                while i < nn {
+                    let p = DVec3::new(i as f64, j as f64, k as f64) * step - DVec3::ONE;
+                    let leaf = mesh.locate(p);
+                    let end = (((mesh.leaf_box(leaf).1.x + 1.0) / step).ceil() as usize).clamp(i + 1, nn);
+                    let (lo, hi) = ranges[leaf];
+                    for (n, v) in out[i..end].iter_mut().enumerate() {
+                        *v = if lo > 0.0 {
+                            lo as f32
+                        } else if hi < 0.0 {
+                            hi as f32
+                        } else {
+                            let q = DVec3::new((i + n) as f64 * step - 1.0, p.y, p.z);
+                            row.value(mesh, c, leaf, q.clamp(DVec3::splat(-1.0), DVec3::ONE)) as f32
+                        };
+                    }
+                    i = end;
+                }
+            }
+        },
+    );
     Ok(marching_cubes(&grid, 0.0))
 }
 
@@ -66,12 +80,12 @@ pub(crate) fn zero_set_mesh(spline: &TSpline, sub: u32) -> Result<TriMesh, GridE
 pub(crate) fn project(spline: &TSpline, x: DVec3, max_drift: f64) -> Option<Sample> {
     let mut p = x;
     for _ in 0..12 {
-        let e = spline.eval(p);
-        let g2 = e.gradient.length_squared();
+        let (value, gradient) = spline.value_gradient(p);
+        let g2 = gradient.length_squared();
         if g2 < 1e-16 {
             return None;
         }
-        let delta = e.value / g2 * e.gradient;
+        let delta = value / g2 * gradient;
         // Positive inside: ∇f points to larger values, so step against it
         // when f > 0.
         p -= delta;

@@ -68,8 +68,18 @@ impl TSpline {
         let p = p.clamp(DVec3::splat(-1.0), DVec3::ONE);
         SCRATCH.with(|s| {
             let mut s = s.borrow_mut();
-            s.at(&self.mesh, p);
+            s.at_with_hessians(&self.mesh, p);
             s.combine(&self.mesh, &self.coeffs)
+        })
+    }
+
+    /// Value and gradient alone at a point of the domain (clamped).
+    pub(crate) fn value_gradient(&self, p: DVec3) -> (f64, DVec3) {
+        let p = p.clamp(DVec3::splat(-1.0), DVec3::ONE);
+        SCRATCH.with(|s| {
+            let mut s = s.borrow_mut();
+            s.at(&self.mesh, p);
+            s.value_gradient(&self.mesh, &self.coeffs)
         })
     }
 
@@ -213,6 +223,29 @@ mod tests {
             assert!((a.gradient - b.gradient).length() < 1e-9);
             assert!((a.hessian - b.hessian).abs_diff_eq(glam::DMat3::ZERO, 1e-7));
             assert!((f.value_at(p) - a.value).abs() < 1e-12);
+            let (v, g) = f.value_gradient(p);
+            assert!((v - a.value).abs() < 1e-12 && (g - a.gradient).length() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn row_values_agree_with_the_sum_over_all_anchors() {
+        // Rows along x through every leaf, including points on the leaf's
+        // faces (closed leaves) and reuse of the sums along a row.
+        let f = random_spline(adapted());
+        let m = f.mesh().clone();
+        let mut row = crate::basis::RowValues::default();
+        for leaf in (0..m.leaf_count()).step_by(7) {
+            let (lo, hi) = m.leaf_box(leaf);
+            for (j, k) in [(0.0, 0.0), (0.3, 0.8), (1.0, 1.0)] {
+                for i in 0..=4 {
+                    let t = DVec3::new(f64::from(i) / 4.0, j, k);
+                    let p = lo + t * (hi - lo);
+                    let want = f.eval_brute_force(p).value;
+                    let got = row.value(&m, f.coefficients(), leaf, p);
+                    assert!((got - want).abs() < 1e-12, "leaf {leaf} at {p}: {got} vs {want}");
+                }
+            }
         }
     }
 
