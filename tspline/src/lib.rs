@@ -42,10 +42,12 @@
 //! # Which speed the tests and demos use
 //! [`Speed::Paper`] (eq. 8) is the default and is used for the shrinking
 //! sphere test. As the note predicts (§5.2), far from the target its
-//! curvature term dominates and growth stalls, so the growth test and the
-//! sphere → holed cube example use the note's [`Speed::Robust`]
-//! (`v = clamp(d_B, ±0.2) + h (1 − λ) κ`). [`Speed::Distance`] (`λ ≡ 1`) is
-//! Breen & Whitaker's speed for the paper's Fig. 2 comparison.
+//! curvature term dominates and growth stalls. The growth tests, the
+//! sphere → holed cube example ([`demo::holed_cube_settings`]), the bunny
+//! bench and `isomorph demo` therefore use the note's [`Speed::Robust`]
+//! (`v = clamp(d_B, ±0.2) + β (1 − λ) κ`, `β` a finest cell or less).
+//! [`Speed::Distance`] (`λ ≡ 1`) is Breen & Whitaker's speed, for the
+//! paper's Fig. 2 comparison.
 //!
 //! # Guarantees and limits
 //! - `f` is C² (cubic blending functions, `Σ B_i > 0` on `D`); evaluation
@@ -58,81 +60,74 @@
 //!   the `fit` tests).
 //! - New target components far from the evolving surface are never created
 //!   (note §5.5): align the shapes so that they overlap.
-//! - **Known issue: pinched-off blobs.** With the mostly-distance
-//!   [`Speed::Robust`] the zero set can pinch off small pieces where the
-//!   target is far (the paper's Fig. 2 effect), and the damped least squares
-//!   does not always remove them: sphere → torus on a depth-3 T-mesh ends
-//!   with the torus (genus 1, mean distance < 0.05) plus two blobs at the
-//!   poles. Sphere → holed cube at depth 4 (margin 0.2, 4794 coefficients)
-//!   reaches a mean surface distance of 0.012 (world units, shapes of size
-//!   0.6) but stays genus 0 with about 13 extra components. Diagnosis
-//!   (per-frame component counts and probes of `f` along lines): (1) the
-//!   extra components are **not** blobs pinched off the shape but open
-//!   sheets at the domain boundary: with `margin` 0.2 and depth 4 the cube
-//!   faces lie 1.3 finest cells inside `D`, and in that gap `f` rises from
-//!   about −0.04 back above 0 at the boundary (only weak rows constrain it
-//!   there); with `margin` 0.5 they do not appear. (2) At depth 4 the genus
-//!   stays 0 because each hole is dug from both ends but a plug of positive
-//!   `f` (up to ≈ 0.18, about 5 finest cells long) remains in its middle and
-//!   the evolution stalls: the holes are only 3.5 finest cells wide, and the
-//!   velocity rows at the tunnel tips cannot lower the plug without moving
-//!   the walls. **At depth 5 with margin 0.5 the morph reaches the target:**
-//!   14744 coefficients, converged after 15 steps, genus 3, one component,
-//!   mean surface distance 0.0079 (Hausdorff 0.063); about a minute in
-//!   release, so the test `sphere_becomes_a_genus_three_holed_cube` that
-//!   asserts it is ignored by default for its run time only and passes with
-//!   `cargo test --release -p isomorph-tspline --test sphere_holed_cube --
-//!   --ignored` (45 s). At depth 4 with margin 0.5: 2569 coefficients,
-//!   stalled after 22 steps, one component, still genus 0.
-//!   Tried and rejected (no gain, or the sphere → torus test lost its hole):
-//!   the level-set equation `ḟ = v|∇f|` at every leaf centre (creates voids
-//!   inside the sphere, where the distance constraint keeps `|∇f| ≈ 1`),
-//!   and the same with the speed extended from the Newton foot point plus
-//!   distance rows at every leaf centre (no strays for 20 steps instead of
-//!   12, but the plugs remain and sphere → torus stays genus 0).
-//! - Cost: one evolution step costs a sparse Cholesky factorization of the
-//!   `n × n` normal matrix plus `O(samples × support²)` assembly, and the
-//!   zero-set lattice has the smallest leaf's spacing everywhere, so steps
-//!   cost more with the number of surface samples than with `n`.
+//! - **The distance-field weight decides whether narrow features open.**
+//!   The distance-field rows ask `|∇f| = 1`; a tunnel narrower than a few
+//!   finest cells needs `f` far from a distance function, so a strong
+//!   constraint keeps a plug in it. Measured with sphere → holed cube on the
+//!   depth-3 T-mesh (729 coefficients, holes 1.4 finest cells wide; step
+//!   one finest cell, up to 60 steps):
+//!
+//!   | `distance_weight` | result |
+//!   |---|---|
+//!   | 0.1 (the default until 2026-11) | stalls after 14 steps, genus 0 plus sheets, mean distance 0.038 |
+//!   | 0.01 | genus 3 by step 9, then strays appear (3–7 components after step 48) |
+//!   | 0.001 (default) | genus 3 from step 5 on, one component to step 60, mean distance 0.0028 |
+//!
+//!   Sphere → torus on the same mesh: 0.1 stalls at genus 8 or with extra
+//!   components for every step size tried (0.25, 0.5 and 1 finest cell);
+//!   0.001 and 0.003 end on the torus, one component, in all but one of
+//!   twelve runs (step sizes × source resolutions). Hence the defaults:
+//!   `distance_weight` 0.001, step half a finest cell, tolerance a tenth of
+//!   it, and convergence only when every zero-set sample is within half a
+//!   finest cell of the target, so a piece pinched off on the way must
+//!   vanish before the morph stops. `|∇f|` then ranges over about 0.4–1.5
+//!   on the zero set instead of 0.8–1.2.
+//! - **Keep a margin.** The domain boundary gets only weak rows; with the
+//!   cube's faces 1.3 finest cells inside `D` (margin 0.2, depth 4) open
+//!   sheets appeared there. The holed-cube settings use margin 0.5.
+//! - **Known issue: the curvature speed also splits the "T"** (see below).
+//! - Cost: one evolution step costs the zero-set samples (marching cubes on
+//!   a lattice of a third of the smallest leaf, culled per leaf, then Newton
+//!   projection), `O(samples × support²)` assembly and a sparse Cholesky
+//!   factorization of the `n × n` normal matrix whose symbolic part is
+//!   reused across steps; steps cost more with the number of surface
+//!   samples (`∝ area / h_min²`) than with `n`.
 //!
 //! # Performance (quiet machine, 2 cores)
-//! `cargo bench -p isomorph-benches --bench tspline -- step/`: one step with
-//! 499 / 997 / 1992 / 4002 coefficients takes 75 / 89 / 354 / 477 ms (not
-//! linear in `n`: the cost follows the number of zero-set samples,
-//! ∝ area / h_min², and the T-meshes of this bench reach a finer cell at
-//! 2000). Whole morphs, one run each (scratch programs with the benches'
-//! settings):
+//! `cargo bench -p isomorph-benches --bench tspline`:
 //!
-//! | morph | coefficients | steps | time | result | issue target |
+//! | bench | coefficients | steps | time | result | issue target |
 //! |---|---|---|---|---|---|
-//! | sphere → holed cube, depth 5, margin 0.5 (`morph/sphere_holed_cube`, the test) | 14744 | 15 | 47 s without projection frames | converged, genus 3 | 2 s — **not met** |
-//! | sphere → holed cube, depth 4, margin 0.2 | 4794 | 23 | 9.9 s | stalled, genus 0 + strays | |
-//! | bunny → petal torus, depth 5 (`morph/bunny_petal_torus`) | 7129 | 20 | 18.8 s with projection frames | converged, genus 1, one component | 10 s — **not met** |
+//! | `morph/sphere_holed_cube` ([`demo::holed_cube_settings`], depth 3, margin 0.5) | 729 | 7 | **0.426 s** | converged, genus 3, one component, mean distance 0.0036, Hausdorff 0.025 (cube edge 0.6) | 2 s, met |
+//! | `morph/bunny_petal_torus` (depth 4) | 2094 | 12 | **1.48 s** | converged, genus 1, one component, mean distance 0.0028 × the bunny's size | about 2500 coefficients in 10 s, met |
+//! | `step/500`, `/1000`, `/2000`, `/4000` | 499, 997, 1992, 4002 | 1 | 37, 53, 209, 361 ms | | about linear |
 //!
-//! What made it faster this session (same algorithm, same results up to
-//! round-off; the depth-4 holed cube took 16.1 s before):
-//! - the univariate B-splines are precomputed per anchor as four polynomial
-//!   pieces (span lookup + Horner) instead of Cox–de Boor with ten
-//!   divisions per call — they were 61 % of a step's profile;
-//! - each leaf keeps its distinct univariate factors per axis (a uniform
-//!   region has 4 per axis for 64 anchors); a point evaluates those once
-//!   and forms the anchors' products;
-//! - the inputs' exact signed distances are sampled once on a lattice four
-//!   times finer than the finest cell and interpolated trilinearly (the
-//!   BVH and winding-number queries were about 15 % of the morph);
-//! - the least-squares normal equations are assembled from dense per-leaf
-//!   Gram matrices (the per-row assembly loop was 26 % of the profile).
+//! The whole morphs include the T-mesh, the fit, the evolution and the
+//! projection frames. A step bench runs one step and samples the zero set a
+//! second time for the stopping test. Per doubling of `n` at the same finest
+//! cell the step time grows 1.4× (500 → 1000) and 1.7× (2000 → 4000). From
+//! 1000 to 2000 the bench's T-meshes reach a cell half as small: that
+//! means four times the zero-set samples, and so 3.9×.
 //!
-//! A `perf` profile of the depth-5 holed cube now puts about 60 % in the
-//! sparse Cholesky factorization of the normal matrix (supernodal dense
-//! kernels; a fresh AMD ordering each step adds 2–3 %) and under 10 % in
-//! the blending functions. Next steps, not done: a solver that exploits
-//! the small change of the system from step to step (warm-started
-//! preconditioned CG, or a symbolic factorization reused across steps),
-//! and fewer degrees of freedom where the surfaces are flat (the paper
-//! needs 651 coefficients for this example).
-//! - Not implemented: marching triangulation (frames are polygonized by the
-//!   shared marching cubes).
+//! Same settings at depth 4 for the holed cube: 2569 coefficients, 13
+//! steps, genus 3, mean distance 0.0020, 2.9 s (one run).
+//!
+//! What made the steps fast (results unchanged to round-off):
+//! - univariate B-splines as polynomial pieces per anchor;
+//! - each leaf's distinct factors evaluated once per point;
+//! - the inputs' signed distances sampled once on a lattice 4× finer than
+//!   the finest cell;
+//! - per-leaf Gram matrices by one GEMM each;
+//! - the zero-set lattice filled row by row with per-row sums over each
+//!   leaf's distinct x factors;
+//! - value-and-gradient-only evaluation for the Newton projection and the
+//!   least-squares rows;
+//! - a fixed sparsity pattern (every leaf's anchors), so the symbolic
+//!   Cholesky (ordering and supernodes, a quarter of a factorization)
+//!   is computed once per morph.
+//!
+//! Not implemented: marching triangulation (frames are polygonized by the
+//! shared marching cubes).
 //!
 //! # Final refinement (§3.2)
 //! [`FitSettings::refinement`] (CLI: `--refine TOL --refine-rounds N`)
@@ -164,7 +159,7 @@
 //!
 //! | speed | components per level set (initial first) |
 //! |---|---|
-//! | [`Speed::Distance`] (`λ ≡ 1`) | 1, 1, 2, 2, 1, 1, 1, 1, 1 — the bar is cut in its middle, the end between the C's ends becomes a second component and vanishes (Fig. 2) |
+//! | [`Speed::Distance`] (`λ ≡ 1`) | 1, 1, 2, 2, 1, 1, 1, 3, 1 — the bar is cut in its middle, the end between the C's ends becomes a second component and vanishes (Fig. 2); a stray appears briefly at step 7 |
 //! | [`Speed::Paper`] (eq. 8) | 1, 1, 1, 2, 2, 2, 2, 2, 2 — also cut, and the end piece survives longer |
 //! | [`Speed::Robust`] (`v_max` 0.2, `β` = h) | split at some frame for step sizes 0.35 h and 0.7 h; one component only at 0.5 h, by chance |
 //!
