@@ -24,8 +24,10 @@ pub(crate) struct LeafRows {
 }
 
 impl LeafRows {
-    /// Appends one row (`entries.len()` = the leaf's anchor count).
+    /// Appends one row (`entries.len()` = the leaf's anchor count, weight
+    /// ≥ 0).
     pub fn push(&mut self, entries: &[f64], weight: f64, rhs: f64) {
+        debug_assert!(weight >= 0.0, "least-squares weights are non-negative");
         self.rows.extend_from_slice(entries);
         self.weights.push(weight);
         self.rhs.push(rhs);
@@ -243,5 +245,15 @@ mod tests {
         let (_, full) = solve(&mesh, &blocks(&mesh, 0.0), 1e-3, &reference, "test", &mut warm).unwrap();
         let (_, part) = solve(&mesh, &sparse, 1e-3, &reference, "test", &mut warm).unwrap();
         assert_eq!(full.nonzeros, part.nonzeros);
+    }
+
+    #[test]
+    fn non_finite_systems_are_typed_errors() {
+        let mesh = TMesh::uniform(2).unwrap();
+        let reference = vec![0.0; mesh.anchor_count()];
+        let mut nan = blocks(&mesh, 0.0);
+        nan[0].rhs[0] = f64::NAN;
+        let r = solve(&mesh, &nan, 1e-3, &reference, "test", &mut Default::default());
+        assert!(matches!(r, Err(TsplineError::NonFinite("test"))), "{r:?}");
     }
 }
