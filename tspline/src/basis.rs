@@ -68,9 +68,8 @@ impl LocalBasis {
         }
     }
 
-    /// Evaluates every blending function of the leaf containing `p` with
-    /// its gradient (`b`, `db`, `d`, `dd`; no Hessians).
-    pub fn at(&mut self, mesh: &TMesh, p: DVec3) {
+    /// Locates `p`, evaluates its leaf's factors and empties the sums.
+    fn start(&mut self, mesh: &TMesh, p: DVec3) {
         self.factors_at(mesh, p);
         self.b.clear();
         self.db.clear();
@@ -78,6 +77,12 @@ impl LocalBasis {
         self.d = 0.0;
         self.dd = DVec3::ZERO;
         self.hd = [0.0; 6];
+    }
+
+    /// Evaluates every blending function of the leaf containing `p` with
+    /// its gradient (`b`, `db`, `d`, `dd`; no Hessians).
+    pub fn at(&mut self, mesh: &TMesh, p: DVec3) {
+        self.start(mesh, p);
         let [fx, fy, fz] = &self.factors;
         for index in &mesh.leaf_factors(self.leaf).index {
             let ([x0, x1, _], [y0, y1, _], [z0, z1, _]) =
@@ -94,13 +99,7 @@ impl LocalBasis {
     /// As [`Self::at`], plus the Hessians `hb` and `hd` that
     /// [`Self::combine`] needs.
     pub fn at_with_hessians(&mut self, mesh: &TMesh, p: DVec3) {
-        self.factors_at(mesh, p);
-        self.b.clear();
-        self.db.clear();
-        self.hb.clear();
-        self.d = 0.0;
-        self.dd = DVec3::ZERO;
-        self.hd = [0.0; 6];
+        self.start(mesh, p);
         let [fx, fy, fz] = &self.factors;
         for index in &mesh.leaf_factors(self.leaf).index {
             let (b, g, h) = product(fx[index[0] as usize], fy[index[1] as usize], fz[index[2] as usize]);
