@@ -85,6 +85,48 @@ pub fn letter_c() -> Shape {
     Shape::cylinder(0.45, z).subtract(Shape::cylinder(0.32, 2.0 * z)).subtract(opening)
 }
 
+/// Half thickness along z of the extruded corners [`corner_source`] and
+/// [`corner_target`] (world units).
+pub const CORNER_HALF_DEPTH: f32 = 0.25;
+
+/// The axis-aligned bar `lo ≤ (x, y) ≤ hi`, `|z| ≤ half_depth` (world units).
+fn extruded_bar(lo: Vec2, hi: Vec2, half_depth: f32) -> Shape {
+    let centre = (0.5 * (lo + hi)).extend(0.0);
+    Shape::cuboid((0.5 * (hi - lo)).extend(half_depth)).translated(centre)
+}
+
+/// The source of the paper's Fig. 2–3 as its text describes it: a "┌"
+/// extruded to `|z| ≤ CORNER_HALF_DEPTH` (world units): a horizontal bar
+/// `x ∈ [−0.45, 0.45]`, `y ∈ [−0.05, 0.1]` and a vertical bar
+/// `x ∈ [−0.45, −0.3]`, `y ∈ [−0.45, 0.1]` hanging from its left end. It
+/// sits below [`corner_target`]'s horizontal bar (a gap of 0.2) and
+/// overlaps the target only where its horizontal bar ends in the target's
+/// right bar (`x ∈ [0.3, 0.45]`).
+pub fn corner_source() -> Shape {
+    let z = CORNER_HALF_DEPTH;
+    extruded_bar(Vec2::new(-0.45, -0.05), Vec2::new(0.45, 0.1), z).union(extruded_bar(
+        Vec2::new(-0.45, -0.45),
+        Vec2::new(-0.3, 0.1),
+        z,
+    ))
+}
+
+/// The target of the paper's Fig. 2–3 as its text describes it: a "┐"
+/// extruded to `|z| ≤ CORNER_HALF_DEPTH` (world units): a horizontal bar
+/// `x ∈ [−0.45, 0.45]`, `y ∈ [0.3, 0.45]` and a vertical bar
+/// `x ∈ [0.3, 0.45]`, `y ∈ [−0.45, 0.45]` hanging from its right end.
+/// [`corner_source`]'s horizontal bar lies 0.2 below its horizontal bar
+/// (uniformly, up to its right bar), [`corner_source`]'s vertical bar 0.2
+/// to 0.55 below it.
+pub fn corner_target() -> Shape {
+    let z = CORNER_HALF_DEPTH;
+    extruded_bar(Vec2::new(-0.45, 0.3), Vec2::new(0.45, 0.45), z).union(extruded_bar(
+        Vec2::new(0.3, -0.45),
+        Vec2::new(0.45, 0.45),
+        z,
+    ))
+}
+
 /// `n` nearly uniform points on the sphere of radius `r` about `center`
 /// (Fibonacci spiral), e.g. to build a [`crate::TMesh`] in domain units.
 pub fn sphere_samples(n: usize, r: f64, center: DVec3) -> Vec<DVec3> {
@@ -124,6 +166,22 @@ mod tests {
         // (CSG distances are bounds: the points avoid the cut's faces.)
         assert!(c.distance(Vec3::new(-0.05, 0.07, 0.0)) < -0.15);
         assert!(c.distance(Vec3::new(0.3, 0.07, 0.0)) < -0.1);
+    }
+
+    #[test]
+    fn corners_overlap_only_at_the_source_bar_end() {
+        let (a, b) = (corner_source(), corner_target());
+        for shape in [&a, &b] {
+            let m = polygonize(shape, &Aabb::cube(0.5), 48, 0.0).unwrap();
+            assert_eq!((m.connected_components(), m.genus()), (1, Some(0)));
+        }
+        // The source's horizontal bar ends inside the target's vertical bar.
+        let end = Vec3::new(0.38, 0.02, 0.0);
+        assert!(a.distance(end) > 0.0 && b.distance(end) > 0.0);
+        // Its corner and its bar's middle lie 0.2 or more outside the target.
+        assert!(b.distance(Vec3::new(-0.38, 0.02, 0.0)) < -0.19);
+        assert!(b.distance(Vec3::new(0.0, 0.02, 0.0)) < -0.19);
+        assert!(b.distance(Vec3::new(-0.38, -0.4, 0.0)) < -0.5);
     }
 
     #[test]
