@@ -27,7 +27,10 @@ impl LeafRows {
     /// Appends one row (`entries.len()` = the leaf's anchor count, weight
     /// ≥ 0).
     pub fn push(&mut self, entries: &[f64], weight: f64, rhs: f64) {
-        debug_assert!(weight >= 0.0, "least-squares weights are non-negative");
+        debug_assert!(
+            weight >= 0.0 || weight.is_nan(),
+            "least-squares weights are non-negative (NaN is reported later)"
+        );
         self.rows.extend_from_slice(entries);
         self.weights.push(weight);
         self.rhs.push(rhs);
