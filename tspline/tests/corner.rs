@@ -18,10 +18,9 @@
 //! At neighbouring settings that long run does split after 19–29 steps;
 //! see the crate docs.
 
-use isomorph_common::marching_cubes::polygonize;
-use isomorph_common::{Aabb, Morph};
-use isomorph_tspline::{MorphSettings, Speed, demo, morph};
-use std::ops::ControlFlow;
+mod common;
+
+use isomorph_tspline::{Speed, demo};
 
 /// Maximum octree depth: finest cells of 0.125 domain units; the bars (width
 /// 0.15 world ≈ 0.27 domain units at margin 0.2) are about two cells wide.
@@ -31,25 +30,8 @@ const DEPTH: u32 = 4;
 /// before) and returns the component count of every level set, the initial
 /// one first.
 fn components_per_level_set(speed: Speed, stall_steps: usize, max_steps: usize) -> (Vec<usize>, Vec<f64>) {
-    let bounds = Aabb::cube(0.5);
-    let source = polygonize(&demo::corner_source(), &bounds, 48, 0.0).unwrap();
-    let target = polygonize(&demo::corner_target(), &bounds, 48, 0.0).unwrap();
-    let mut s = MorphSettings::default();
-    s.tmesh.max_depth = DEPTH;
-    s.tmesh.min_depth = 3;
-    s.margin = 0.2;
-    s.projection_frames = false;
-    s.evolve.speed = speed;
-    s.evolve.step = Some(0.5 * 2.0 / f64::from(1u32 << DEPTH));
-    s.evolve.max_steps = max_steps;
-    s.evolve.stall_steps = stall_steps;
-    let m = morph(&source, &target, &s, &|_| ControlFlow::Continue(())).unwrap();
-    let counts = (0..m.frame_count())
-        .map(|i| {
-            let t = i as f32 / (m.frame_count() - 1) as f32;
-            m.frame_mesh(t, 40).unwrap().connected_components()
-        })
-        .collect();
+    let shapes = (&demo::corner_source(), &demo::corner_target(), 48);
+    let m = common::run(shapes, DEPTH, 0.2, speed, (max_steps, stall_steps));
     // The morph time τ of every level set: the sum of the Euler steps.
     let taus = std::iter::once(0.0)
         .chain(m.evolution().steps.iter().scan(0.0, |tau, st| {
@@ -57,7 +39,7 @@ fn components_per_level_set(speed: Speed, stall_steps: usize, max_steps: usize) 
             Some(*tau)
         }))
         .collect();
-    (counts, taus)
+    (common::components_per_frame(&m), taus)
 }
 
 #[test]

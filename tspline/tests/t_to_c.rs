@@ -8,10 +8,9 @@
 //! Fig. 3 comparison is tested with the shapes of the paper's text, "┌" →
 //! "┐", in `tests/corner.rs`.
 
-use isomorph_common::marching_cubes::polygonize;
-use isomorph_common::{Aabb, Morph};
-use isomorph_tspline::{MorphSettings, Speed, demo, morph};
-use std::ops::ControlFlow;
+mod common;
+
+use isomorph_tspline::{Speed, demo};
 
 /// Maximum octree depth: finest cells of 0.125 domain units, the T's bar
 /// (half width 0.07 world ≈ 0.12 domain units) is about two cells wide.
@@ -21,28 +20,13 @@ const DEPTH: u32 = 4;
 /// and returns the component count of every level set (the initial one
 /// first), polygonized over the domain with 40 nodes per axis.
 fn components_per_level_set(speed: Speed, steps: usize) -> Vec<usize> {
-    let bounds = Aabb::cube(0.5);
-    let source = polygonize(&demo::letter_t(), &bounds, 40, 0.0).unwrap();
-    let target = polygonize(&demo::letter_c(), &bounds, 40, 0.0).unwrap();
-    let mut s = MorphSettings::default();
-    s.tmesh.max_depth = DEPTH;
-    s.tmesh.min_depth = 3;
     // A wide margin keeps the level set clear of the domain boundary (see
-    // the crate docs' known issues).
-    s.margin = 0.5;
-    s.projection_frames = false;
-    s.evolve.speed = speed;
-    // Half a finest cell per step, so that the split lasts several frames.
-    s.evolve.step = Some(0.5 * 2.0 / f64::from(1u32 << DEPTH));
-    s.evolve.max_steps = steps;
-    let m = morph(&source, &target, &s, &|_| ControlFlow::Continue(())).unwrap();
+    // the crate docs); half a finest cell per step, so that the split lasts
+    // several frames.
+    let shapes = (&demo::letter_t(), &demo::letter_c(), 40);
+    let m = common::run(shapes, DEPTH, 0.5, speed, (steps, 8));
     assert_eq!(m.evolution().frames.len(), steps + 1, "{:?}", m.evolution().outcome);
-    (0..m.frame_count())
-        .map(|i| {
-            let t = i as f32 / (m.frame_count() - 1) as f32;
-            m.frame_mesh(t, 40).unwrap().connected_components()
-        })
-        .collect()
+    common::components_per_frame(&m)
 }
 
 #[test]
