@@ -160,9 +160,9 @@ impl fmt::Display for Side {
 #[non_exhaustive]
 pub enum MorphError {
     /// A frame time is NaN or outside `[0, 1]`
-    /// ([`isomorph_common::morph::check_time`]), or another shared-core morph error.
+    /// ([`isomorph_common::check_time`]), or another shared-core morph error.
     #[error(transparent)]
-    Time(#[from] isomorph_common::morph::MorphError),
+    Time(#[from] isomorph_common::MorphError),
     /// A grid could not be made (meshing a frame).
     #[error(transparent)]
     Grid(#[from] GridError),

@@ -32,7 +32,7 @@ use crate::skeleton::Skeleton;
 use crate::tree::BlobTree;
 use crate::warp::Warp;
 use glam::{Affine3A, Vec3};
-use isomorph_common::morph::{Frame, Morph};
+use isomorph_common::{Frame, Morph};
 use isomorph_common::{Aabb, AffineParts};
 use serde::{Deserialize, Serialize};
 
@@ -380,7 +380,7 @@ impl GenericTree {
     /// [`MorphError::Time`] for `t ∉ [0, 1]` or NaN; [`MorphError::Blob`] if
     /// an instantiated node is invalid (not expected for valid inputs).
     pub fn at(&self, t: f32) -> Result<BlobTree, MorphError> {
-        let t = isomorph_common::morph::check_time(t)?;
+        let t = isomorph_common::check_time(t)?;
         Ok(BlobTree::new(self.node_at(t), self.threshold_at(t))?)
     }
 }
@@ -476,11 +476,11 @@ mod tests {
         let m = BlobMorph::new(&a, &a, &ok).unwrap();
         assert!(matches!(
             m.frame(1.5),
-            Err(MorphError::Time(isomorph_common::morph::MorphError::InvalidTime(_)))
+            Err(MorphError::Time(isomorph_common::MorphError::InvalidTime(_)))
         ));
         assert!(matches!(
             m.frame(f32::NAN),
-            Err(MorphError::Time(isomorph_common::morph::MorphError::InvalidTime(_)))
+            Err(MorphError::Time(isomorph_common::MorphError::InvalidTime(_)))
         ));
         assert!(MorphSpec::from_ron("(links: 3)").is_err());
     }

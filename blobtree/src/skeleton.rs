@@ -932,54 +932,9 @@ fn closest_on_segment(x: Vec3, a: Vec3, b: Vec3) -> Vec3 {
     a + e * ((x - a).dot(e) / l2).clamp(0.0, 1.0)
 }
 
-/// Closest point on triangle `abc` (Ericson, *Real-Time Collision Detection* §5.1.5).
+/// Closest point on triangle `abc` (the shared exact query of the mesh BVH).
 fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
-    let ab = b - a;
-    let ac = c - a;
-    let ap = p - a;
-    let d1 = ab.dot(ap);
-    let d2 = ac.dot(ap);
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return a;
-    }
-    let bp = p - b;
-    let d3 = ab.dot(bp);
-    let d4 = ac.dot(bp);
-    if d3 >= 0.0 && d4 <= d3 {
-        return b;
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        let v = d1 / (d1 - d3);
-        return a + ab * v;
-    }
-    let cp = p - c;
-    let d5 = ab.dot(cp);
-    let d6 = ac.dot(cp);
-    if d6 >= 0.0 && d5 <= d6 {
-        return c;
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        let w = d2 / (d2 - d6);
-        return a + ac * w;
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return b + (c - b) * w;
-    }
-    let denom = va + vb + vc;
-    if denom.abs() <= f32::MIN_POSITIVE {
-        // Degenerate triangle: closest of its edges.
-        return [closest_on_segment(p, a, b), closest_on_segment(p, b, c), closest_on_segment(p, a, c)]
-            .into_iter()
-            .min_by(|s, t| (*s - p).length_squared().total_cmp(&(*t - p).length_squared()))
-            .unwrap_or(a);
-    }
-    let v = vb / denom;
-    let w = vc / denom;
-    a + ab * v + ac * w
+    isomorph_common::mesh::bvh::closest_point_on_triangle(p, [a, b, c])
 }
 
 #[cfg(test)]

@@ -11,7 +11,7 @@ use clap::{Args, ValueEnum};
 use isomorph_blobtree::BlobMorph;
 use isomorph_common::export::{ExportSettings, Report, export_sequence};
 use isomorph_common::mesh::io::MeshFormat;
-use isomorph_common::morph::{DistanceBlend, Morph};
+use isomorph_common::{DistanceBlend, Morph};
 use std::path::PathBuf;
 
 /// Morphing methods available to the command line.

@@ -688,13 +688,12 @@ mod tests {
     use super::*;
     use crate::marching_cubes::polygonize;
     use crate::mesh::distance::surface_distance;
-    use crate::mesh::io::read_mesh;
     use crate::sdf::MeshSdf;
     use crate::{Shape, models};
     use proptest::prelude::*;
 
     fn bunny() -> TriMesh {
-        read_mesh(concat!(env!("CARGO_MANIFEST_DIR"), "/../data/bunny.ply")).unwrap()
+        crate::mesh::metrics::test_meshes::bunny()
     }
 
     /// The unit corner tetrahedron `(0, e_x, e_y, e_z)` moved by `offset`,

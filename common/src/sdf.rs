@@ -43,9 +43,9 @@
 //! to the medial axis whose true closest point did not travel through their
 //! neighbours (tested below 0.4 voxel; see [`crate::fast_marching`]).
 //! Exact everywhere stays the default: the block-wise lattice search is so
-//! cheap that it is also the faster mode here (`isomorph sdf bunny --res
-//! 128`: 1.15 s exact, 2.3 s with `--band 2`, both measured on a loaded
-//! 2-core machine).
+//! cheap that it is also the faster mode at the sizes measured (see
+//! `docs/EXPERIMENTS.md`; bench `mesh_sdf/bunny/128` and
+//! `mesh_sdf/bunny/band/128`).
 //!
 //! # Example
 //! ```

@@ -86,12 +86,12 @@ pub enum Shape {
     /// Points inside the first and outside the second (`min(a, −b)`).
     Difference(Box<Shape>, Box<Shape>),
     /// A shape moved by an affine map.
-    Placed(Box<Placement>),
+    Placed(Box<PlacedShape>),
 }
 
 /// A shape with its local-to-world map (see [`Shape::transformed`]).
 #[derive(Debug, Clone, PartialEq)]
-pub struct Placement {
+pub struct PlacedShape {
     shape: Shape,
     to_world: Affine3A,
     to_local: Affine3A,
@@ -100,7 +100,7 @@ pub struct Placement {
     distance_scale: f32,
 }
 
-impl Placement {
+impl PlacedShape {
     /// The placed shape, in its local frame.
     pub fn shape(&self) -> &Shape {
         &self.shape
@@ -180,7 +180,7 @@ impl Shape {
         };
         let to_local = to_world.inverse();
         let distance_scale = smallest_singular_value(&to_world);
-        Shape::Placed(Box::new(Placement { shape, to_world, to_local, distance_scale }))
+        Shape::Placed(Box::new(PlacedShape { shape, to_world, to_local, distance_scale }))
     }
 
     /// The shape moved by `offset`.

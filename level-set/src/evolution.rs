@@ -7,7 +7,7 @@ use crate::stencil::Lattice;
 use crate::{DenseSolver, LevelSetError, Placement, SparseFieldSolver, SpeedGrid};
 use isomorph_common::glam::{UVec3, Vec3};
 use isomorph_common::marching_cubes::marching_cubes;
-use isomorph_common::morph::{Frame, Morph};
+use isomorph_common::{Frame, Morph};
 use isomorph_common::{Aabb, Grid3, TriMesh};
 
 /// Which solver integrates the level-set equation.

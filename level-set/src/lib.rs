@@ -91,7 +91,7 @@ fn initial_embedding(
         return Err(GridError::TooSmall { dims, min: 3 }.into());
     }
     let requested = source.len().saturating_mul(bytes_per_node);
-    let limit = isomorph_common::grid::memory_limit();
+    let limit = isomorph_common::memory_limit();
     if requested > limit {
         return Err(GridError::TooLarge { dims, requested, limit }.into());
     }

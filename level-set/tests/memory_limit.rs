@@ -1,7 +1,7 @@
 //! The solvers refuse grids over the process-wide memory limit with a typed
 //! error (own test binary: the limit is global to the process).
 
-use isomorph_common::grid::set_memory_limit;
+use isomorph_common::set_memory_limit;
 use isomorph_common::{Aabb, Grid3, GridError, Shape};
 use isomorph_levelset::{DenseSolver, LevelSetError, SparseFieldSolver};
 

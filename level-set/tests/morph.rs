@@ -1,6 +1,6 @@
 //! End-to-end behaviour of the level-set morph on the paper's cases.
 
-use isomorph_common::morph::{DistanceBlend, Morph};
+use isomorph_common::{DistanceBlend, Morph};
 use isomorph_common::{Aabb, Field3, Grid3, Shape, TriMesh, models};
 use isomorph_levelset::{
     EvolveSettings, FrameSchedule, LevelSetError, LevelSetMorph, Placement, Response, SolverKind, SpeedGrid,

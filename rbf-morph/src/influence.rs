@@ -13,7 +13,7 @@ use crate::interpolant::{Constraint, Interpolant};
 use crate::slice::Slice3;
 use crate::transform::{TransformSettings, lift};
 use glam::Vec3;
-use isomorph_common::morph::check_time;
+use isomorph_common::check_time;
 use isomorph_common::{Aabb, Frame, Morph};
 
 #[derive(Debug, Clone)]

@@ -12,7 +12,7 @@ use crate::interpolant::{Constraint, FitSettings, Interpolant};
 use crate::slice::{Slice2, Slice3};
 use glam::{UVec2, Vec2, Vec3};
 use isomorph_common::marching_squares::{Polyline2, marching_squares};
-use isomorph_common::morph::check_time;
+use isomorph_common::check_time;
 use isomorph_common::{Aabb, Frame, Grid2, Morph, TriMesh};
 
 /// Settings of a shape transformation.

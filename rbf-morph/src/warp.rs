@@ -29,7 +29,7 @@ use crate::slice::{Slice2, Slice3, sample_lattice};
 use crate::transform::{ContourMorph, RbfMorph, TransformSettings, frame_lattice};
 use glam::{Mat2, Mat3, Vec2, Vec3};
 use isomorph_common::marching_squares::{Polyline2, marching_squares};
-use isomorph_common::morph::check_time;
+use isomorph_common::check_time;
 use isomorph_common::{Aabb, Field3, Frame, Grid2, Morph, TriMesh};
 use rayon::prelude::*;
 use std::sync::Arc;

@@ -4,7 +4,7 @@ use isomorph_common::export::{ExportProgress, ExportSettings, export_sequence};
 use isomorph_common::marching_cubes::polygonize;
 use isomorph_common::mesh::distance::surface_distance;
 use isomorph_common::mesh::io::read_mesh;
-use isomorph_common::morph::{DistanceBlend, Morph};
+use isomorph_common::{DistanceBlend, Morph};
 use isomorph_common::{Aabb, models};
 use std::sync::atomic::{AtomicUsize, Ordering};
 

@@ -13,7 +13,7 @@ use glam::{Affine3A, DVec3, Vec3};
 use isomorph_common::alignment::{AlignMode, Alignment, Moments, align};
 use isomorph_common::marching_cubes::marching_cubes;
 use isomorph_common::mesh::distance::surface_samples;
-use isomorph_common::morph::check_time;
+use isomorph_common::check_time;
 use isomorph_common::sdf::MeshSdf;
 use isomorph_common::{Aabb, Field3, Frame, Grid3, Morph, TriMesh};
 use rayon::prelude::*;

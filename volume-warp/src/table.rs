@@ -51,7 +51,7 @@ impl CoefficientTable {
         let g = dims / regions;
         let count = g.as_u64vec3().element_product();
         let requested = usize::try_from(count).unwrap_or(usize::MAX).saturating_mul(size_of::<[f32; 64]>());
-        let limit = isomorph_common::grid::memory_limit();
+        let limit = isomorph_common::memory_limit();
         if requested > limit {
             return Err(GridError::TooLarge { dims: g, requested, limit }.into());
         }

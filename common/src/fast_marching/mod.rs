@@ -26,24 +26,10 @@
 //! relaxed shell by shell, large shells in parallel by z-slabs, while the
 //! Eikonal updates run the classic sequential heap.
 //!
-//! Cost of [`redistance`] with closest points on the bench's 256³ torus
-//! (scaled distance field, 2 cores), measured with `cargo run --release -p
-//! isomorph-common --example redistance_timing` (CPU time of all threads per
-//! run, which the other load of a shared machine disturbs far less than the
-//! wall time) and `cargo bench -p isomorph-benches --bench common --
-//! redistance/torus/256`; the example also reports the error against the
-//! exact torus distance:
-//!
-//! | grid | CPU time per run | max error, within 2 voxels |
-//! |---|---|---|
-//! | 256³ | 2.1–2.5 s: band ≈ 10 %, shells ≈ 75 %, allocation and output the rest | 0.18, 0.015 voxel |
-//! | 128³ | 0.22 s | 0.18, 0.03 voxel |
-//! | 64³ | 0.03 s | 0.16, 0.05 voxel |
-//!
-//! The bench measured 1.22 s of wall time on the quiet machine (criterion
-//! interval 1.21–1.23 s), and 3.3–3.5 s with its two cores shared with
-//! three to eight other busy threads; before the shell queues were kept per
-//! z-slab it took 3.9 s (3.9 s of CPU time per run).
+//! Cost: near-linear in the number of nodes (the shells of closest-point
+//! propagation hold each node once; the Eikonal updates pay a radix heap).
+//! Bench: `cargo bench -p isomorph-benches --bench common --
+//! redistance/torus/256` (figures in `docs/EXPERIMENTS.md`).
 //!
 //! [`redistance`] turns any grid whose zero level set is right but whose
 //! values are not distances (a sign field, a scaled or clamped field) into a

@@ -52,13 +52,14 @@
 //! into z-slabs of a fixed thickness processed in parallel with rayon; a
 //! slab refers to the vertices of the plane it shares with the next slab by
 //! their (deterministic) order there, so the seams carry no duplicate vertex
-//! and the output is identical for any thread count.
-//!
-//! Measured (`cargo run --release -p isomorph-common --example mc_timing`):
-//! a 256³ grid of a torus distance (134,688 vertices, 269,376 triangles)
-//! takes about 9 ms on 2 idle cores, 18 ms on one.
+//! and the output is identical for any thread count. Bench:
+//! `cargo bench -p isomorph-benches --bench common -- marching_cubes/torus/256`
+//! (figures in `docs/EXPERIMENTS.md`).
 
+mod sparse;
 mod table;
+
+pub use sparse::{SparseSettings, SparseStats, level_set_mesh, polygonize_near_surface};
 
 use crate::marching_squares::crossing_parameter;
 use crate::{Aabb, Field3, Grid3, GridError, TriMesh};

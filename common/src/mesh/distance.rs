@@ -7,8 +7,8 @@
 //! with a [`TriangleBvh`]. The sampling is deterministic: the same meshes and
 //! sample count always give the same figures.
 
-use super::TriMesh;
 use super::bvh::TriangleBvh;
+use crate::TriMesh;
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -37,7 +37,7 @@ pub enum DistanceError {
     },
     /// A mesh failed validation.
     #[error(transparent)]
-    Mesh(#[from] super::MeshError),
+    Mesh(#[from] crate::MeshError),
 }
 
 /// Two-sided distance between the surfaces of `a` and `b`: `samples` points

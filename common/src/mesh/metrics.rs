@@ -15,7 +15,7 @@
 //! Accumulations run in `f64`; the edge analysis sorts one packed key per
 //! triangle corner (parallel sort), so a 270k-triangle mesh takes milliseconds.
 
-use super::TriMesh;
+use crate::TriMesh;
 use glam::DVec3;
 use rayon::slice::ParallelSliceMut;
 use serde::Serialize;
@@ -286,13 +286,15 @@ impl TriMesh {
     }
 }
 
-/// Meshes shared by the tests of the mesh modules: procedural shapes and a
-/// minimal OBJ reader for the test data (the real reader lives in `io`).
+/// Meshes shared by the tests of the mesh modules: the Stanford bunny read
+/// by a minimal OBJ reader (the real reader lives in `isomorph-io`) and the
+/// procedural meshes of [`crate::mesh::primitives`].
 #[cfg(test)]
 pub(crate) mod test_meshes {
     use crate::TriMesh;
     use glam::Vec3;
-    use std::f32::consts::{PI, TAU};
+
+    pub(crate) use crate::mesh::primitives::{cube, torus, uv_sphere};
 
     /// Reads the `v` and `f` lines of an OBJ file (triangles only, 1-based
     /// indices, `i/j/k` corner syntax reduced to the position index).
@@ -322,72 +324,13 @@ pub(crate) mod test_meshes {
     pub(crate) fn bunny() -> TriMesh {
         read_obj(concat!(env!("CARGO_MANIFEST_DIR"), "/../data/bunny.obj"))
     }
-
-    /// The cube `[-h, h]³`, two outward triangles per face.
-    pub(crate) fn cube(h: f32) -> TriMesh {
-        let positions =
-            (0..8).map(|i| Vec3::new([-h, h][i & 1], [-h, h][(i >> 1) & 1], [-h, h][(i >> 2) & 1])).collect();
-        let quads = [[0, 4, 6, 2], [1, 3, 7, 5], [0, 1, 5, 4], [2, 6, 7, 3], [0, 2, 3, 1], [4, 5, 7, 6]];
-        let triangles = quads.iter().flat_map(|&[a, b, c, d]| [[a, b, c], [a, c, d]]).collect();
-        TriMesh::new(positions, triangles).unwrap()
-    }
-
-    /// A UV sphere of radius `r` about `center` with `rings` latitude bands
-    /// and `segments` longitude slices; the poles are single vertices.
-    pub(crate) fn uv_sphere(center: Vec3, r: f32, rings: u32, segments: u32) -> TriMesh {
-        let mut positions = vec![center + Vec3::new(0.0, 0.0, r)];
-        for i in 1..rings {
-            let theta = PI * i as f32 / rings as f32;
-            for j in 0..segments {
-                let phi = TAU * j as f32 / segments as f32;
-                let dir = Vec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
-                positions.push(center + r * dir);
-            }
-        }
-        positions.push(center - Vec3::new(0.0, 0.0, r));
-        let south = positions.len() as u32 - 1;
-        let ring = |i: u32, j: u32| 1 + (i - 1) * segments + j % segments;
-        let mut triangles = Vec::new();
-        for j in 0..segments {
-            triangles.push([0, ring(1, j), ring(1, j + 1)]);
-            triangles.push([south, ring(rings - 1, j + 1), ring(rings - 1, j)]);
-            for i in 1..rings - 1 {
-                let (a, b, c, d) = (ring(i, j), ring(i + 1, j), ring(i + 1, j + 1), ring(i, j + 1));
-                triangles.extend([[a, b, c], [a, c, d]]);
-            }
-        }
-        TriMesh::new(positions, triangles).unwrap()
-    }
-
-    /// A torus about the z axis with tube centre radius `big` and tube radius
-    /// `small`, `n` segments around the axis and `m` around the tube.
-    pub(crate) fn torus(big: f32, small: f32, n: u32, m: u32) -> TriMesh {
-        let mut positions = Vec::new();
-        for i in 0..n {
-            let u = TAU * i as f32 / n as f32;
-            for j in 0..m {
-                let v = TAU * j as f32 / m as f32;
-                let rho = big + small * v.cos();
-                positions.push(Vec3::new(rho * u.cos(), rho * u.sin(), small * v.sin()));
-            }
-        }
-        let id = |i: u32, j: u32| (i % n) * m + j % m;
-        let mut triangles = Vec::new();
-        for i in 0..n {
-            for j in 0..m {
-                let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-                triangles.extend([[a, b, c], [a, c, d]]);
-            }
-        }
-        TriMesh::new(positions, triangles).unwrap()
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::test_meshes::*;
     use super::*;
-    use crate::mesh::tests::tetrahedron;
+    use crate::mesh::trimesh::tests::tetrahedron;
     use glam::Vec3;
     use std::f64::consts::PI;
 

@@ -45,7 +45,7 @@
 //! # Ok::<(), isomorph_common::MeshError>(())
 //! ```
 
-use super::TriMesh;
+use crate::TriMesh;
 use glam::{Mat3, Vec3};
 use rayon::prelude::*;
 use std::f32::consts::PI;

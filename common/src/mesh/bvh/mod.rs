@@ -25,7 +25,7 @@ pub mod lattice;
 
 pub use lattice::{Lattice, LatticeHit};
 
-use super::TriMesh;
+use crate::TriMesh;
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -296,6 +296,13 @@ impl TriangleBvh {
             }
         }
     }
+}
+
+/// The point of triangle `corners` nearest to `p` (any triangle, degenerate
+/// ones included: then the nearest point of its edges). The BVH's own
+/// query, for callers with a single triangle.
+pub fn closest_point_on_triangle(p: Vec3, corners: [Vec3; 3]) -> Vec3 {
+    closest_on_triangle(p, &Tri::new(corners)).point
 }
 
 /// The nearest point of triangle `t` to `p` (see the [module docs](self)).

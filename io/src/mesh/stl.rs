@@ -2,8 +2,8 @@
 //! soup is welded into an indexed mesh.
 
 use super::{MeshFormat, MeshIoError};
-use crate::TriMesh;
 use glam::Vec3;
+use isomorph_common::TriMesh;
 use std::collections::HashMap;
 use std::io::{self, Cursor, Read, Write};
 

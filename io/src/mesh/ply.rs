@@ -2,8 +2,8 @@
 //! element loop, the count checks and the error locations done here.
 
 use super::{MeshFormat, MeshIoError};
-use crate::TriMesh;
 use glam::Vec3;
+use isomorph_common::TriMesh;
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{
     ElementDef, Encoding, Header, Property, PropertyAccess, PropertyAccessResult, PropertyDef, PropertyType,
@@ -542,7 +542,10 @@ mod tests {
         for v in [1.0f32, 2.0, 3.0, f32::NAN, 0.0, 0.0] {
             bytes.extend_from_slice(&v.to_be_bytes());
         }
-        assert!(matches!(read_ply(&bytes[..]), Err(MeshIoError::Mesh(crate::MeshError::NonFinite(1)))));
+        assert!(matches!(
+            read_ply(&bytes[..]),
+            Err(MeshIoError::Mesh(isomorph_common::MeshError::NonFinite(1)))
+        ));
 
         let normals = format!(
             "ply\nformat ascii 1.0\nelement vertex 1\n{xyz}property float nx\nproperty float ny\n\

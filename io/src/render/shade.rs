@@ -5,8 +5,8 @@
 
 use super::raster::{Fragment, Projection};
 use super::{RenderSettings, Shading};
-use crate::TriMesh;
 use glam::{Vec2, Vec3};
+use isomorph_common::TriMesh;
 
 /// Light reaching every surface regardless of orientation.
 const AMBIENT: f32 = 0.12;

@@ -9,7 +9,7 @@
 //! into one image, and [`Image::write_png`] saves any of them.
 //!
 //! ```
-//! use isomorph_common::render::{render, RenderSettings};
+//! use isomorph_io::render::{render, RenderSettings};
 //! use isomorph_common::{glam::Vec3, TriMesh};
 //!
 //! let tetrahedron = TriMesh::new(
@@ -44,8 +44,8 @@ pub use font::text_size;
 pub use image::Image;
 pub use sheet::{ContactSheet, contact_sheet, contact_sheet_titled};
 
-use crate::{Aabb, TriMesh};
 use glam::{Vec2, Vec3};
+use isomorph_common::{Aabb, TriMesh};
 use raster::{Projection, rasterize};
 use rayon::prelude::*;
 use shade::{Shader, linear_to_srgb, srgb_to_linear};
@@ -180,7 +180,7 @@ fn finite_bounds(mesh: &TriMesh) -> Aabb {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::metrics::test_meshes::uv_sphere;
+    use isomorph_common::mesh::primitives::uv_sphere;
 
     fn drawn(image: &Image, background: [u8; 3]) -> Vec<(u32, u32)> {
         (0..image.height())

@@ -2,8 +2,8 @@
 //! hostile input fed to every reader.
 
 use super::*;
-use crate::Aabb;
 use glam::Vec3;
+use isomorph_common::Aabb;
 use proptest::prelude::*;
 
 const ALL: [MeshFormat; 6] = [

@@ -18,7 +18,8 @@
 //!
 //! # Example
 //! ```
-//! use isomorph_common::{Aabb, Grid3, Shape, npy};
+//! use isomorph_common::{Aabb, Grid3, Shape};
+//! use isomorph_io::npy;
 //! let grid = Grid3::sample_box(&Shape::sphere(0.3), &Aabb::cube(0.5), 9)?;
 //! let mut bytes = Vec::new();
 //! npy::write_npy(&grid, &mut bytes)?;
@@ -33,8 +34,8 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-use crate::{Grid3, GridError};
 use glam::{UVec3, Vec3};
+use isomorph_common::{Grid3, GridError};
 use serde::{Deserialize, Serialize};
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
@@ -196,8 +197,8 @@ pub fn read_npy(bytes: &[u8], origin: Vec3, spacing: f32, path: &Path) -> Result
         return Err(bad(format!("{} data bytes for {count} values of {} bytes", data.len(), dtype.size())));
     }
     let requested = usize::try_from(count).unwrap_or(usize::MAX).saturating_mul(4);
-    if requested > crate::grid::memory_limit() {
-        return Err(GridError::TooLarge { dims, requested, limit: crate::grid::memory_limit() }.into());
+    if requested > isomorph_common::memory_limit() {
+        return Err(GridError::TooLarge { dims, requested, limit: isomorph_common::memory_limit() }.into());
     }
     Ok(match dtype {
         Dtype::U8 => Volume::U8(Grid3::from_vec(dims, origin, spacing, data.to_vec())?),
@@ -487,7 +488,9 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("isomorph-npy-load-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("sphere.npy");
-        let grid = Grid3::sample_box(&crate::Shape::sphere(0.3), &crate::Aabb::cube(0.5), 9).unwrap();
+        let grid =
+            Grid3::sample_box(&isomorph_common::Shape::sphere(0.3), &isomorph_common::Aabb::cube(0.5), 9)
+                .unwrap();
         save_npy(&grid, &path).unwrap();
         assert_eq!(load_npy(&path).unwrap(), Volume::F32(grid.clone()));
         // Without the sidecar: voxel units at the origin.

@@ -11,8 +11,8 @@
 //! not depend on the thread count.
 
 use super::camera::{Camera, ViewBasis};
-use crate::TriMesh;
 use glam::{Vec2, Vec3};
+use isomorph_common::TriMesh;
 use rayon::prelude::*;
 
 /// Image rows per band; bands are rasterized in parallel.

@@ -17,11 +17,11 @@
 //! test rules out unless the field varies faster than `L` there (tested
 //! against the full grid).
 
-use crate::error::RbfError;
+use super::marching_cubes;
+use crate::grid::lattice_for_box;
+use crate::morph::MorphError;
+use crate::{Aabb, Field3, Grid3, TriMesh};
 use glam::{UVec3, Vec3};
-use isomorph_common::grid::lattice_for_box;
-use isomorph_common::marching_cubes::marching_cubes;
-use isomorph_common::{Aabb, Field3, Grid3, TriMesh};
 
 /// Settings of [`polygonize_near_surface`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -58,17 +58,20 @@ pub struct SparseStats {
 /// surface (see the [module docs](self)).
 ///
 /// # Errors
-/// [`RbfError::Grid`] for a bad box, `res < 2` or a lattice too large;
-/// [`RbfError::InvalidSetting`] for `block < 1` or a safety factor below 1.
+/// [`MorphError::Grid`] for a bad box, `res < 2` or a lattice too large;
+/// [`MorphError::BadSetting`] for `block < 1` or a safety factor below 1.
 pub fn polygonize_near_surface<F: Field3 + ?Sized>(
     field: &F,
     bounds: &Aabb,
     res: u32,
     iso: f32,
     settings: &SparseSettings,
-) -> Result<(TriMesh, SparseStats), RbfError> {
-    if settings.block < 1 || !(settings.safety >= 1.0 && settings.safety.is_finite()) {
-        return Err(RbfError::InvalidSetting("block must be ≥ 1 and safety a finite number ≥ 1"));
+) -> Result<(TriMesh, SparseStats), MorphError> {
+    if settings.block < 1 {
+        return Err(MorphError::bad_setting("block", settings.block, "at least 1 cell"));
+    }
+    if !(settings.safety >= 1.0 && settings.safety.is_finite()) {
+        return Err(MorphError::bad_setting("safety", settings.safety, "a finite number ≥ 1"));
     }
     let (dims, origin, h) = lattice_for_box(bounds, res)?;
     let mut grid = Grid3::new(dims, origin, h, 0.0f32)?;
@@ -270,44 +273,52 @@ impl<F: Field3 + ?Sized> Sampler<'_, F> {
     }
 }
 
-/// The mesh of `field`'s zero set over `bounds` (grown by a hair so that a
-/// surface on the box is still closed) with `res` nodes along the longest
-/// edge, polygonized near the surface with the default settings.
-pub(crate) fn zero_set_mesh<F: Field3 + ?Sized>(
+/// The mesh of `field`'s level set `iso` over `bounds` (grown by a hair so
+/// that a surface on the box is still closed) with `res` nodes along the
+/// longest edge, polygonized near the surface with the default settings.
+///
+/// # Errors
+/// As [`polygonize_near_surface`].
+pub fn level_set_mesh<F: Field3 + ?Sized>(
     field: &F,
     bounds: &Aabb,
     res: u32,
-) -> Result<TriMesh, RbfError> {
-    Ok(polygonize_near_surface(field, &bounds.expanded(1e-4), res, 0.0, &SparseSettings::default())?.0)
+    iso: f32,
+) -> Result<TriMesh, MorphError> {
+    Ok(polygonize_near_surface(field, &bounds.expanded(1e-4), res, iso, &SparseSettings::default())?.0)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Kernel, RbfMorph};
-    use isomorph_common::marching_cubes::polygonize;
+    use crate::marching_cubes::polygonize;
+    use crate::{Shape, models};
 
     #[test]
     fn same_mesh_as_the_full_grid_with_fewer_evaluations() {
-        let morph = RbfMorph::sphere_torus(100, Kernel::ThinPlate).unwrap();
-        for t in [0.0, 0.5, 1.0] {
-            let slice = morph.slice(t).unwrap();
-            let box_ = Aabb::cube(0.5);
-            let full = polygonize(&slice, &box_, 40, 0.0).unwrap();
+        // Exact distances, a CSG bound and a field far from a distance.
+        let torus = models::torus();
+        let c = models::c_shape();
+        let squashed = |p: Vec3| (0.3 - p.length()) * (1.0 + 4.0 * p.x * p.x);
+        let box_ = Aabb::cube(0.5);
+        let fields: [&dyn Field3; 3] = [&torus, &c, &squashed];
+        for field in fields {
+            let full = polygonize(field, &box_, 40, 0.0).unwrap();
             let (sparse, stats) =
-                polygonize_near_surface(&slice, &box_, 40, 0.0, &SparseSettings::default()).unwrap();
-            assert_eq!(sparse.positions, full.positions, "t={t}");
-            assert_eq!(sparse.triangles, full.triangles, "t={t}");
+                polygonize_near_surface(field, &box_, 40, 0.0, &SparseSettings::default()).unwrap();
+            assert_eq!(sparse.positions, full.positions);
+            assert_eq!(sparse.triangles, full.triangles);
             assert!(!full.triangles.is_empty());
-            // About 25–31 % of the nodes at 40³ (the saving grows with the resolution).
-            assert!(stats.evaluated * 10 < stats.nodes * 4, "{stats:?}");
+            assert!(stats.evaluated * 10 < stats.nodes * 6, "{stats:?}");
         }
         let f = |p: Vec3| 0.3 - p.length();
         assert!(polygonize_near_surface(&f, &Aabb::cube(0.5), 1, 0.0, &SparseSettings::default()).is_err());
         let bad = SparseSettings { block: 0, ..Default::default() };
         assert!(matches!(
             polygonize_near_surface(&f, &Aabb::cube(0.5), 8, 0.0, &bad),
-            Err(RbfError::InvalidSetting(_))
+            Err(MorphError::BadSetting { name: "block", .. })
         ));
+        let sphere = level_set_mesh(&Shape::sphere(0.3), &box_, 32, 0.0).unwrap();
+        assert_eq!(sphere.genus(), Some(0));
     }
 }

@@ -1,7 +1,7 @@
 //! [`Camera`]: a perspective pinhole camera and automatic framing.
 
-use crate::Aabb;
 use glam::Vec3;
+use isomorph_common::Aabb;
 
 /// A perspective pinhole camera in world space.
 ///

@@ -2,27 +2,35 @@
 //! the meshes, a PNG contact sheet and `report.json`.
 //!
 //! # `report.json`
-//! Stable keys (all distances in world units unless suffixed `_voxels`):
+//! Stable keys (all distances in world units unless suffixed `_voxels`; a
+//! voxel is the longest edge of the morph's world bounds over
+//! `resolution − 1`):
 //!
 //! ```json
 //! {
 //!   "method": "baseline", "resolution": 64, "voxel_size": 0.0159,
-//!   "total_seconds": 0.41,
+//!   "export_seconds": 0.41,
 //!   "frames": [ { "t": 0.0, "file": "frame_000.ply", "vertices": 1234, "triangles": 2464,
-//!                 "components": 1, "genus": 0, "area": 0.9, "volume": 0.1, "seconds": 0.02 } ],
+//!                 "components": 1, "genus": 0, "area": 0.9, "volume": 0.1, "seconds": 0.02,
+//!                 "step_from_previous": null } ],
 //!   "endpoints": { "source": { "mean": 0.001, "hausdorff": 0.004,
 //!                              "mean_voxels": 0.06, "hausdorff_voxels": 0.25 },
-//!                  "target": { ... } }
+//!                  "target": { ... } },
+//!   "largest_step": 0.03, "largest_step_voxels": 1.9,
+//!   "morph": { "method": "baseline", "outcome": "direct", "converged": true, "stages": [ ... ], ... }
 //! }
 //! ```
 //! `genus` is `null` for frames that are not closed 2-manifolds; an endpoint is
-//! `null` when no reference mesh was given.
+//! `null` when no reference mesh was given. `step_from_previous` is the
+//! Hausdorff distance from the frame before (how far the surface jumped);
+//! `largest_step` the largest of them. `morph` is the method's
+//! [`MorphReport`].
 
-use crate::TriMesh;
-use crate::mesh::distance::{SurfaceDistance, surface_distance};
-use crate::mesh::io::{MeshFormat, write_mesh};
-use crate::morph::Morph;
-use crate::render::{Image, RenderSettings, contact_sheet, render};
+use crate::mesh::{MeshFormat, write_mesh};
+use crate::render::{Camera, Image, RenderSettings, contact_sheet, render};
+use isomorph_common::mesh::distance::{SurfaceDistance, surface_distance};
+use isomorph_common::{Aabb, Control, Morph, MorphError, TriMesh};
+use isomorph_common::{BoxedError, MorphReport};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -51,6 +59,8 @@ pub struct ExportSettings {
     pub target_reference: Option<TriMesh>,
     /// Surface samples per mesh for the endpoint distances.
     pub distance_samples: usize,
+    /// Surface samples per mesh for the distance between consecutive frames.
+    pub step_samples: usize,
 }
 
 impl Default for ExportSettings {
@@ -66,25 +76,9 @@ impl Default for ExportSettings {
             source_reference: None,
             target_reference: None,
             distance_samples: 20_000,
+            step_samples: 4_000,
         }
     }
-}
-
-/// Progress of an export, passed to the callback.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum ExportProgress {
-    /// `done` of `total` frames polygonized and written.
-    Frame {
-        /// Frames finished.
-        done: usize,
-        /// Frames in all.
-        total: usize,
-    },
-    /// Rendering the contact sheet.
-    ContactSheet,
-    /// Measuring endpoint distances.
-    Endpoints,
 }
 
 /// Errors of [`export_sequence`].
@@ -100,7 +94,15 @@ pub enum ExportError {
         /// Time of the frame.
         t: f32,
         /// The morph's error.
-        source: Box<dyn std::error::Error + Send + Sync>,
+        source: BoxedError,
+    },
+    /// A frame at an end of the morph is empty while its input is not.
+    #[error("the frame at t = {t} is empty (no surface) although the {which} is not")]
+    EmptyEndpoint {
+        /// Time of the frame.
+        t: f32,
+        /// `"source"` or `"target"`.
+        which: &'static str,
     },
     /// A file or folder could not be written.
     #[error("cannot write {path}: {source}")]
@@ -112,13 +114,13 @@ pub enum ExportError {
     },
     /// A mesh could not be written.
     #[error(transparent)]
-    MeshIo(#[from] crate::mesh::io::MeshIoError),
+    MeshIo(#[from] crate::mesh::MeshIoError),
     /// The contact sheet could not be written.
     #[error(transparent)]
     Render(#[from] crate::render::RenderError),
-    /// The callback asked to stop.
-    #[error("cancelled")]
-    Cancelled,
+    /// Cancelled through the [`Control`].
+    #[error(transparent)]
+    Cancelled(#[from] MorphError),
 }
 
 /// Metrics of one exported frame.
@@ -142,6 +144,9 @@ pub struct FrameReport {
     pub volume: f64,
     /// Wall time to make, polygonize and write this frame.
     pub seconds: f64,
+    /// Hausdorff distance to the previous frame (world units); `None` for the
+    /// first frame or when either is empty.
+    pub step_from_previous: Option<f32>,
 }
 
 /// A surface distance in world units and in voxels.
@@ -185,17 +190,20 @@ pub struct Report {
     pub method: String,
     /// Nodes along the longest edge.
     pub resolution: u32,
-    /// Edge length of one voxel (world units).
+    /// Edge length of one world voxel (world units).
     pub voxel_size: f32,
-    /// Wall time of the whole export.
-    pub total_seconds: f64,
+    /// Wall time of the export (frames, files, pictures, metrics).
+    pub export_seconds: f64,
     /// One entry per frame, in time order.
     pub frames: Vec<FrameReport>,
     /// Endpoint distances.
     pub endpoints: Endpoints,
-    /// [`Morph::details`]: method-specific convergence and cost figures.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub details: Option<serde_json::Value>,
+    /// The largest distance between consecutive frames (world units).
+    pub largest_step: Option<f32>,
+    /// `largest_step` in voxels.
+    pub largest_step_voxels: Option<f32>,
+    /// The method's own report.
+    pub morph: MorphReport,
 }
 
 impl Report {
@@ -203,21 +211,43 @@ impl Report {
     pub fn max_components(&self) -> usize {
         self.frames.iter().map(|f| f.components).max().unwrap_or(0)
     }
+
+    /// Genus per frame.
+    pub fn genus_sequence(&self) -> Vec<Option<i64>> {
+        self.frames.iter().map(|f| f.genus).collect()
+    }
 }
 
-/// Polygonizes `settings.frames` frames of `morph` (in parallel), writes
-/// `frame_NNN.<ext>`, `contact_sheet.png` and `report.json` into
-/// `settings.out_dir`, and returns the report. `progress` is called as work
-/// finishes; returning `false` cancels.
+/// The frames' meshes and their report, as [`export_sequence`] made them.
+#[derive(Debug, Clone)]
+pub struct Exported {
+    /// `report.json`'s contents.
+    pub report: Report,
+    /// The frame meshes in time order (world units).
+    pub meshes: Vec<TriMesh>,
+}
+
+/// Polygonizes `settings.frames` frames of `morph` (in parallel on the
+/// control's threads), writes `frame_NNN.<ext>`, `contact_sheet.png` and
+/// `report.json` into `settings.out_dir`, and returns the report with the
+/// meshes. Progress is reported as stage `"frames"`.
 ///
 /// # Errors
-/// [`ExportError`] for bad settings, a failing frame, IO problems or
-/// cancellation.
+/// [`ExportError`] for bad settings, a failing frame, an empty end frame, IO
+/// problems or cancellation.
 pub fn export_sequence<M: Morph + ?Sized>(
     morph: &M,
     settings: &ExportSettings,
-    progress: &(dyn Fn(ExportProgress) -> bool + Sync),
-) -> Result<Report, ExportError> {
+    control: &Control,
+) -> Result<Exported, ExportError> {
+    control.install(|| export_on_pool(morph, settings, control))
+}
+
+fn export_on_pool<M: Morph + ?Sized>(
+    morph: &M,
+    settings: &ExportSettings,
+    control: &Control,
+) -> Result<Exported, ExportError> {
     let start = Instant::now();
     if settings.frames < 2 {
         return Err(ExportError::Settings(format!("need at least 2 frames, got {}", settings.frames)));
@@ -235,11 +265,12 @@ pub fn export_sequence<M: Morph + ?Sized>(
     let results: Vec<(FrameReport, TriMesh)> = (0..total)
         .into_par_iter()
         .map(|i| {
+            control.check()?;
             let frame_start = Instant::now();
             let t = i as f32 / (total - 1) as f32;
             let mesh = morph
                 .frame_mesh(t, settings.resolution)
-                .map_err(|e| ExportError::Frame { t, source: Box::new(e) })?;
+                .map_err(|e| ExportError::Frame { t, source: BoxedError::new(e) })?;
             let file = format!("frame_{i:03}.{}", settings.format.extension());
             write_mesh(&mesh, dir.join(&file), settings.format)?;
             let m = mesh.metrics();
@@ -253,67 +284,102 @@ pub fn export_sequence<M: Morph + ?Sized>(
                 area: m.area,
                 volume: m.volume,
                 seconds: frame_start.elapsed().as_secs_f64(),
+                step_from_previous: None,
             };
             let finished = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            if !progress(ExportProgress::Frame { done: finished, total }) {
-                return Err(ExportError::Cancelled);
-            }
+            control
+                .progress("frames", Some(finished as f32 / total as f32), || format!("{finished}/{total}"));
             Ok((report, mesh))
         })
-        .collect::<Result<_, _>>()?;
+        .collect::<Result<_, ExportError>>()?;
+    let (mut frames, meshes): (Vec<FrameReport>, Vec<TriMesh>) = results.into_iter().unzip();
+
+    for (which, index, reference) in
+        [("source", 0, &settings.source_reference), ("target", total - 1, &settings.target_reference)]
+    {
+        let reference_has_surface = reference.as_ref().is_some_and(|r| !r.triangles.is_empty());
+        if meshes[index].triangles.is_empty() && reference_has_surface {
+            return Err(ExportError::EmptyEndpoint { t: frames[index].t, which });
+        }
+    }
 
     if settings.contact_sheet {
-        if !progress(ExportProgress::ContactSheet) {
-            return Err(ExportError::Cancelled);
-        }
-        write_contact_sheet(&results, settings, &dir.join("contact_sheet.png"))?;
+        control.check()?;
+        control.progress("contact sheet", None, String::new);
+        write_contact_sheet(&frames, &meshes, settings, &dir.join("contact_sheet.png"))?;
     }
 
-    if !progress(ExportProgress::Endpoints) {
-        return Err(ExportError::Cancelled);
+    control.check()?;
+    control.progress("metrics", None, String::new);
+    let voxel = world_voxel(&morph.world_bounds(), settings.resolution);
+    let steps: Vec<Option<f32>> = (1..total)
+        .into_par_iter()
+        .map(|i| {
+            surface_distance(&meshes[i - 1], &meshes[i], settings.step_samples).ok().map(|d| d.hausdorff)
+        })
+        .collect();
+    for (frame, step) in frames.iter_mut().skip(1).zip(&steps) {
+        frame.step_from_previous = *step;
     }
-    let voxel = morph.bounds().size().max_element() / (settings.resolution - 1) as f32;
+    let largest_step = steps.iter().flatten().copied().reduce(f32::max);
     let endpoint = |reference: &Option<TriMesh>, mesh: &TriMesh| {
         let reference = reference.as_ref()?;
         let d = surface_distance(mesh, reference, settings.distance_samples).ok()?;
         Some(EndpointDistance::new(d, voxel))
     };
     let endpoints = Endpoints {
-        source: endpoint(&settings.source_reference, &results[0].1),
-        target: endpoint(&settings.target_reference, &results[total - 1].1),
+        source: endpoint(&settings.source_reference, &meshes[0]),
+        target: endpoint(&settings.target_reference, &meshes[total - 1]),
     };
     let report = Report {
         method: morph.method().to_string(),
         resolution: settings.resolution,
         voxel_size: voxel,
-        total_seconds: start.elapsed().as_secs_f64(),
-        frames: results.into_iter().map(|(r, _)| r).collect(),
+        export_seconds: start.elapsed().as_secs_f64(),
+        frames,
         endpoints,
-        details: morph.details(),
+        largest_step,
+        largest_step_voxels: largest_step.map(|s| s / voxel),
+        morph: morph.report().clone(),
     };
     let path = dir.join("report.json");
     let json = serde_json::to_string_pretty(&report).expect("report serializes");
     std::fs::write(&path, json).map_err(|source| ExportError::Io { path, source })?;
-    Ok(report)
+    Ok(Exported { report, meshes })
+}
+
+/// One world voxel: the longest edge of `bounds` over `resolution − 1`.
+pub fn world_voxel(bounds: &Aabb, resolution: u32) -> f32 {
+    bounds.size().max_element() / resolution.saturating_sub(1).max(1) as f32
+}
+
+/// The frames rendered with one camera fitted to all of them, labelled
+/// with their times.
+pub fn frame_tiles(
+    times: &[f32],
+    meshes: &[TriMesh],
+    render_settings: &RenderSettings,
+) -> Vec<(Image, String)> {
+    let mut settings = *render_settings;
+    if settings.camera.is_none() {
+        let bounds = meshes.iter().fold(Aabb::EMPTY, |b, m| b.union(&m.bounds()));
+        if !bounds.is_empty() {
+            settings.camera = Some(Camera::fit(&bounds, Camera::DEFAULT_VIEW_DIR));
+        }
+    }
+    times.par_iter().zip(meshes).map(|(t, m)| (render(m, &settings), format!("t = {t:.2}"))).collect()
 }
 
 /// Renders every frame with one camera fitted to all of them and tiles the
 /// images, labelled with their times.
 fn write_contact_sheet(
-    frames: &[(FrameReport, TriMesh)],
+    frames: &[FrameReport],
+    meshes: &[TriMesh],
     settings: &ExportSettings,
     path: &Path,
 ) -> Result<(), ExportError> {
-    let mut render_settings = settings.render;
-    if render_settings.camera.is_none() {
-        let bounds = frames.iter().fold(crate::Aabb::EMPTY, |b, (_, m)| b.union(&m.bounds()));
-        if !bounds.is_empty() {
-            render_settings.camera =
-                Some(crate::render::Camera::fit(&bounds, crate::render::Camera::DEFAULT_VIEW_DIR));
-        }
-    }
-    let tiles: Vec<(Image, String)> =
-        frames.par_iter().map(|(r, m)| (render(m, &render_settings), format!("t = {:.2}", r.t))).collect();
+    let times: Vec<f32> = frames.iter().map(|f| f.t).collect();
+    let tiles = frame_tiles(&times, meshes, &settings.render);
     contact_sheet(&tiles, settings.sheet_columns).write_png(path)?;
     Ok(())
 }

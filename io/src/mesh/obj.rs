@@ -1,8 +1,8 @@
 //! Wavefront OBJ: `v`, `vn` and `f` records (every other record is skipped).
 
 use super::MeshIoError;
-use crate::TriMesh;
 use glam::Vec3;
+use isomorph_common::TriMesh;
 use std::io::{self, BufRead, Write};
 
 const FORMAT: &str = "OBJ";

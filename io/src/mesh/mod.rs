@@ -59,7 +59,7 @@ pub use obj::read_obj;
 pub use ply::read_ply;
 pub use stl::read_stl;
 
-use super::{MeshError, TriMesh};
+use isomorph_common::{MeshError, TriMesh};
 use std::fmt;
 use std::fs::File;
 use std::io::{self, BufReader, BufWriter, Read, Write};

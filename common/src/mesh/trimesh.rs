@@ -1,0 +1,190 @@
+//! The indexed triangle mesh [`TriMesh`] and its construction errors.
+
+use crate::Aabb;
+use glam::{Affine3A, Vec3};
+
+/// Errors of mesh construction.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum MeshError {
+    /// A triangle refers to a vertex that does not exist.
+    #[error("triangle {triangle} refers to vertex {index}, but the mesh has {vertices} vertices")]
+    IndexOutOfRange {
+        /// Triangle number.
+        triangle: usize,
+        /// The offending vertex index.
+        index: u32,
+        /// Vertex count.
+        vertices: usize,
+    },
+    /// A vertex position is NaN or infinite.
+    #[error("vertex {0} has a non-finite coordinate")]
+    NonFinite(usize),
+    /// The normals array does not have one normal per vertex.
+    #[error("{normals} normals given for {vertices} vertices")]
+    NormalCount {
+        /// Normals given.
+        normals: usize,
+        /// Vertices.
+        vertices: usize,
+    },
+}
+
+/// An indexed triangle mesh in world space.
+///
+/// Triangles are counter-clockwise seen from outside (their right-hand normal
+/// points out of the solid), which is what the polygonizers produce under the
+/// positive-inside convention.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TriMesh {
+    /// Vertex positions.
+    pub positions: Vec<Vec3>,
+    /// Vertex indices of each triangle.
+    pub triangles: Vec<[u32; 3]>,
+    /// Optional per-vertex unit normals (outward).
+    pub normals: Option<Vec<Vec3>>,
+}
+
+impl TriMesh {
+    /// A mesh from positions and triangles, validated.
+    ///
+    /// # Errors
+    /// [`MeshError::IndexOutOfRange`] for a bad index, [`MeshError::NonFinite`]
+    /// for a NaN or infinite coordinate.
+    pub fn new(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Result<Self, MeshError> {
+        let mesh = Self { positions, triangles, normals: None };
+        mesh.validate()?;
+        Ok(mesh)
+    }
+
+    /// Checks indices, coordinates and the normal count.
+    ///
+    /// # Errors
+    /// The first problem found, as a [`MeshError`].
+    pub fn validate(&self) -> Result<(), MeshError> {
+        if let Some(i) = self.positions.iter().position(|p| !p.is_finite()) {
+            return Err(MeshError::NonFinite(i));
+        }
+        let n = self.positions.len();
+        for (t, tri) in self.triangles.iter().enumerate() {
+            if let Some(&index) = tri.iter().find(|&&i| i as usize >= n) {
+                return Err(MeshError::IndexOutOfRange { triangle: t, index, vertices: n });
+            }
+        }
+        if let Some(normals) = &self.normals
+            && normals.len() != n
+        {
+            return Err(MeshError::NormalCount { normals: normals.len(), vertices: n });
+        }
+        Ok(())
+    }
+
+    /// True when the mesh has no triangle.
+    pub fn is_empty(&self) -> bool {
+        self.triangles.is_empty()
+    }
+
+    /// Bounding box of the vertices.
+    pub fn bounds(&self) -> Aabb {
+        Aabb::from_points(&self.positions)
+    }
+
+    /// The three corner positions of triangle `t`.
+    #[inline]
+    pub fn corners(&self, t: usize) -> [Vec3; 3] {
+        self.triangles[t].map(|i| self.positions[i as usize])
+    }
+
+    /// Area-weighted vertex normals (unit length; zero for isolated vertices).
+    pub fn vertex_normals(&self) -> Vec<Vec3> {
+        let mut acc = vec![Vec3::ZERO; self.positions.len()];
+        for (t, tri) in self.triangles.iter().enumerate() {
+            let [a, b, c] = self.corners(t);
+            let n = (b - a).cross(c - a); // length = 2 × area
+            for &i in tri {
+                acc[i as usize] += n;
+            }
+        }
+        acc.iter().map(|n| n.normalize_or_zero()).collect()
+    }
+
+    /// Fills [`TriMesh::normals`] with [`TriMesh::vertex_normals`].
+    pub fn compute_normals(&mut self) {
+        self.normals = Some(self.vertex_normals());
+    }
+
+    /// Applies `map` to every position (and normals by its inverse transpose);
+    /// a map with negative determinant also flips the triangles so that they
+    /// stay outward.
+    pub fn transform(&mut self, map: &Affine3A) {
+        for p in &mut self.positions {
+            *p = map.transform_point3(*p);
+        }
+        let normal_map = map.matrix3.inverse().transpose();
+        if let Some(normals) = &mut self.normals {
+            for n in normals.iter_mut() {
+                *n = (normal_map * *n).normalize_or_zero();
+            }
+        }
+        if map.matrix3.determinant() < 0.0 {
+            for tri in &mut self.triangles {
+                tri.swap(1, 2);
+            }
+        }
+    }
+
+    /// A transformed copy (see [`TriMesh::transform`]).
+    pub fn transformed(&self, map: &Affine3A) -> Self {
+        let mut m = self.clone();
+        m.transform(map);
+        m
+    }
+
+    /// Appends `other`'s vertices and triangles (normals are kept only when
+    /// both meshes have them).
+    pub fn append(&mut self, other: &TriMesh) {
+        let offset = self.positions.len() as u32;
+        self.normals = match (self.normals.take(), &other.normals) {
+            (Some(mut a), Some(b)) => {
+                a.extend_from_slice(b);
+                Some(a)
+            }
+            _ => None,
+        };
+        self.positions.extend_from_slice(&other.positions);
+        self.triangles.extend(other.triangles.iter().map(|t| t.map(|i| i + offset)));
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+
+    /// A unit right tetrahedron, outward oriented.
+    pub(crate) fn tetrahedron() -> TriMesh {
+        TriMesh::new(
+            vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z],
+            vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn validation_catches_bad_input() {
+        assert!(matches!(
+            TriMesh::new(vec![Vec3::ZERO], vec![[0, 0, 1]]),
+            Err(MeshError::IndexOutOfRange { index: 1, .. })
+        ));
+        assert!(matches!(TriMesh::new(vec![Vec3::NAN], vec![]), Err(MeshError::NonFinite(0))));
+    }
+
+    #[test]
+    fn mirror_keeps_outward_orientation() {
+        let t = tetrahedron();
+        let n0 = t.vertex_normals()[0];
+        assert!(n0.dot(Vec3::ONE) < 0.0, "normal at origin points away from the body");
+        let m = t.transformed(&Affine3A::from_scale(Vec3::new(-1.0, 1.0, 1.0)));
+        let n0m = m.vertex_normals()[0];
+        assert!(n0m.dot(Vec3::new(-1.0, 1.0, 1.0)) < 0.0);
+    }
+}
