@@ -1,12 +1,13 @@
 //! `isomorph align`: the moment alignment (Breen & Whitaker 2001, Appendix)
 //! of a source onto a target, printed as JSON, and the aligned source mesh.
 
-use crate::inputs::Input;
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 use isomorph_common::alignment::{AlignMode, Alignment, PrincipalFrame, align};
 use isomorph_common::glam::Mat4;
-use isomorph_common::mesh::io::{MeshFormat, write_mesh};
+use isomorph_common::Control;
+use isomorph_io::inputs::{LoadOptions, load_solid};
+use isomorph_io::mesh::{MeshFormat, write_mesh};
 use serde_json::{Value, json};
 use std::path::PathBuf;
 
@@ -57,15 +58,17 @@ pub fn run(args: &AlignArgs) -> anyhow::Result<()> {
     let Some(format) = MeshFormat::from_path(&args.out) else {
         bail!("cannot tell the mesh format of {}: use .ply, .obj or .stl", args.out.display());
     };
-    let source = Input::parse(&args.source, false)?;
-    let target = Input::parse(&args.target, false)?;
+    let own = LoadOptions { fit: false, iso: None };
+    let control = Control::new();
+    let source = load_solid(&args.source, &own)?;
+    let target = load_solid(&args.target, &own)?;
     let alignment = align(
-        &source.moments(args.res).with_context(|| format!("cannot measure {}", args.source))?,
-        &target.moments(args.res).with_context(|| format!("cannot measure {}", args.target))?,
+        &source.moments(args.res, &control).with_context(|| format!("cannot measure {}", args.source))?,
+        &target.moments(args.res, &control).with_context(|| format!("cannot measure {}", args.target))?,
         args.mode.into(),
     )
     .context("cannot align the two shapes")?;
-    let mesh = source.reference(args.res)?.transformed(&alignment.map);
+    let mesh = source.surface(args.res, &control)?.transformed(&alignment.map);
     write_mesh(&mesh, &args.out, format).with_context(|| format!("cannot write {}", args.out.display()))?;
     let mut report = alignment_json(&alignment);
     report["output"] = json!(args.out.display().to_string());

@@ -1,13 +1,15 @@
-//! `isomorph demo`: a complete example from built-in shapes, in seconds.
+//! `isomorph demo`: a complete example from built-in shapes, in seconds,
+//! with every method's library defaults.
 
-use crate::inputs::BUNNY;
-use crate::level_set::{Align, Solver};
-use crate::morph::{Format, Method, MorphArgs, morph, print_summary};
-use crate::rbf::{self, ContoursArgs, KernelArg};
-use crate::tspline::SpeedArg;
+use crate::morph::{Format, Io, morph, print_summary};
+use crate::options::KernelArg;
+use crate::rbf::{self, ContoursArgs};
 use crate::warp::{self, FilterArg, RawType, WarpArgs};
 use clap::Args;
+use isomorph_cli::methods::{Method, Settings};
 use isomorph_common::glam::Vec3;
+use isomorph_io::inputs::BUNNY;
+use isomorph_levelset::Align;
 use std::path::PathBuf;
 
 /// Arguments of `isomorph demo`.
@@ -16,65 +18,63 @@ pub struct DemoArgs {
     /// Output folder; each morph gets a subfolder.
     #[arg(long, default_value = "out/demo")]
     out: PathBuf,
-    /// Grid nodes along the longest edge.
-    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(8..=512))]
-    res: u32,
+    /// Grid nodes along the longest edge of the frames (and of the grid
+    /// methods) [default: 64, the libraries' defaults].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(8..=512))]
+    res: Option<u32>,
     /// Frames per morph.
     #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(2..=200))]
     frames: u32,
+    /// Threads to use (default: all cores).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
+    threads: Option<u64>,
 }
 
 /// Runs every demo morph.
 pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
-    // Ball → C overlaps as modelled (Breen Fig. 4); the mug is placed on the
-    // chain by moment alignment so that every link overlaps it.
-    // The T-spline morphs: sphere → torus at depth 4, and Yang & Jüttler's
-    // Example 2, sphere → holed cube, with `isomorph_tspline::demo::
-    // holed_cube_settings` (depth 3, margin 0.5).
+    let defaults = match args.res {
+        Some(res) => Settings::default().with_resolution(res),
+        None => Settings::default(),
+    };
+    // The mug is placed on the chain by moment alignment so that every link
+    // overlaps it; Yang & Jüttler's Example 2 uses its own settings.
+    let mug_on_chain = {
+        let mut s = defaults.clone();
+        s.level_set.align = Align::Auto;
+        s
+    };
+    let holed_cube = Settings { tspline: isomorph_tspline::demo::holed_cube_settings(), ..defaults.clone() };
+    let rook_queen = Settings {
+        blobtree: isomorph_blobtree::BlobSettings {
+            spec: isomorph_blobtree::scenes::demo_spec("rook", "queen").unwrap_or_default(),
+            ..Default::default()
+        },
+        ..defaults.clone()
+    };
     let demos = [
-        (Method::Baseline, "ball", "c-shape", Align::None, "baseline_ball_to_c", None),
-        (Method::LevelSet, "ball", "c-shape", Align::None, "level_set_ball_to_c", None),
-        (Method::LevelSet, "mug", "chain", Align::Auto, "level_set_mug_to_chain", None),
-        (Method::Blobtree, "rook", "queen", Align::None, "blobtree_rook_to_queen", None),
-        (Method::Rbf, "sphere", "torus", Align::None, "rbf_sphere_to_torus", None),
-        (Method::Tspline, "sphere", "torus", Align::None, "tspline_sphere_to_torus", Some((4, None))),
-        (
-            Method::Tspline,
-            "sphere",
-            "holed-cube",
-            Align::None,
-            "tspline_sphere_to_holed_cube",
-            Some((3, Some(0.5))),
-        ),
+        (Method::Baseline, "ball", "c-shape", &defaults, "baseline_ball_to_c"),
+        (Method::LevelSet, "ball", "c-shape", &defaults, "level_set_ball_to_c"),
+        (Method::LevelSet, "mug", "chain", &mug_on_chain, "level_set_mug_to_chain"),
+        (Method::Blobtree, "rook", "queen", &rook_queen, "blobtree_rook_to_queen"),
+        (Method::Rbf, "sphere", "torus", &defaults, "rbf_sphere_to_torus"),
+        (Method::Warp, "sphere", "torus", &defaults, "warp_sphere_to_torus"),
+        (Method::Tspline, "sphere", "torus", &defaults, "tspline_sphere_to_torus"),
+        (Method::Tspline, "sphere", "holed-cube", &holed_cube, "tspline_sphere_to_holed_cube"),
     ];
-    for (method, source, target, align, folder, tspline) in demos {
-        let morph_args = MorphArgs {
-            method,
+    for (method, source, target, settings, folder) in demos {
+        let io = Io {
             source: source.into(),
             target: target.into(),
             res: args.res,
             frames: args.frames,
-            out: args.out.join(folder),
-            format: Format::Ply,
             keep_scale: false,
-            align,
-            solver: Solver::Sparse,
-            curvature: None,
-            report: false,
-            links: None,
-            points: 300,
-            separation: 1.0,
-            kernel: KernelArg::Tps,
-            speed: Some(SpeedArg::Robust),
-            nt: None,
-            depth: tspline.map(|(depth, _)| depth),
-            step: None,
-            margin: tspline.and_then(|(_, margin)| margin),
-            refine: None,
-            refine_rounds: 3,
+            iso: None,
+            threads: args.threads,
+            format: Format::Ply,
         };
-        let report = morph(&morph_args)?;
-        print_summary(&report, &morph_args);
+        let out = args.out.join(folder);
+        let report = morph(method, &io, settings, &out)?;
+        print_summary(&report, &io, &out);
         let most = report.max_components();
         if method == Method::Baseline && most > 1 {
             println!(
@@ -105,7 +105,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         radius: Some(3.0),
         csize: 9,
         filter: FilterArg::Box,
-        res: args.res,
+        res: args.res.unwrap_or(64),
         pad: None,
         out: args.out.join("warp_bunny_ear"),
     };

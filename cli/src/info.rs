@@ -2,7 +2,7 @@
 
 use anyhow::Context;
 use clap::Args;
-use isomorph_common::mesh::io::read_mesh;
+use isomorph_io::mesh::read_mesh;
 use std::path::PathBuf;
 
 /// Arguments of `isomorph info`.

@@ -1,21 +1,22 @@
-//! The `isomorph` command line tool: run the demo, morph shapes and meshes,
-//! inspect meshes, write distance volumes, align and warp shapes. `isomorph --help`
-//! lists the commands.
+//! The `isomorph` command line tool: run the demo, morph and compare shapes
+//! and meshes, inspect meshes, write distance volumes, align and warp
+//! shapes. `isomorph --help` lists the commands. The morphs themselves are
+//! the libraries' (through [`isomorph_cli::methods`]); this binary parses
+//! arguments, drives progress bars and prints summaries.
 
 mod align;
 mod blob;
+mod compare;
 mod demo;
 mod info;
-mod inputs;
-mod level_set;
 mod morph;
+mod options;
 mod progress;
 mod rbf;
 mod sdf;
-mod tspline;
 mod warp;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use std::process::ExitCode;
 
 /// Implicit and volumetric 3D shape metamorphosis.
@@ -32,6 +33,9 @@ enum Command {
     Demo(demo::DemoArgs),
     /// Morph a source shape or mesh into a target and export the frames.
     Morph(morph::MorphArgs),
+    /// Run several methods on one pair side by side: frames, one contact
+    /// sheet with a row per method, and a table (JSON, Markdown, HTML).
+    Compare(compare::CompareArgs),
     /// Print metrics of a mesh file (OBJ, PLY or STL).
     Info(info::InfoArgs),
     /// Write the signed distance volume of a shape or mesh as NumPy .npy
@@ -52,10 +56,13 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let matches = Cli::command().get_matches();
+    let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
+    let sub = |name: &str| matches.subcommand_matches(name).expect("the parsed subcommand");
     let result = match cli.command {
         Command::Demo(args) => demo::run(&args),
-        Command::Morph(args) => morph::run(&args),
+        Command::Morph(args) => morph::run(&args, sub("morph")),
+        Command::Compare(args) => compare::run(&args, sub("compare")),
         Command::Info(args) => info::run(&args),
         Command::Sdf(args) => sdf::run(&args),
         Command::Align(args) => align::run(&args),

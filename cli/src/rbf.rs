@@ -1,91 +1,19 @@
-//! `isomorph morph --method rbf` and `isomorph contours`: Turk & O'Brien's
-//! variational implicit shape transformation, for 3D shapes and for 2D
-//! images.
+//! `isomorph contours`: Turk & O'Brien's variational implicit shape
+//! transformation of 2D images (`isomorph morph --method rbf` is the 3D one).
 
-use crate::inputs::Input;
+use crate::options::KernelArg;
 use anyhow::{Context, bail};
-use clap::{Args, ValueEnum};
+use clap::Args;
 use isomorph_common::glam::UVec2;
 use isomorph_common::marching_cubes::polygonize;
-use isomorph_common::mesh::io::{MeshFormat, write_mesh};
-use isomorph_common::render::{Image, RenderSettings, contact_sheet_titled, render};
 use isomorph_common::{Aabb, Grid2};
-use isomorph_rbf::constraints::{
-    NormalOffset, Subsample, SurfaceSettings, field_constraints, mesh_constraints,
-};
-use isomorph_rbf::image::{image_constraints, read_png_gray};
-use isomorph_rbf::{Constraint, ContourMorph, FitSettings, Kernel, RbfMorph, TransformSettings, figures};
+use isomorph_io::mesh::{MeshFormat, write_mesh};
+use isomorph_io::png_gray::read_png_gray;
+use isomorph_io::render::{Image, RenderSettings, contact_sheet_titled, render};
+use isomorph_rbf::image::image_constraints;
+use isomorph_rbf::{ContourMorph, FitSettings, TransformSettings, figures};
 use std::path::PathBuf;
 use std::time::Instant;
-
-/// The radial kernels on the command line.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum KernelArg {
-    /// `r² log r` (the paper's, better conditioned, less bloated in-betweens).
-    Tps,
-    /// `r³`.
-    R3,
-}
-
-impl From<KernelArg> for Kernel {
-    fn from(k: KernelArg) -> Self {
-        match k {
-            KernelArg::Tps => Kernel::ThinPlate,
-            KernelArg::R3 => Kernel::Cubic,
-        }
-    }
-}
-
-/// RBF options of `isomorph morph`.
-#[derive(Debug, Clone, Copy)]
-pub struct Options {
-    /// Surface points per shape (each gives a boundary and a normal constraint).
-    pub points: usize,
-    /// Separation `t_max` of the shapes along the fourth axis (world units).
-    pub separation: f32,
-    /// The radial kernel.
-    pub kernel: KernelArg,
-}
-
-/// The constraints of one input: `points` farthest-point samples of its
-/// surface (a mesh's vertices, or a built-in shape's surface polygonized at
-/// 96 nodes along its box) with inward normal constraints at 1 % of the box
-/// diagonal (§4.2).
-fn constraints(input: &Input, points: usize) -> anyhow::Result<Vec<Constraint<3>>> {
-    let settings = SurfaceSettings {
-        offset: NormalOffset::RelativeToDiagonal(0.01),
-        subsample: Subsample::FarthestPoint(points),
-    };
-    Ok(match input {
-        Input::Mesh(mesh, _) => mesh_constraints(mesh, &settings)?,
-        Input::Builtin(shape) => field_constraints(shape, &shape.aabb().padded(0.05), 96, &settings)?,
-    })
-}
-
-/// Fits the 4D variational implicit through `source` at `t = 0` and
-/// `target` at `t = separation`.
-///
-/// # Errors
-/// Constraint and fit errors (too few points, singular systems).
-pub fn build(source: &Input, target: &Input, options: Options) -> anyhow::Result<RbfMorph> {
-    let (a, b) = (constraints(source, options.points)?, constraints(target, options.points)?);
-    let settings = TransformSettings {
-        fit: FitSettings::default().with_kernel(options.kernel.into()),
-        separation: options.separation,
-        ..TransformSettings::default()
-    };
-    let start = Instant::now();
-    let morph = RbfMorph::new(&a, &b, &settings).context("cannot fit the variational implicit")?;
-    let report = morph.interpolant().report();
-    eprintln!(
-        "rbf: {} constraints in 4D fitted in {:.2} s ({:?}, rcond {:.1e})",
-        a.len() + b.len(),
-        start.elapsed().as_secs_f64(),
-        report.factorization,
-        report.rcond
-    );
-    Ok(morph)
-}
 
 /// Arguments of `isomorph contours`.
 #[derive(Debug, Args)]

@@ -1,13 +1,12 @@
 //! `isomorph sdf`: a signed distance volume of a shape or mesh, written as
 //! NumPy `.npy` plus a JSON sidecar.
 
-use crate::inputs::Input;
 use anyhow::Context;
 use clap::Args;
-use isomorph_common::fast_marching::FastMarchingSettings;
-use isomorph_common::scan_conversion::scan_convert;
 use isomorph_common::sdf::{MeshSdf, SdfSettings, VolumeMode};
-use isomorph_common::{Aabb, Grid3, npy};
+use isomorph_common::{Aabb, Control, Grid3, Solid};
+use isomorph_io::inputs::{LoadOptions, load_solid};
+use isomorph_io::npy;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -49,7 +48,7 @@ fn parse_pad(s: &str) -> Result<f32, String> {
 /// Runs `isomorph sdf`.
 pub fn run(args: &SdfArgs) -> anyhow::Result<()> {
     let start = Instant::now();
-    let input = Input::parse(&args.input, false)?;
+    let input = load_solid(&args.input, &LoadOptions { fit: false, iso: None })?;
     let bounds = input.bounds().padded(args.pad);
     let sampled = Instant::now();
     let grid = distance_grid(&input, &bounds, args.res, args.band)
@@ -79,20 +78,15 @@ pub fn run(args: &SdfArgs) -> anyhow::Result<()> {
 }
 
 /// The signed distance grid (positive inside) of `input` over `bounds` with
-/// `res` nodes along the longest edge: a mesh through the exact lattice
-/// distance (winding-number sign), everywhere or in a `band` of voxels and
-/// marched beyond; a built-in shape sampled from its field where that is an
-/// exact distance, else scan converted (Breen & Whitaker §6.1: closest
-/// points in a band, then fast marching).
-fn distance_grid(input: &Input, bounds: &Aabb, res: u32, band: Option<f32>) -> anyhow::Result<Grid3<f32>> {
-    Ok(match input {
-        Input::Mesh(mesh, _) if let Some(voxels) = band => {
-            let width = voxels * bounds.size().max_element() / (res - 1).max(1) as f32;
-            let settings = SdfSettings::default().with_volume(VolumeMode::NarrowBand { width });
-            MeshSdf::with_settings(mesh, settings)?.sample_grid(bounds, res)?
-        }
-        Input::Mesh(_, sdf) => sdf.sample_grid(bounds, res)?,
-        Input::Builtin(shape) if shape.is_exact_distance() => Grid3::sample_box(shape, bounds, res)?,
-        Input::Builtin(shape) => scan_convert(shape, bounds, res, &FastMarchingSettings::default())?,
-    })
+/// `res` nodes along the longest edge ([`Solid::distance_volume`]: exact for
+/// meshes, scan converted for built-in shapes (Breen & Whitaker §6.1),
+/// resampled for volumes); for a mesh with a `band` of voxels, exact only
+/// in the band and marched beyond.
+fn distance_grid(input: &Solid, bounds: &Aabb, res: u32, band: Option<f32>) -> anyhow::Result<Grid3<f32>> {
+    if let (Some(voxels), Some(mesh)) = (band, input.as_mesh()) {
+        let width = voxels * bounds.size().max_element() / (res - 1).max(1) as f32;
+        let settings = SdfSettings::default().with_volume(VolumeMode::NarrowBand { width });
+        return Ok(MeshSdf::with_settings(mesh, settings)?.sample_grid(bounds, res)?);
+    }
+    Ok(input.distance_volume(bounds, res, &Control::new())?)
 }

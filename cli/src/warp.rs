@@ -1,15 +1,16 @@
 //! `isomorph warp`: True's B-spline volume warp of a shape or mesh, driven by
 //! dragged points (direct manipulation) and/or moved control points.
 
-use crate::inputs::Input;
+use crate::options::parse_pair;
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
-use isomorph_common::Grid3;
 use isomorph_common::glam::{UVec3, Vec3};
 use isomorph_common::marching_cubes::marching_cubes;
-use isomorph_common::mesh::io::{MeshFormat, write_mesh};
-use isomorph_common::npy::{self, Volume};
-use isomorph_common::render::{Camera, RenderSettings, contact_sheet_titled, render};
+use isomorph_common::{Control, Grid3};
+use isomorph_io::inputs::{LoadOptions, load_solid};
+use isomorph_io::mesh::{MeshFormat, write_mesh};
+use isomorph_io::npy::{self, Volume};
+use isomorph_io::render::{Camera, RenderSettings, contact_sheet_titled, render};
 use isomorph_warp::{Evaluation, Filter, Handle, VolumeWarp, WarpSettings};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -113,8 +114,9 @@ fn density(args: &WarpArgs) -> anyhow::Result<Grid3<u8>> {
             to_density(&field)?
         }
         None => {
-            let input = Input::parse(&args.input, false)?;
-            let distance = Grid3::sample_box(input.field(), &input.bounds().padded(0.15), args.res)
+            let input = load_solid(&args.input, &LoadOptions { fit: false, iso: None })?;
+            let distance = input
+                .distance_volume(&input.bounds().padded(0.15), args.res, &Control::new())
                 .with_context(|| format!("cannot sample the distance field of {}", args.input))?;
             to_density(&distance)?
         }
@@ -157,22 +159,6 @@ fn read_raw(args: &WarpArgs) -> anyhow::Result<Volume> {
             Volume::F32(Grid3::from_vec(dims, Vec3::ZERO, 1.0, values)?)
         }
     })
-}
-
-/// Parses `A,B,C:D,E,F` into two vectors.
-fn parse_pair(s: &str) -> Result<(Vec3, Vec3), String> {
-    let (a, b) = s.split_once(':').ok_or_else(|| format!("'{s}' is not of the form X,Y,Z:DX,DY,DZ"))?;
-    let vec = |t: &str| -> Result<Vec3, String> {
-        let v: Vec<f32> = t
-            .split(',')
-            .map(|x| x.trim().parse::<f32>().map_err(|e| format!("'{x}': {e}")))
-            .collect::<Result<_, _>>()?;
-        match v[..] {
-            [x, y, z] if x.is_finite() && y.is_finite() && z.is_finite() => Ok(Vec3::new(x, y, z)),
-            _ => Err(format!("'{t}' is not three finite numbers")),
-        }
-    };
-    Ok((vec(a)?, vec(b)?))
 }
 
 /// Runs `isomorph warp`.

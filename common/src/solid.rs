@@ -6,7 +6,7 @@
 //! |---|---|---|
 //! | closed mesh ([`Solid::mesh`]) | exact (BVH, winding-number sign; [`crate::sdf`]) | the mesh itself |
 //! | distance volume ([`Solid::volume`]) | the volume, resampled trilinearly when the lattice differs | marching cubes of the volume |
-//! | analytic shape or CSG model ([`Solid::shape`]) | scan conversion (Breen & Whitaker §6.1; [`crate::scan_conversion`]), never the raw CSG field | marching cubes of the distance volume |
+//! | analytic shape or CSG model ([`Solid::shape`]) | the shape's own distance where it is exact ([`Shape::is_exact_distance`]: spheres, boxes, tori, cylinders), else scan conversion (Breen & Whitaker §6.1; [`crate::scan_conversion`]), never the raw CSG field | marching cubes of the distance volume |
 //! | any implicit ([`Solid::implicit`], e.g. a BlobTree) | sampled, then redistanced by fast marching ([`crate::fast_marching::redistance`]) | marching cubes |
 //!
 //! Everything is positive inside, in world units. A `Solid` is cheap to
@@ -223,6 +223,7 @@ impl Solid {
         let volume = control.install(|| -> Result<_, MorphError> {
             Ok(match &*self.0 {
                 Repr::Mesh { sdf, .. } => sdf.sample_grid(bounds, res)?,
+                Repr::Shape(shape) if shape.is_exact_distance() => Grid3::sample_box(shape, bounds, res)?,
                 Repr::Shape(shape) => scan_convert(shape, bounds, res, &FastMarchingSettings::default())?,
                 Repr::Volume(grid) => {
                     let (dims, origin, spacing) = lattice_for_box(bounds, res)?;

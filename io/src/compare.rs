@@ -13,7 +13,7 @@
 use crate::export::{ExportError, ExportSettings, Exported, Report, frame_tiles};
 use crate::render::{Camera, ContactSheet, RenderError};
 use base64::Engine;
-use isomorph_common::{Aabb, BoxedError, BoxedMorph, Control, MorphFailure, StageTime};
+use isomorph_common::{Aabb, BoxedError, BoxedMorph, Control, MorphFailure, StageTime, TriMesh};
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -26,6 +26,10 @@ pub struct Candidate {
     pub name: String,
     /// Builds the morph, or says why the method does not apply.
     pub build: Result<Box<dyn FnOnce(&Control) -> Result<BoxedMorph, BoxedError>>, String>,
+    /// The method's own source and target surfaces for the endpoint
+    /// distances, when its inputs differ from the others' (e.g. BlobTree
+    /// scenes); `None` uses the export settings' references.
+    pub references: Option<(TriMesh, TriMesh)>,
 }
 
 /// Errors of [`compare`] (a method's own failure is a row, not an error).
@@ -220,7 +224,11 @@ pub fn compare(
             }
         };
         control.progress("compare", None, || format!("{name}: frames"));
-        let method_settings = ExportSettings { out_dir: dir.join(&name), ..settings.clone() };
+        let mut method_settings = ExportSettings { out_dir: dir.join(&name), ..settings.clone() };
+        if let Some((source, target)) = candidate.references {
+            method_settings.source_reference = Some(source);
+            method_settings.target_reference = Some(target);
+        }
         match crate::export::export_sequence(&*morph, &method_settings, control) {
             Ok(exported) => {
                 let mut row = Row::from_report(&name, build_seconds, &exported.report);
@@ -555,11 +563,12 @@ mod tests {
             Ok(DistanceBlend::new(&a, &b, &settings, c)?.boxed())
         };
         let candidates = vec![
-            Candidate { name: "baseline".into(), build: Ok(Box::new(blend)) },
-            Candidate { name: "never".into(), build: Err("does not take shapes".into()) },
+            Candidate { name: "baseline".into(), build: Ok(Box::new(blend)), references: None },
+            Candidate { name: "never".into(), build: Err("does not take shapes".into()), references: None },
             Candidate {
                 name: "broken".into(),
                 build: Ok(Box::new(|_: &Control| Err(MorphError::InvalidInput("no".into()).into()))),
+                references: None,
             },
         ];
         let settings =

@@ -9,4 +9,5 @@ pub mod export;
 pub mod inputs;
 pub mod mesh;
 pub mod npy;
+pub mod png_gray;
 pub mod render;

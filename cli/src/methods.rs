@@ -1,0 +1,163 @@
+//! Every morph method by name: [`Method`], the settings of all of them
+//! ([`Settings`], the libraries' defaults), their inputs ([`load_input`])
+//! and one constructor for any of them ([`build`], a boxed
+//! [`isomorph_common::Morph`]).
+
+use isomorph_blobtree::{BlobMorph, BlobSettings, BlobTree, scenes};
+use isomorph_common::{BlendSettings, BoxedError, BoxedMorph, Control, DistanceBlend, MorphExt, Solid};
+use isomorph_io::inputs::{InputError, LoadOptions, load_solid};
+use isomorph_levelset::{LevelSetMorph, LevelSetSettings};
+use isomorph_rbf::{RbfMorph, RbfSettings};
+use isomorph_tspline::{TsplineMorph, TsplineSettings};
+use isomorph_warp::{WarpMorph, WarpMorphSettings};
+use std::sync::Arc;
+
+/// The morph methods.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, clap::ValueEnum)]
+pub enum Method {
+    /// Linear interpolation of the two signed distance volumes (the naive
+    /// baseline every method should beat).
+    Baseline,
+    /// Breen & Whitaker 2001: the source surface moves along its normals
+    /// with the target's signed distance as speed.
+    LevelSet,
+    /// Turk & O'Brien 1999: one variational implicit in 4D whose slices are
+    /// the in-between shapes.
+    Rbf,
+    /// True 1992: trivariate cubic B-spline volume warps of both shapes
+    /// toward each other, cross-dissolved.
+    Warp,
+    /// Yang & Jüttler 2007: T-spline level sets on an adaptive octree.
+    Tspline,
+    /// Galin, Leclercq & Akkouche 2000: skeletal implicit BlobTrees (inputs
+    /// are BlobTree scenes).
+    Blobtree,
+}
+
+impl Method {
+    /// Every method, in the order of the comparison tables.
+    pub const ALL: [Method; 6] =
+        [Method::Baseline, Method::LevelSet, Method::Rbf, Method::Warp, Method::Tspline, Method::Blobtree];
+
+    /// The name used on the command line, in reports and as the output
+    /// folder (the same as the morph's `Morph::method`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Baseline => "baseline",
+            Method::LevelSet => "level-set",
+            Method::Rbf => "rbf",
+            Method::Warp => "warp",
+            Method::Tspline => "tspline",
+            Method::Blobtree => "blobtree",
+        }
+    }
+
+    /// The method named `name` (as [`Method::name`] prints it).
+    pub fn from_name(name: &str) -> Option<Method> {
+        Method::ALL.into_iter().find(|m| m.name() == name)
+    }
+}
+
+/// The settings of every method; `Settings::default()` holds each
+/// library's defaults.
+#[derive(Debug, Clone, Default)]
+pub struct Settings {
+    /// The distance-volume blend.
+    pub baseline: BlendSettings,
+    /// Breen & Whitaker's level set.
+    pub level_set: LevelSetSettings,
+    /// Turk & O'Brien's variational implicit.
+    pub rbf: RbfSettings,
+    /// True's B-spline warp with a cross-dissolve.
+    pub warp: WarpMorphSettings,
+    /// Yang & Jüttler's T-spline level sets.
+    pub tspline: TsplineSettings,
+    /// Galin et al.'s BlobTree morph.
+    pub blobtree: BlobSettings,
+}
+
+impl Settings {
+    /// Sets the grid resolution (nodes along the longest edge) of every
+    /// method that samples its inputs on a grid (baseline, level set, warp).
+    pub fn with_resolution(mut self, res: u32) -> Self {
+        self.baseline.resolution = res;
+        self.level_set.resolution = res;
+        self.warp.resolution = res;
+        self
+    }
+}
+
+/// Errors of [`load_input`].
+#[derive(Debug, thiserror::Error)]
+pub enum LoadError {
+    /// A shape, mesh or volume input.
+    #[error(transparent)]
+    Input(#[from] InputError),
+    /// A BlobTree scene.
+    #[error(transparent)]
+    Scene(#[from] isomorph_blobtree::BlobError),
+    /// The input cannot be a solid.
+    #[error(transparent)]
+    Solid(#[from] isomorph_common::MorphError),
+}
+
+/// The input `spec` for `method`: a BlobTree scene (built-in name or
+/// `.ron`/`.json` file) for the BlobTree method; for the others a built-in
+/// shape, `bunny`, a mesh file or a `.npy` volume ([`load_solid`]), else a
+/// BlobTree scene, which every method can sample as an implicit.
+///
+/// # Errors
+/// [`LoadError`] naming the input and what is wrong with it.
+pub fn load_input(method: Method, spec: &str, options: &LoadOptions) -> Result<Solid, LoadError> {
+    let is_scene_file = spec.ends_with(".ron") || spec.ends_with(".json");
+    if method == Method::Blobtree || is_scene_file {
+        return Ok(scene_solid(scenes::load(spec)?)?);
+    }
+    match load_solid(spec, options) {
+        Err(InputError::Unknown { .. }) if scenes::NAMES.contains(&spec) => Ok(scene_solid(scenes::load(spec)?)?),
+        other => Ok(other?),
+    }
+}
+
+/// A BlobTree as a solid (the BlobTree morph recovers the tree from it).
+pub fn scene_solid(tree: BlobTree) -> Result<Solid, isomorph_common::MorphError> {
+    Solid::implicit(Arc::new(tree))
+}
+
+/// Builds `method` from `source` to `target` with its part of `settings`.
+///
+/// # Errors
+/// The method's error, boxed: bad settings, unsupported inputs,
+/// cancellation, and the method's own failures.
+pub fn build(
+    method: Method,
+    source: &Solid,
+    target: &Solid,
+    settings: &Settings,
+    control: &Control,
+) -> Result<BoxedMorph, BoxedError> {
+    let boxed = BoxedError::new;
+    Ok(match method {
+        Method::Baseline => DistanceBlend::new(source, target, &settings.baseline, control).map_err(boxed)?.boxed(),
+        Method::LevelSet => {
+            LevelSetMorph::new(source, target, &settings.level_set, control).map_err(boxed)?.boxed()
+        }
+        Method::Rbf => RbfMorph::new(source, target, &settings.rbf, control).map_err(boxed)?.boxed(),
+        Method::Warp => WarpMorph::new(source, target, &settings.warp, control).map_err(boxed)?.boxed(),
+        Method::Tspline => TsplineMorph::new(source, target, &settings.tspline, control).map_err(boxed)?.boxed(),
+        Method::Blobtree => BlobMorph::new(source, target, &settings.blobtree, control).map_err(boxed)?.boxed(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip() {
+        for m in Method::ALL {
+            assert_eq!(Method::from_name(m.name()), Some(m));
+        }
+        assert_eq!(Method::from_name("nope"), None);
+    }
+}
