@@ -6,7 +6,7 @@
 //! `cargo bench -p isomorph-benches --bench levelset -- step/sphere_torus`
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use isomorph_common::{Aabb, Grid3, Shape};
+use isomorph_common::{Aabb, Control, Grid3, Shape};
 use isomorph_levelset::{
     DenseSolver, EvolveSettings, FrameSchedule, Placement, Response, Solver, SolverKind, SparseFieldSolver,
     SpeedGrid, StepParams, evolve,
@@ -38,10 +38,10 @@ fn morph(c: &mut Criterion) {
         EvolveSettings { frames: FrameSchedule::EveryIterations(usize::MAX), ..Default::default() };
     for n in [64u32, 128, 256] {
         let (source, speed) = case(n);
-        let sparse = evolve(&source, &speed, Placement::Identity, &settings, &|_| {}).unwrap();
+        let sparse = evolve(&source, &speed, Placement::Identity, &settings, &Control::new()).unwrap();
         group.bench_function(BenchmarkId::new("sparse", n), |b| {
             b.iter(|| {
-                black_box(evolve(&source, &speed, Placement::Identity, &settings, &|_| {}).unwrap().len())
+                black_box(evolve(&source, &speed, Placement::Identity, &settings, &Control::new()).unwrap().len())
             })
         });
         if n <= 128 {
@@ -53,7 +53,7 @@ fn morph(c: &mut Criterion) {
             };
             group.bench_function(BenchmarkId::new("dense", n), |b| {
                 b.iter(|| {
-                    black_box(evolve(&source, &speed, Placement::Identity, &dense, &|_| {}).unwrap().len())
+                    black_box(evolve(&source, &speed, Placement::Identity, &dense, &Control::new()).unwrap().len())
                 })
             });
         }

@@ -6,7 +6,7 @@
 //!
 //! `cargo run --release -p isomorph-levelset --example reference_case -- 128 sparse`
 
-use isomorph_common::{Aabb, Field3, Grid3, Morph, Shape};
+use isomorph_common::{Aabb, Control, Field3, Grid3, Morph, Shape};
 use isomorph_levelset::{EvolveSettings, FrameSchedule, Placement, Response, SolverKind, SpeedGrid, evolve};
 use std::time::Instant;
 
@@ -24,11 +24,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         EvolveSettings { solver, frames: FrameSchedule::EveryIterations(usize::MAX), ..Default::default() };
     if solver == SolverKind::Dense {
         let sparse = EvolveSettings { solver: SolverKind::SparseField, ..settings };
-        settings.end_time = evolve(&source, &speed, Placement::Identity, &sparse, &|_| {})?.end_time();
+        settings.end_time =
+            evolve(&source, &speed, Placement::Identity, &sparse, &Control::new())?.end_time();
         settings.max_iterations = 100_000;
     }
     let start = Instant::now();
-    let morph = evolve(&source, &speed, Placement::Identity, &settings, &|_| {})?;
+    let morph = evolve(&source, &speed, Placement::Identity, &settings, &Control::new())?;
     let seconds = start.elapsed().as_secs_f64();
     let mesh = morph.frame_mesh(1.0, 0)?;
     let h = source.spacing();

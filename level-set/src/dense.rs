@@ -21,7 +21,7 @@ impl DenseSolver {
     /// inside), converted to voxel units.
     ///
     /// # Errors
-    /// [`LevelSetError::NonFinite`], [`LevelSetError::Grid`] (fewer than 3 nodes per axis, or over the memory limit),
+    /// [`LevelSetError::NonFinite`], [`MorphError::Grid`](isomorph_common::MorphError::Grid) (fewer than 3 nodes per axis, or over the memory limit),
     /// [`LevelSetError::NoSurface`] for a source without a sign change.
     pub fn new(source: &Grid3<f32>) -> Result<Self, LevelSetError> {
         // The embedding and the change volume.

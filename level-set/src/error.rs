@@ -1,14 +1,17 @@
 //! Errors of the level-set morph.
 
-use isomorph_common::GridError;
+use isomorph_common::{GridError, MorphError, MorphFailure};
 
-/// What can go wrong setting up or running a level-set morph.
+/// What can go wrong setting up or running a level-set morph: the shared
+/// kinds ([`MorphError`]: bad settings and times, no overlap, grids and
+/// memory, cancellation, input conversions) and the grid-level input
+/// problems of [`crate::evolve`].
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum LevelSetError {
-    /// A grid could not be made (memory limit) or two grids do not share a lattice.
+    /// One of the kinds every method shares.
     #[error(transparent)]
-    Grid(#[from] GridError),
+    Morph(#[from] MorphError),
     /// An input grid holds a NaN or infinite value.
     #[error("the {what} grid has a NaN or infinite value at node {node}")]
     NonFinite {
@@ -21,30 +24,19 @@ pub enum LevelSetError {
     /// surface to evolve or to evolve towards.
     #[error("the {0} shape has no surface on the grid (no sign change between nodes)")]
     NoSurface(&'static str),
-    /// A component of the target does not overlap the source (Breen & Whitaker
-    /// §4): the evolving surface can never reach it. Align the shapes first
-    /// (`isomorph_common::alignment`) or pass a transform.
-    #[error(
-        "{components} of {total} target component(s) do not overlap the source; the level-set morph \
-         cannot reach them (align the shapes or pass a transform)"
-    )]
-    NoOverlap {
-        /// Target components without any inside node shared with the source.
-        components: usize,
-        /// All target components.
-        total: usize,
-    },
-    /// A setting is out of its range.
-    #[error("setting {name} = {value} is out of range ({expected})")]
-    BadSetting {
-        /// The setting's name.
-        name: &'static str,
-        /// The offending value.
-        value: f64,
-        /// What is accepted.
-        expected: &'static str,
-    },
-    /// A morph time outside `[0, 1]` or NaN.
-    #[error("time {0} is outside [0, 1]")]
-    InvalidTime(f32),
+}
+
+impl From<GridError> for LevelSetError {
+    fn from(e: GridError) -> Self {
+        LevelSetError::Morph(MorphError::Grid(e))
+    }
+}
+
+impl MorphFailure for LevelSetError {
+    fn shared(&self) -> Option<&MorphError> {
+        match self {
+            LevelSetError::Morph(e) => Some(e),
+            _ => None,
+        }
+    }
 }

@@ -7,8 +7,10 @@ use crate::stencil::Lattice;
 use crate::{DenseSolver, LevelSetError, Placement, SparseFieldSolver, SpeedGrid};
 use isomorph_common::glam::{UVec3, Vec3};
 use isomorph_common::marching_cubes::marching_cubes;
-use isomorph_common::{Frame, Morph};
 use isomorph_common::{Aabb, Grid3, TriMesh};
+use isomorph_common::{
+    Control, Frame, MissedPart, Morph, MorphError, MorphReport, Outcome, Residual, Stages, check, check_time,
+};
 
 /// Which solver integrates the level-set equation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
@@ -56,6 +58,12 @@ pub struct EvolveSettings {
     /// Stop once the evolution time (eq. 17's `t`) reaches this; infinite by
     /// default. Lets two solvers be compared over the same evolution time.
     pub end_time: f64,
+    /// Stop (as stalled) when the RMS target distance has not fallen below
+    /// 99 % of its best value for this many iterations: a speed that is not
+    /// a distance (seen through an anisotropic map, or a target the grid
+    /// cannot resolve) can leave the surface oscillating a hundredth of a
+    /// voxel above the thresholds forever. Default 500.
+    pub stall_iterations: usize,
 }
 
 impl Default for EvolveSettings {
@@ -69,19 +77,9 @@ impl Default for EvolveSettings {
             frames: FrameSchedule::EveryIterations(10),
             curvature: None,
             end_time: f64::INFINITY,
+            stall_iterations: 500,
         }
     }
-}
-
-/// Progress of [`evolve`], reported after each iteration.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Progress {
-    /// Iterations done.
-    pub iteration: usize,
-    /// The iteration cap.
-    pub max_iterations: usize,
-    /// Statistics of the last iteration.
-    pub stats: StepStats,
 }
 
 /// A finished level-set evolution: the kept frames and how it went. As a
@@ -97,6 +95,8 @@ pub struct LevelSetMorph {
     placement: Placement,
     stats: Vec<StepStats>,
     converged: bool,
+    world: Aabb,
+    report: MorphReport,
 }
 
 /// Whether the target's inside overlaps the source's in every connected
@@ -104,23 +104,30 @@ pub struct LevelSetMorph {
 /// the source does not touch is never reached).
 ///
 /// # Errors
-/// [`LevelSetError::NoOverlap`] naming how many components are missed.
+/// [`MorphError::NoOverlap`] with every missed component's size, share of
+/// the target's inside and box (world units), largest first.
 pub fn check_overlap(source: &Grid3<f32>, speed: &SpeedGrid) -> Result<(), LevelSetError> {
     let lattice = Lattice::new(source.dims());
     let (u, v) = (source.data(), speed.values());
     let mut seen = vec![false; v.len()];
-    let (mut total, mut missed) = (0, 0);
+    let (mut total, mut inside) = (0, 0usize);
+    let mut missed = Vec::new();
     let mut stack = Vec::new();
     for start in 0..v.len() {
         if seen[start] || v[start] <= 0.0 {
             continue;
         }
         total += 1;
-        let mut overlaps = false;
+        let (mut overlaps, mut nodes) = (false, 0usize);
+        let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
         seen[start] = true;
         stack.push(start);
         while let Some(n) = stack.pop() {
             overlaps |= u[n] > 0.0;
+            nodes += 1;
+            let c = source.node_of(n);
+            let p = source.position(c.x, c.y, c.z);
+            (lo, hi) = (lo.min(p), hi.max(p));
             for m in lattice.neighbours(n).into_iter().flatten() {
                 if !seen[m] && v[m] > 0.0 {
                     seen[m] = true;
@@ -128,9 +135,19 @@ pub fn check_overlap(source: &Grid3<f32>, speed: &SpeedGrid) -> Result<(), Level
                 }
             }
         }
-        missed += usize::from(!overlaps);
+        inside += nodes;
+        if !overlaps {
+            missed.push(MissedPart { nodes, share: 0.0, min: lo, max: hi });
+        }
     }
-    if missed > 0 { Err(LevelSetError::NoOverlap { components: missed, total }) } else { Ok(()) }
+    if missed.is_empty() {
+        return Ok(());
+    }
+    for part in &mut missed {
+        part.share = part.nodes as f32 / inside as f32;
+    }
+    missed.sort_by_key(|p| std::cmp::Reverse(p.nodes));
+    Err(MorphError::NoOverlap { missed, total }.into())
 }
 
 /// Evolves the source surface (a signed distance grid, world units,
@@ -140,17 +157,33 @@ pub fn check_overlap(source: &Grid3<f32>, speed: &SpeedGrid) -> Result<(), Level
 /// `T(x, α)`: kept frames are placed by it when polygonized (use
 /// [`Placement::Identity`] when the speed was sampled without a map).
 ///
+/// Progress is reported to `control` after every iteration (stage
+/// `"evolution"`, with the RMS target distance), which is also checked for
+/// cancellation; the solvers run on its threads.
+///
 /// # Errors
-/// Input errors of the solvers, [`LevelSetError::NoOverlap`] when a target
-/// component does not overlap the source, [`LevelSetError::BadSetting`],
-/// and [`LevelSetError::Grid`] when `speed` lies on another lattice.
+/// Input errors of the solvers, [`MorphError::NoOverlap`] when a target
+/// component does not overlap the source, [`MorphError::BadSetting`],
+/// [`MorphError::Grid`] when `speed` lies on another lattice,
+/// [`MorphError::Cancelled`].
 pub fn evolve(
     source: &Grid3<f32>,
     speed: &SpeedGrid,
     placement: Placement,
     settings: &EvolveSettings,
-    progress: &dyn Fn(&Progress),
+    control: &Control,
 ) -> Result<LevelSetMorph, LevelSetError> {
+    control.install(|| evolve_on_pool(source, speed, placement, settings, control))
+}
+
+fn evolve_on_pool(
+    source: &Grid3<f32>,
+    speed: &SpeedGrid,
+    placement: Placement,
+    settings: &EvolveSettings,
+    control: &Control,
+) -> Result<LevelSetMorph, LevelSetError> {
+    let mut stages = Stages::start();
     check_settings(settings)?;
     source.check_same_lattice(speed.grid())?;
     let mut solver: Box<dyn Solver> = match settings.solver {
@@ -163,14 +196,22 @@ pub fn evolve(
     let mut stats = Vec::new();
     let (mut time, mut last_kept_time) = (0.0f64, 0.0f64);
     let mut converged = false;
+    let (mut best, mut best_at, mut stalled) = (f32::INFINITY, 0, false);
     let params = StepParams { max_time_step: settings.max_time_step, curvature: settings.curvature };
     for iteration in 1..=settings.max_iterations {
+        control.check()?;
         let s = solver.step(speed, &params);
         time += f64::from(s.dt);
         stats.push(s);
-        progress(&Progress { iteration, max_iterations: settings.max_iterations, stats: s });
+        control.progress("evolution", Some(iteration as f32 / settings.max_iterations as f32), || {
+            format!("iteration {iteration}, RMS distance {:.3} voxels", s.rms_distance)
+        });
         converged = s.rms_distance <= settings.rms_distance || s.rms_change <= settings.rms_change;
-        let done = converged || time >= settings.end_time;
+        if s.rms_distance < 0.99 * best {
+            (best, best_at) = (s.rms_distance, iteration);
+        }
+        stalled = !converged && iteration - best_at >= settings.stall_iterations;
+        let done = converged || stalled || time >= settings.end_time;
         let due = match settings.frames {
             FrameSchedule::EveryIterations(k) => iteration % k == 0,
             FrameSchedule::EveryTime(dt) => time - last_kept_time >= dt,
@@ -183,6 +224,37 @@ pub fn evolve(
             break;
         }
     }
+    stages.lap("evolution");
+    let last = stats.last().copied().unwrap_or_default();
+    let outcome = if converged {
+        Outcome::Converged
+    } else if stalled {
+        Outcome::Stalled
+    } else {
+        // The iteration cap or the evolution time limit.
+        Outcome::IterationCap
+    };
+    let stored: usize = frames.iter().map(BandFrame::stored_bytes).sum();
+    // The solver's embedding and change grids, the speed and the source.
+    let working = 4 * source.len() * size_of::<f32>();
+    let report = MorphReport::new("level-set", outcome)
+        .with_iterations(stats.len())
+        .with_residual(Residual {
+            what: "RMS target distance at the surface",
+            value: f64::from(last.rms_distance),
+            unit: "voxels",
+        })
+        .with_stages(stages)
+        .with_memory(stored, Some(stored + working))
+        .with_detail("solver", format!("{:?}", settings.solver))
+        .with_detail("nodes", source.len())
+        .with_detail("evolution_time", time)
+        .with_detail("final_rms_change_voxels", f64::from(last.rms_change))
+        .with_detail("final_surface_nodes", last.surface_nodes)
+        .with_detail("kept_frames", frames.len())
+        .with_detail("placement", placement.kind());
+    let field = source.bounds();
+    let world = placed_box(&field, &placement);
     Ok(LevelSetMorph {
         frames,
         dims: source.dims(),
@@ -191,29 +263,58 @@ pub fn evolve(
         placement,
         stats,
         converged,
+        world,
+        report,
     })
 }
 
-fn check_settings(s: &EvolveSettings) -> Result<(), LevelSetError> {
-    let bad = |name, value: f64, expected| Err(LevelSetError::BadSetting { name, value, expected });
-    if s.max_iterations == 0 {
-        return bad("max_iterations", 0.0, "at least 1");
+/// A world box containing `field` placed by `T(·, α)` for every `α`: for
+/// an affine path the union over 33 times (padded by 1 % for the arcs of a
+/// rotation between them), for a warp the union of the box and its image
+/// sampled on a 9³ lattice (`T` blends the two linearly).
+fn placed_box(field: &Aabb, placement: &Placement) -> Aabb {
+    let samples = |n: u32| (0..=n).map(move |i| i as f32 / n as f32);
+    match placement {
+        Placement::Identity => *field,
+        Placement::Affine(_) => {
+            let maps = samples(32).map(|a| placement.affine_at(a));
+            isomorph_common::placed_bounds(field, maps).padded(0.01)
+        }
+        Placement::Warp(_) => {
+            let size = field.size();
+            let mut b = *field;
+            for x in samples(8) {
+                for y in samples(8) {
+                    for z in samples(8) {
+                        let p = field.min + size * Vec3::new(x, y, z);
+                        b = b.union(&Aabb::new(placement.point_at(p, 1.0), placement.point_at(p, 1.0)));
+                    }
+                }
+            }
+            b.padded(0.02)
+        }
     }
-    if !(s.max_time_step.is_finite() && s.max_time_step > 0.0) {
-        return bad("max_time_step", f64::from(s.max_time_step), "finite and > 0");
+}
+
+fn check_settings(s: &EvolveSettings) -> Result<(), MorphError> {
+    check::count("max_iterations", s.max_iterations as u64, 1, u64::MAX)?;
+    check::positive("max_time_step", f64::from(s.max_time_step))?;
+    check::count("stall_iterations", s.stall_iterations as u64, 1, u64::MAX)?;
+    for (name, v) in [("rms_distance", f64::from(s.rms_distance)), ("rms_change", f64::from(s.rms_change))] {
+        if v.is_nan() {
+            return Err(MorphError::bad_setting(name, v, "a threshold (not NaN)"));
+        }
     }
-    if s.rms_distance.is_nan() || s.rms_change.is_nan() || s.end_time.is_nan() {
-        return bad("rms thresholds", f64::NAN, "not NaN");
+    if s.end_time.is_nan() || s.end_time <= 0.0 {
+        return Err(MorphError::bad_setting("end_time", s.end_time, "a time > 0 (infinite by default)"));
     }
-    if let Some(c) = s.curvature
-        && !(c.weight.is_finite() && c.weight >= 0.0 && c.length.is_finite() && c.length > 0.0)
-    {
-        return bad("curvature", f64::from(c.weight), "weight ≥ 0 and length > 0, finite");
+    if let Some(c) = s.curvature {
+        check::range("curvature.weight", f64::from(c.weight), 0.0, f64::from(f32::MAX))?;
+        check::positive("curvature.length", f64::from(c.length))?;
     }
     match s.frames {
-        FrameSchedule::EveryIterations(0) => bad("frames", 0.0, "every k ≥ 1 iterations"),
-        FrameSchedule::EveryTime(t) if !(t.is_finite() && t > 0.0) => bad("frames", t, "time step > 0"),
-        _ => Ok(()),
+        FrameSchedule::EveryIterations(k) => check::count("frames", k as u64, 1, u64::MAX),
+        FrameSchedule::EveryTime(t) => check::positive("frames", t),
     }
 }
 
@@ -257,7 +358,7 @@ impl LevelSetMorph {
     /// inside; exact next to the zero set).
     ///
     /// # Errors
-    /// [`LevelSetError::Grid`] if the grid cannot be allocated.
+    /// [`MorphError::Grid`](isomorph_common::MorphError::Grid) if the grid cannot be allocated.
     pub fn frame_grid(&self, n: usize) -> Result<Grid3<f32>, LevelSetError> {
         let frame = &self.frames[n.min(self.frames.len() - 1)];
         let h = self.spacing;
@@ -279,54 +380,45 @@ impl LevelSetMorph {
     pub fn placement(&self) -> &Placement {
         &self.placement
     }
+
+    /// The report, for the constructor that adds its stages.
+    pub(crate) fn report_mut(&mut self) -> &mut MorphReport {
+        &mut self.report
+    }
 }
 
 impl Morph for LevelSetMorph {
     type Field = Grid3<f32>;
     type Error = LevelSetError;
 
-    fn method(&self) -> &str {
+    fn method(&self) -> &'static str {
         "level-set"
     }
 
     fn frame(&self, t: f32) -> Result<Frame<Grid3<f32>>, LevelSetError> {
-        if !(0.0..=1.0).contains(&t) {
-            return Err(LevelSetError::InvalidTime(t));
-        }
-        let n = self.index(t);
+        let n = self.index(check_time(t)?);
         Ok(Frame { field: self.frame_grid(n)?, iso: 0.0, transform: self.placement.affine_at(self.alpha(n)) })
     }
 
-    fn bounds(&self) -> Aabb {
+    /// The evolution lattice's box (source space).
+    fn field_bounds(&self) -> Aabb {
         Aabb::new(self.origin, self.origin + (self.dims - UVec3::ONE).as_vec3() * self.spacing)
     }
 
-    /// Marching cubes directly on the kept frame's lattice (`res` ignored),
-    /// placed by `T(x, n/(N − 1))`.
+    fn world_bounds(&self) -> Aabb {
+        self.world
+    }
+
+    fn report(&self) -> &MorphReport {
+        &self.report
+    }
+
+    /// Marching cubes directly on the kept frame's lattice (`res` ignored:
+    /// the resolution is the evolution's), placed by `T(x, n/(N − 1))`.
     fn frame_mesh(&self, t: f32, _res: u32) -> Result<TriMesh, LevelSetError> {
-        if !(0.0..=1.0).contains(&t) {
-            return Err(LevelSetError::InvalidTime(t));
-        }
-        let n = self.index(t);
+        let n = self.index(check_time(t)?);
         let mut mesh = marching_cubes(&self.frame_grid(n)?, 0.0);
         self.placement.apply(&mut mesh, self.alpha(n));
         Ok(mesh)
-    }
-
-    /// Iterations, convergence, evolution time, the last RMS target
-    /// distance and change (voxels), frames kept and their memory.
-    fn details(&self) -> Option<serde_json::Value> {
-        let last = self.stats.last().copied().unwrap_or_default();
-        Some(serde_json::json!({
-            "solver_iterations": self.stats.len(),
-            "converged": self.converged,
-            "evolution_time": self.end_time(),
-            "final_rms_distance_voxels": last.rms_distance,
-            "final_rms_change_voxels": last.rms_change,
-            "final_surface_nodes": last.surface_nodes,
-            "kept_frames": self.frames.len(),
-            "stored_frame_bytes": self.stored_bytes(),
-            "placement": self.placement.kind(),
-        }))
     }
 }

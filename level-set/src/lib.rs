@@ -20,42 +20,51 @@
 //!
 //! Units: grids are world units; solver values and speeds are in voxels.
 //!
-//! # Performance
-//! The reference case (sphere r = 0.3 → torus R = 0.3, r = 0.12 in
-//! `[-0.5, 0.5]³`, N³ nodes, speed = target distance), measured on a quiet
-//! 2-core machine with `cargo bench -p isomorph-benches --bench levelset`:
+//! [`LevelSetMorph::new`] assembles the whole pipeline from two
+//! [`isomorph_common::Solid`]s (meshes, distance volumes, CSG models,
+//! implicits): moment alignment or a user map ([`Align`]), true signed
+//! distances for the embedding and the speed (scan conversion for CSG,
+//! Breen §6.1), the evolution, and frames placed by the interpolated map.
 //!
-//! | N | sparse field, per iteration | dense, per iteration | sparse, whole morph |
-//! |---|---|---|---|
-//! | 64 | 0.77 ms | 5.0 ms | 79 ms |
-//! | 128 | 3.6 ms (×4.7) | 39 ms (×7.8) | 683 ms |
-//! | 256 | 17.9 ms (×4.9) | 312 ms (×8.0) | |
-//!
-//! The sparse field's cost grows like the surface (×4 per doubling), the
-//! dense solver's like the volume (×8). Two things keep the sparse field's
-//! cost per point flat once the grids outgrow the caches: its layer lists
-//! are kept sorted by node index (so each iteration sweeps memory in order),
-//! and the solver state is stepped in place. The whole dense morph at 64³
-//! (to the sparse field's evolution time) needs about 600 iterations, as
-//! eq. 24 bounds its step by the largest target distance anywhere.
+//! # Guarantees
+//! - Frame 0 is the source's distance volume and the last frame the
+//!   converged evolution; every frame mesh is closed and outward, and the
+//!   same for any thread count.
+//! - A part of the target the source does not overlap is a
+//!   [`MorphError::NoOverlap`](isomorph_common::MorphError::NoOverlap)
+//!   error naming each part, never a silent partial morph.
+//! - Cost per sparse-field iteration grows with the surface, not the volume
+//!   (measurements in `docs/EXPERIMENTS.md`).
 //!
 //! # Example
 //! ```
-//! use isomorph_common::{Aabb, Grid3, Morph, Shape};
+//! use isomorph_common::{Control, Morph, Shape, Solid, models};
+//! use isomorph_levelset::{LevelSetMorph, LevelSetSettings};
+//!
+//! let (sphere, torus) = (Solid::shape(Shape::sphere(0.3)), Solid::shape(models::torus()));
+//! let settings = LevelSetSettings { resolution: 48, ..Default::default() };
+//! let morph = LevelSetMorph::new(&sphere, &torus, &settings, &Control::new())?;
+//! assert!(morph.report().converged);
+//! assert_eq!(morph.frame_mesh(1.0, 0)?.genus(), Some(1)); // the sphere became a torus
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! The paper-level pieces stay public: sample a speed and evolve a grid
+//! yourself.
+//!
+//! ```
+//! use isomorph_common::{Aabb, Control, Grid3, Shape};
 //! use isomorph_levelset::{EvolveSettings, Placement, Response, SpeedGrid, evolve};
 //!
-//! let bounds = Aabb::cube(0.5);
-//! let source = Grid3::sample_box(&Shape::sphere(0.3), &bounds, 32)?;
-//! let torus = Shape::torus(0.3, 0.12);
-//! let speed = SpeedGrid::sample(&source, &torus, |x| x, Response::Identity)?;
-//! let morph = evolve(&source, &speed, Placement::Identity, &EvolveSettings::default(), &|_| {})?;
+//! let source = Grid3::sample_box(&Shape::sphere(0.3), &Aabb::cube(0.5), 32)?;
+//! let speed = SpeedGrid::sample(&source, &Shape::torus(0.3, 0.12), |x| x, Response::Identity)?;
+//! let morph = evolve(&source, &speed, Placement::Identity, &EvolveSettings::default(), &Control::new())?;
 //! assert!(morph.converged());
-//! let last = morph.frame_mesh(1.0, 0)?;
-//! assert_eq!(last.genus(), Some(1)); // the sphere became a torus
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
 mod band;
+mod contract;
 mod dense;
 mod error;
 mod evolution;
@@ -66,11 +75,10 @@ mod speed;
 mod stencil;
 
 pub use band::BandFrame;
+pub use contract::{Align, LevelSetSettings};
 pub use dense::DenseSolver;
 pub use error::LevelSetError;
-pub use evolution::{
-    EvolveSettings, FrameSchedule, LevelSetMorph, Progress, SolverKind, check_overlap, evolve,
-};
+pub use evolution::{EvolveSettings, FrameSchedule, LevelSetMorph, SolverKind, check_overlap, evolve};
 pub use placement::{Placement, Warp};
 pub use solver::{Curvature, Solver, StepParams, StepStats};
 pub use sparse_field::SparseFieldSolver;

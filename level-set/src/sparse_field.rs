@@ -83,7 +83,7 @@ impl SparseFieldSolver {
     /// clamped to `[−½, ½]`, and the layers are then filled as in step 4.
     ///
     /// # Errors
-    /// [`LevelSetError::NonFinite`], [`LevelSetError::Grid`] (fewer than 3 nodes per axis, or over the memory limit),
+    /// [`LevelSetError::NonFinite`], [`MorphError::Grid`](isomorph_common::MorphError::Grid) (fewer than 3 nodes per axis, or over the memory limit),
     /// [`LevelSetError::NoSurface`] for a source without a sign change.
     pub fn new(source: &Grid3<f32>) -> Result<Self, LevelSetError> {
         // The embedding and the status byte per node.

@@ -1,7 +1,7 @@
 //! End-to-end behaviour of the level-set morph on the paper's cases.
 
-use isomorph_common::{DistanceBlend, Morph};
 use isomorph_common::{Aabb, Field3, Grid3, Shape, TriMesh, models};
+use isomorph_common::{Control, DistanceBlend, Morph, MorphError};
 use isomorph_levelset::{
     EvolveSettings, FrameSchedule, LevelSetError, LevelSetMorph, Placement, Response, SolverKind, SpeedGrid,
     evolve,
@@ -13,7 +13,7 @@ fn sphere_torus(res: u32, solver: SolverKind) -> (LevelSetMorph, Grid3<f32>, Sha
     let torus = Shape::torus(0.3, 0.12);
     let speed = SpeedGrid::sample(&source, &torus, |x| x, Response::Identity).unwrap();
     let settings = EvolveSettings { solver, ..EvolveSettings::default() };
-    let morph = evolve(&source, &speed, Placement::Identity, &settings, &|_| {}).unwrap();
+    let morph = evolve(&source, &speed, Placement::Identity, &settings, &Control::new()).unwrap();
     (morph, source, torus)
 }
 
@@ -55,7 +55,7 @@ fn dense_and_sparse_solvers_agree() {
             rms_distance: 0.0,
             ..EvolveSettings::default()
         };
-        evolve(&source, &speed, Placement::Identity, &settings, &|_| {}).unwrap()
+        evolve(&source, &speed, Placement::Identity, &settings, &Control::new()).unwrap()
     };
     let (sparse, dense) = (run(SolverKind::SparseField), run(SolverKind::Dense));
     assert_eq!(sparse.len(), dense.len());
@@ -79,13 +79,13 @@ fn ball_to_c_never_pops_pieces_but_the_blend_does() {
     let target = Grid3::sample_box(&c, &bounds, res).unwrap();
     let speed = SpeedGrid::from_grid(&target, Response::Identity).unwrap();
     let settings = EvolveSettings { frames: FrameSchedule::EveryIterations(5), ..EvolveSettings::default() };
-    let morph = evolve(&source, &speed, Placement::Identity, &settings, &|_| {}).unwrap();
+    let morph = evolve(&source, &speed, Placement::Identity, &settings, &Control::new()).unwrap();
     let most = (0..morph.len())
         .map(|n| morph.frame_mesh(n as f32 / (morph.len() - 1) as f32, 0).unwrap().connected_components())
         .max()
         .unwrap();
     assert_eq!(most, 1, "the level-set morph split into {most} pieces");
-    let blend = DistanceBlend::new(source, target).unwrap();
+    let blend = DistanceBlend::from_grids(source, target).unwrap();
     let blend_most =
         (0..=20).map(|i| blend.frame_mesh(i as f32 / 20.0, 0).unwrap().connected_components()).max();
     assert!(blend_most.unwrap() > 1, "the baseline blend was expected to pop pieces (Breen Fig. 6)");
@@ -114,10 +114,10 @@ fn bad_inputs_are_typed_errors() {
     let far = Shape::sphere(0.1).translated(glam::Vec3::new(0.3, 0.0, 0.0));
     let speed = SpeedGrid::sample(&source, &far, |x| x, Response::Identity).unwrap();
     let settings = EvolveSettings::default();
-    let none = |_: &_| {};
+    let none = Control::new();
     assert!(matches!(
         evolve(&source, &speed, Placement::Identity, &settings, &none),
-        Err(LevelSetError::NoOverlap { components: 1, total: 1 })
+        Err(LevelSetError::Morph(MorphError::NoOverlap { ref missed, total: 1 })) if missed.len() == 1 && missed[0].share == 1.0
     ));
     let empty = source.map(|_| -1.0f32).unwrap();
     assert!(matches!(
@@ -137,12 +137,12 @@ fn bad_inputs_are_typed_errors() {
     let other = Grid3::sample_box(&Shape::sphere(0.3), &bounds, 20).unwrap();
     assert!(matches!(
         evolve(&other, &speed, Placement::Identity, &settings, &none),
-        Err(LevelSetError::Grid(_))
+        Err(LevelSetError::Morph(MorphError::Grid(_)))
     ));
     let zero = EvolveSettings { max_iterations: 0, ..settings };
     assert!(matches!(
         evolve(&source, &speed, Placement::Identity, &zero, &none),
-        Err(LevelSetError::BadSetting { .. })
+        Err(LevelSetError::Morph(MorphError::BadSetting { .. }))
     ));
 }
 
@@ -154,7 +154,7 @@ fn curvature_regularized_morph_still_lands_on_the_target() {
     let speed = SpeedGrid::sample(&source, &torus, |x| x, Response::Identity).unwrap();
     let curvature = Some(Curvature { weight: 2.0, length: 0.5 });
     let settings = EvolveSettings { curvature, ..EvolveSettings::default() };
-    let morph = evolve(&source, &speed, Placement::Identity, &settings, &|_| {}).unwrap();
+    let morph = evolve(&source, &speed, Placement::Identity, &settings, &Control::new()).unwrap();
     assert!(morph.converged());
     let last = morph.frame_mesh(1.0, 0).unwrap();
     let (mean, max) = vertex_error(&last, &torus, source.spacing());
@@ -176,7 +176,7 @@ fn mug_becomes_the_chain_after_moment_alignment() {
     let source = Grid3::sample_box(&mug, &region, res).unwrap();
     let speed = SpeedGrid::sample(&source, &chain, |x| map.transform_point3(x), Response::Identity).unwrap();
     let path = isomorph_common::AffinePath::from_identity(&map).unwrap();
-    let morph = evolve(&source, &speed, path.into(), &EvolveSettings::default(), &|_| {}).unwrap();
+    let morph = evolve(&source, &speed, path.into(), &EvolveSettings::default(), &Control::new()).unwrap();
     assert!(morph.converged());
     // Frames are placed by T(x, n/(N − 1)): the last one lies in the chain's space.
     let last = morph.frame_mesh(1.0, 0).unwrap();
@@ -206,7 +206,8 @@ fn warp_placement_carries_the_last_frame_onto_the_target() {
     let source = Grid3::sample_box(&Shape::sphere(0.3), &Aabb::cube(0.5), 48).unwrap();
     let torus = Shape::torus(0.3, 0.12);
     let speed = SpeedGrid::sample(&source, &torus, warp, Response::Identity).unwrap();
-    let morph = evolve(&source, &speed, Placement::warp(warp), &EvolveSettings::default(), &|_| {}).unwrap();
+    let morph =
+        evolve(&source, &speed, Placement::warp(warp), &EvolveSettings::default(), &Control::new()).unwrap();
     assert!(morph.converged());
     let h = source.spacing();
     let worst = |mesh: &TriMesh, field: &dyn Field3| {
@@ -219,5 +220,5 @@ fn warp_placement_carries_the_last_frame_onto_the_target() {
     let first = morph.frame_mesh(0.0, 0).unwrap();
     let sphere = Shape::sphere(0.3);
     assert!(worst(&first, &sphere) < 0.5, "first frame off the sphere by {} voxels", worst(&first, &sphere));
-    assert_eq!(morph.details().unwrap()["placement"], "warp");
+    assert_eq!(morph.report().details.get("placement"), Some(&isomorph_common::Value::Text("warp".into())));
 }
