@@ -52,7 +52,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         ..defaults.clone()
     };
     let demos = [
-        (Method::Baseline, "ball", "c-shape", &defaults, "baseline_ball_to_c"),
+        (Method::Baseline, "mug", "chain", &defaults, "baseline_mug_to_chain"),
         (Method::LevelSet, "ball", "c-shape", &defaults, "level_set_ball_to_c"),
         (Method::LevelSet, "mug", "chain", &mug_on_chain, "level_set_mug_to_chain"),
         (Method::Blobtree, "rook", "queen", &rook_queen, "blobtree_rook_to_queen"),

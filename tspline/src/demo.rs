@@ -2,7 +2,7 @@
 //! the shared CSG primitives or as parametric meshes.
 
 use crate::evolution::Speed;
-use crate::morph::MorphSettings;
+use crate::morph::TsplineSettings;
 use glam::{DVec3, Vec2, Vec3};
 use isomorph_common::{Shape, TriMesh};
 use std::f32::consts::TAU;
@@ -17,11 +17,11 @@ pub use isomorph_common::models::holed_cube;
 /// the paper used 651), a margin of half the shapes' size (the cube's faces
 /// stay away from the domain boundary) and [`Speed::Robust`] (the paper's
 /// eq. 8 stalls this growth); the evolution settings are the defaults.
-pub fn holed_cube_settings() -> MorphSettings {
-    let mut s = MorphSettings::default();
+pub fn holed_cube_settings() -> TsplineSettings {
+    let mut s = TsplineSettings::default();
     s.tmesh.max_depth = 3;
     s.margin = 0.5;
-    s.evolve.speed = Speed::Robust { v_max: 0.2, beta: 0.0625 };
+    s.evolve.speed = Speed::Robust { v_max: 0.2, beta_cells: 0.25 };
     s.evolve.max_steps = 60;
     s
 }

@@ -38,7 +38,7 @@ use crate::sampling::{Sample, zero_set_samples};
 use crate::tspline::TSpline;
 use glam::DVec3;
 use rayon::prelude::*;
-use std::ops::ControlFlow;
+use isomorph_common::Control;
 
 /// The speed function of the evolution.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -57,14 +57,14 @@ pub enum Speed {
     Robust {
         /// Largest distance speed (domain units per unit time), e.g. 0.2.
         v_max: f64,
-        /// Curvature weight, e.g. the finest cell size.
-        beta: f64,
+        /// Curvature weight `β` in units of the T-mesh's finest cell size
+        /// (so that it follows the depth), e.g. 1.
+        beta_cells: f64,
     },
 }
 
 /// Settings of the evolution.
 #[derive(Debug, Clone, PartialEq)]
-#[non_exhaustive]
 pub struct EvolveSettings {
     /// The speed function.
     pub speed: Speed,
@@ -124,7 +124,7 @@ impl EvolveSettings {
     /// Checks the ranges.
     ///
     /// # Errors
-    /// [`TsplineError::BadSetting`].
+    /// [`MorphError::BadSetting`](isomorph_common::MorphError::BadSetting).
     pub fn validate(&self) -> Result<(), TsplineError> {
         if let Some(h) = self.step {
             check_range("step", h, 1e-6, 2.0, "(0, 2]")?;
@@ -138,9 +138,9 @@ impl EvolveSettings {
         check_range("far_field_weight", self.far_field_weight, 0.0, 1e6, ">= 0")?;
         check_range("samples_per_cell", f64::from(self.samples_per_cell), 1.0, 4.0, "1..=4")?;
         check_range("stall_steps", self.stall_steps as f64, 1.0, 1e9, ">= 1")?;
-        if let Speed::Robust { v_max, beta } = self.speed {
+        if let Speed::Robust { v_max, beta_cells: beta } = self.speed {
             check_range("v_max", v_max, 1e-9, 1e6, "> 0")?;
-            check_range("beta", beta, 0.0, 1e6, ">= 0")?;
+            check_range("beta_cells", beta, 0.0, 1e6, ">= 0")?;
         }
         Ok(())
     }
@@ -212,15 +212,27 @@ pub struct Evolution {
 /// may break to cancel.
 ///
 /// # Errors
-/// [`TsplineError::BadSetting`], [`TsplineError::Singular`] when a step's
-/// system cannot be solved, [`TsplineError::Cancelled`],
-/// [`TsplineError::Grid`] when the sampling lattice does not fit in memory.
-pub fn evolve<D: Fn(DVec3) -> f64 + Sync>(
+/// [`MorphError::BadSetting`](isomorph_common::MorphError::BadSetting),
+/// [`TsplineError::Singular`] when a step's system cannot be solved,
+/// [`MorphError::Cancelled`](isomorph_common::MorphError::Cancelled) (checked
+/// after every step), [`MorphError::Grid`](isomorph_common::MorphError::Grid)
+/// when the sampling lattice does not fit in memory.
+pub fn evolve<D: Fn(DVec3) -> f64 + Sync + Send>(
     initial: &TSpline,
     target: D,
     target_surface: &[DVec3],
     settings: &EvolveSettings,
-    progress: &dyn Fn(&StepStats) -> ControlFlow<()>,
+    control: &Control,
+) -> Result<Evolution, TsplineError> {
+    control.install(|| evolve_on_pool(initial, target, target_surface, settings, control))
+}
+
+fn evolve_on_pool<D: Fn(DVec3) -> f64 + Sync + Send>(
+    initial: &TSpline,
+    target: D,
+    target_surface: &[DVec3],
+    settings: &EvolveSettings,
+    control: &Control,
 ) -> Result<Evolution, TsplineError> {
     settings.validate()?;
     let h_min = initial.mesh().finest_cell();
@@ -283,9 +295,10 @@ pub fn evolve<D: Fn(DVec3) -> f64 + Sync>(
             nonzeros,
         };
         steps.push(stats);
-        if progress(&stats).is_break() {
-            return Err(TsplineError::Cancelled);
-        }
+        control.progress("evolution", Some(steps.len() as f32 / settings.max_steps as f32), || {
+            format!("step {}, RMS to target {:.4}, {} samples", stats.step, stats.rms_to_target, stats.samples)
+        });
+        control.check()?;
     };
     Ok(Evolution { frames, steps, outcome, final_error })
 }
@@ -312,9 +325,9 @@ fn speed(kind: Speed, d_b: f64, s: &Sample, h_min: f64) -> f64 {
     match kind {
         Speed::Paper => lambda * d_b + (1.0 - lambda) * s.eval.mean_curvature(),
         Speed::Distance => d_b,
-        Speed::Robust { v_max, beta } => {
+        Speed::Robust { v_max, beta_cells } => {
             let k = s.eval.mean_curvature().clamp(-1.0 / h_min, 1.0 / h_min);
-            d_b.clamp(-v_max, v_max) + beta * (1.0 - lambda) * k
+            d_b.clamp(-v_max, v_max) + beta_cells * h_min * (1.0 - lambda) * k
         }
     }
 }
@@ -422,7 +435,7 @@ mod tests {
         let mesh = Arc::new(TMesh::build(&all, &s).unwrap());
         let (f0, _) = fit(mesh, move |p: DVec3| r0 - p.length(), &a, &FitSettings::default()).unwrap();
         let settings = EvolveSettings { speed, max_steps: 60, ..Default::default() };
-        evolve(&f0, move |p: DVec3| r1 - p.length(), &b, &settings, &|_| ControlFlow::Continue(())).unwrap()
+        evolve(&f0, move |p: DVec3| r1 - p.length(), &b, &settings, &Control::new()).unwrap()
     }
 
     #[test]
@@ -439,7 +452,7 @@ mod tests {
 
     #[test]
     fn growing_sphere_converges_with_the_robust_speed() {
-        let e = run(0.3, 0.6, Speed::Robust { v_max: 0.2, beta: 0.125 });
+        let e = run(0.3, 0.6, Speed::Robust { v_max: 0.2, beta_cells: 1.0 });
         assert_eq!(e.outcome, Outcome::Converged, "{:?}", e.steps.last());
     }
 }

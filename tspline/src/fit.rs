@@ -34,7 +34,6 @@ use std::sync::Arc;
 
 /// Settings of the initial fit.
 #[derive(Debug, Clone, PartialEq)]
-#[non_exhaustive]
 pub struct FitSettings {
     /// Quadrature points per axis and leaf (`q`; `q³` per leaf).
     pub quadrature: u32,
@@ -68,7 +67,7 @@ impl FitSettings {
     /// Checks the ranges.
     ///
     /// # Errors
-    /// [`TsplineError::BadSetting`].
+    /// [`MorphError::BadSetting`](isomorph_common::MorphError::BadSetting).
     pub fn validate(&self) -> Result<(), TsplineError> {
         check_range("quadrature", f64::from(self.quadrature), 1.0, 8.0, "1..=8")?;
         check_range("tikhonov", self.tikhonov, 1e-14, 1.0, "1e-14..=1")?;
@@ -126,7 +125,7 @@ pub struct FitReport {
 /// surface, used to measure the error.
 ///
 /// # Errors
-/// [`TsplineError::BadSetting`] for bad settings, [`TsplineError::NonFinite`]
+/// [`MorphError::BadSetting`](isomorph_common::MorphError::BadSetting) for bad settings, [`TsplineError::NonFinite`]
 /// when `distance` returns NaN, [`TsplineError::Singular`] when the system
 /// cannot be factorized.
 pub fn fit<D: Fn(DVec3) -> f64 + Sync>(

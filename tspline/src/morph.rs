@@ -4,7 +4,7 @@
 //! transforms of eq. 11 (§4.4), as an [`isomorph_common::Morph`].
 
 use crate::error::{TsplineError, check_range};
-use crate::evolution::{Evolution, EvolveSettings, StepStats, evolve};
+use crate::evolution::{Evolution, EvolveSettings, evolve};
 use crate::fit::{FitReport, FitSettings, fit};
 use crate::sampling::project;
 use crate::tmesh::{TMesh, TMeshSettings};
@@ -13,17 +13,15 @@ use glam::{Affine3A, DVec3, Vec3};
 use isomorph_common::alignment::{AlignMode, Alignment, Moments, align};
 use isomorph_common::marching_cubes::marching_cubes;
 use isomorph_common::mesh::distance::surface_samples;
-use isomorph_common::check_time;
 use isomorph_common::sdf::MeshSdf;
 use isomorph_common::{Aabb, Field3, Frame, Grid3, Morph, TriMesh};
+use isomorph_common::{Control, MorphError, MorphReport, Residual, Solid, Stages, check, check_time};
 use rayon::prelude::*;
-use std::ops::ControlFlow;
 use std::sync::Arc;
 
-/// Settings of [`morph`].
+/// Settings of [`TsplineMorph::new`] and [`morph`].
 #[derive(Debug, Clone, PartialEq)]
-#[non_exhaustive]
-pub struct MorphSettings {
+pub struct TsplineSettings {
     /// T-mesh construction (`n_T`, depth, sample spacing).
     pub tmesh: TMeshSettings,
     /// The initial fit.
@@ -39,18 +37,43 @@ pub struct MorphSettings {
     /// Insert the projection frames of §4.3 at both ends, so the sequence
     /// starts exactly at the source mesh and ends exactly at the target mesh.
     pub projection_frames: bool,
+    /// Grid nodes along the longest edge for the surface of a solid that
+    /// is not a mesh ([`Solid::surface`]; 8–1024).
+    pub surface_resolution: u32,
 }
 
-impl Default for MorphSettings {
+/// The defaults: a T-mesh of depth at most 4 (a few thousand
+/// coefficients), the robust speed with a curvature weight of one finest
+/// cell (the paper's eq. 8 stalls large growth, its note §5.2), a margin of
+/// 0.2, projection frames, surfaces of non-mesh inputs at 64 nodes.
+impl Default for TsplineSettings {
     fn default() -> Self {
         Self {
-            tmesh: TMeshSettings::default(),
+            tmesh: TMeshSettings { max_depth: 4, ..TMeshSettings::default() },
             fit: FitSettings::default(),
-            evolve: EvolveSettings::default(),
+            evolve: EvolveSettings {
+                speed: crate::Speed::Robust { v_max: 0.2, beta_cells: 1.0 },
+                ..EvolveSettings::default()
+            },
             align: None,
             margin: 0.2,
             projection_frames: true,
+            surface_resolution: 64,
         }
+    }
+}
+
+impl TsplineSettings {
+    /// Checks every field's range.
+    ///
+    /// # Errors
+    /// [`MorphError::BadSetting`] naming the first bad field.
+    pub fn validate(&self) -> Result<(), TsplineError> {
+        check_range("margin", self.margin, 0.0, 10.0, "0..=10")?;
+        check::count("surface_resolution", u64::from(self.surface_resolution), 8, 1024)?;
+        self.tmesh.validate()?;
+        self.fit.validate()?;
+        self.evolve.validate()
     }
 }
 
@@ -105,6 +128,8 @@ pub struct TsplineMorph {
     denormalize: Affine3A,
     /// Working space → source world space and the alignment path.
     alignment: Option<(Alignment, Affine3A)>,
+    world: Aabb,
+    report: MorphReport,
 }
 
 impl TsplineMorph {
@@ -136,12 +161,10 @@ impl TsplineMorph {
     /// The level set `L_i` (`i < n_l`) as a T-spline in domain coordinates.
     ///
     /// # Errors
-    /// [`TsplineError::BadSetting`] for `i >= n_l`.
+    /// [`MorphError::BadSetting`] for `i >= n_l`.
     pub fn level_set(&self, i: usize) -> Result<TSpline, TsplineError> {
-        let c = self.evolution.frames.get(i).ok_or(TsplineError::BadSetting {
-            name: "level set index",
-            value: i as f64,
-            expected: "below the number of level sets",
+        let c = self.evolution.frames.get(i).ok_or_else(|| {
+            MorphError::bad_setting("level set index", i, "below the number of level sets")
         })?;
         TSpline::new(self.mesh.clone(), c.clone())
     }
@@ -158,7 +181,7 @@ impl TsplineMorph {
     }
 
     fn index(&self, t: f32) -> Result<usize, TsplineError> {
-        let t = check_time(t).map_err(|_| TsplineError::InvalidTime(t))?;
+        let t = check_time(t)?;
         Ok((t * (self.frames.len() - 1) as f32).round() as usize)
     }
 }
@@ -167,7 +190,7 @@ impl Morph for TsplineMorph {
     type Field = FrameField;
     type Error = TsplineError;
 
-    fn method(&self) -> &str {
+    fn method(&self) -> &'static str {
         "tspline"
     }
 
@@ -180,8 +203,17 @@ impl Morph for TsplineMorph {
         Ok(Frame { field, iso: 0.0, transform: self.frame_transform(i) })
     }
 
-    fn bounds(&self) -> Aabb {
+    /// The domain `D = [−1, 1]³`.
+    fn field_bounds(&self) -> Aabb {
         Aabb::cube(1.0)
+    }
+
+    fn world_bounds(&self) -> Aabb {
+        self.world
+    }
+
+    fn report(&self) -> &MorphReport {
+        &self.report
     }
 
     /// Projection frames are returned as meshes directly; level sets are
@@ -202,26 +234,33 @@ impl Morph for TsplineMorph {
 }
 
 /// Runs the whole method from a source to a target mesh (closed, outward
-/// oriented, world units). `progress` sees every evolution step and may
-/// break to cancel.
+/// oriented, world units). `control` sees every evolution step and cancels
+/// between steps; the work runs on its threads.
 ///
 /// # Errors
 /// [`TsplineError::EmptyShape`] for a mesh without area,
-/// [`TsplineError::NonFinite`], [`TsplineError::Mesh`] for invalid meshes,
-/// [`TsplineError::Align`] when alignment is asked for an open mesh,
+/// [`TsplineError::NonFinite`], [`MorphError::Mesh`] for invalid meshes,
+/// [`MorphError::Alignment`] when alignment is asked for an open mesh,
 /// [`TsplineError::NoOverlap`] when the shapes do not overlap after
-/// alignment, [`TsplineError::Singular`], [`TsplineError::BadSetting`],
-/// [`TsplineError::Cancelled`].
+/// alignment, [`TsplineError::Singular`], [`MorphError::BadSetting`],
+/// [`MorphError::Cancelled`].
 pub fn morph(
     source: &TriMesh,
     target: &TriMesh,
-    settings: &MorphSettings,
-    progress: &dyn Fn(&StepStats) -> ControlFlow<()>,
+    settings: &TsplineSettings,
+    control: &Control,
 ) -> Result<TsplineMorph, TsplineError> {
-    check_range("margin", settings.margin, 0.0, 10.0, "0..=10")?;
-    settings.tmesh.validate()?;
-    settings.fit.validate()?;
-    settings.evolve.validate()?;
+    control.install(|| morph_on_pool(source, target, settings, control, Stages::start()))
+}
+
+fn morph_on_pool(
+    source: &TriMesh,
+    target: &TriMesh,
+    settings: &TsplineSettings,
+    control: &Control,
+    mut stages: Stages,
+) -> Result<TsplineMorph, TsplineError> {
+    settings.validate()?;
     for (name, m) in [("source", source), ("target", target)] {
         m.validate()?;
         if m.is_empty() || surface_samples(m, 1).is_none() {
@@ -273,11 +312,16 @@ pub fn morph(
         return Err(TsplineError::NoOverlap);
     }
     let all: Vec<DVec3> = samples_a.iter().chain(&samples_b).copied().collect();
+    control.check()?;
+    control.progress("fit", None, || format!("{} surface samples", all.len()));
     let mesh = Arc::new(TMesh::build(&all, &settings.tmesh)?);
     let (initial, fit_report) = fit(mesh, da, &samples_a, &settings.fit)?;
+    stages.lap("fit");
+    control.check()?;
     // The final refinement may have refined the T-mesh; it stays fixed from here on.
     let mesh = initial.mesh().clone();
-    let evolution = evolve(&initial, db, &samples_b, &settings.evolve, progress)?;
+    let evolution = evolve(&initial, db, &samples_b, &settings.evolve, control)?;
+    stages.lap("evolution");
     let h = settings.evolve.step_size(mesh.finest_cell());
     let mut frames = Vec::new();
     let (mut source_frames, mut target_frames) = (0, 0);
@@ -294,7 +338,9 @@ pub fn morph(
         target_frames = end.len();
         frames.extend(end.into_iter().map(|m| FrameKind::Mesh(Arc::new(m))));
     }
-    Ok(TsplineMorph {
+    stages.lap("projection frames");
+    let report = report(&evolution, &fit_report, &frames, stages);
+    let mut morph = TsplineMorph {
         mesh,
         evolution,
         fit: fit_report,
@@ -303,11 +349,76 @@ pub fn morph(
         target_frames,
         denormalize,
         alignment,
-    })
+        world: Aabb::EMPTY,
+        report,
+    };
+    let maps = (0..morph.frames.len()).map(|i| morph.frame_transform(i));
+    morph.world = isomorph_common::placed_bounds(&Aabb::cube(1.0), maps.collect::<Vec<_>>());
+    Ok(morph)
+}
+
+/// The contract's report of a finished morph.
+fn report(evolution: &Evolution, fit: &FitReport, frames: &[FrameKind], stages: Stages) -> MorphReport {
+    use crate::evolution::Outcome as Stop;
+    use isomorph_common::Outcome;
+    let outcome = match evolution.outcome {
+        Stop::Converged => Outcome::Converged,
+        Stop::Stalled | Stop::Vanished => Outcome::Stalled,
+        Stop::StepLimit => Outcome::IterationCap,
+    };
+    let coefficients: usize = evolution.frames.iter().map(Vec::len).sum();
+    let meshes: usize = frames
+        .iter()
+        .map(|f| match f {
+            FrameKind::Mesh(m) => m.positions.len() * 12 + m.triangles.len() * 12,
+            FrameKind::Spline(_) => 0,
+        })
+        .sum();
+    let stored = coefficients * size_of::<f64>() + meshes;
+    let mut report = MorphReport::new("tspline", outcome)
+        .with_iterations(evolution.steps.len())
+        .with_residual(Residual {
+            what: "two-sided RMS distance of the last level set to the target",
+            value: evolution.final_error,
+            unit: "domain units ([-1, 1]^3)",
+        })
+        .with_stages(stages)
+        .with_memory(stored, None)
+        .with_detail("coefficients", fit.coefficients)
+        .with_detail("fit_max_surface_error", fit.max_surface_error)
+        .with_detail("level_sets", evolution.frames.len())
+        .with_detail("frames", frames.len());
+    if evolution.outcome == Stop::Vanished {
+        report = report.with_warnings(["the zero set vanished during the evolution".to_string()]);
+    }
+    report
+}
+
+impl TsplineMorph {
+    /// Yang & Jüttler's morph of `source` into `target`: their surfaces
+    /// (the mesh itself, or marching cubes of the true distance volume at
+    /// [`TsplineSettings::surface_resolution`]) through [`morph`].
+    ///
+    /// # Errors
+    /// As [`morph`], plus the solids' conversion errors.
+    pub fn new(
+        source: &Solid,
+        target: &Solid,
+        settings: &TsplineSettings,
+        control: &Control,
+    ) -> Result<Self, TsplineError> {
+        settings.validate()?;
+        let mut stages = Stages::start();
+        let res = settings.surface_resolution;
+        control.progress("surfaces", None, String::new);
+        let (a, b) = (source.surface(res, control)?, target.surface(res, control)?);
+        stages.lap("surfaces");
+        control.install(|| morph_on_pool(&a, &b, settings, control, stages))
+    }
 }
 
 /// Uniform surface samples with the T-mesh's spacing (domain units).
-fn uniform_samples(mesh: &TriMesh, settings: &MorphSettings) -> Result<Vec<DVec3>, TsplineError> {
+fn uniform_samples(mesh: &TriMesh, settings: &TsplineSettings) -> Result<Vec<DVec3>, TsplineError> {
     let area = mesh.area();
     let count = (area / (settings.tmesh.sample_spacing * settings.tmesh.sample_spacing)).ceil();
     let count = count.clamp(16.0, 4e6) as usize;

@@ -18,7 +18,6 @@ pub const MAX_DEPTH: u32 = 7;
 
 /// How the octree T-mesh is built (paper §3.2, note §3.1).
 #[derive(Debug, Clone, PartialEq)]
-#[non_exhaustive]
 pub struct TMeshSettings {
     /// Split a cell holding more than this many surface samples (`n_T`).
     pub max_samples_per_cell: usize,
@@ -47,7 +46,7 @@ impl TMeshSettings {
     /// Checks every field's range.
     ///
     /// # Errors
-    /// [`TsplineError::BadSetting`] naming the first bad field.
+    /// [`MorphError::BadSetting`](isomorph_common::MorphError::BadSetting) naming the first bad field.
     pub fn validate(&self) -> Result<(), TsplineError> {
         check_range("max_samples_per_cell", self.max_samples_per_cell as f64, 1.0, 1e9, ">= 1")?;
         check_range("max_depth", self.max_depth as f64, 1.0, MAX_DEPTH as f64, "1..=7")?;
@@ -120,7 +119,7 @@ impl TMesh {
     /// more than `n_T` samples, then anchors and knot vectors.
     ///
     /// # Errors
-    /// [`TsplineError::BadSetting`] for invalid settings.
+    /// [`MorphError::BadSetting`](isomorph_common::MorphError::BadSetting) for invalid settings.
     pub fn build(samples: &[DVec3], settings: &TMeshSettings) -> Result<Self, TsplineError> {
         settings.validate()?;
         let depth = settings.max_depth;
@@ -191,7 +190,7 @@ impl TMesh {
     /// B-spline space; the interior knot vectors are uniform).
     ///
     /// # Errors
-    /// [`TsplineError::BadSetting`] for `depth` outside `1..=MAX_DEPTH`.
+    /// [`MorphError::BadSetting`](isomorph_common::MorphError::BadSetting) for `depth` outside `1..=MAX_DEPTH`.
     pub fn uniform(depth: u32) -> Result<Self, TsplineError> {
         let settings =
             TMeshSettings { min_depth: depth, max_depth: depth, balance: false, ..TMeshSettings::default() };
@@ -643,7 +642,7 @@ mod tests {
     #[test]
     fn bad_settings_are_errors() {
         let s = TMeshSettings { max_depth: 9, ..Default::default() };
-        assert!(matches!(TMesh::build(&[], &s), Err(TsplineError::BadSetting { name: "max_depth", .. })));
+        assert!(matches!(TMesh::build(&[], &s), Err(TsplineError::Morph(isomorph_common::MorphError::BadSetting { name: "max_depth", .. }))));
         let s = TMeshSettings { sample_spacing: f64::NAN, ..Default::default() };
         assert!(TMesh::build(&[], &s).is_err());
     }

@@ -30,15 +30,16 @@ impl TSpline {
     /// The function with `coeffs` (one per anchor of `mesh`).
     ///
     /// # Errors
-    /// [`TsplineError::BadSetting`] when the lengths differ,
+    /// [`MorphError::BadSetting`](isomorph_common::MorphError::BadSetting) when the lengths differ,
     /// [`TsplineError::NonFinite`] for NaN or infinite coefficients.
     pub fn new(mesh: Arc<TMesh>, coeffs: Vec<f64>) -> Result<Self, TsplineError> {
         if coeffs.len() != mesh.anchor_count() {
-            return Err(TsplineError::BadSetting {
-                name: "coefficients",
-                value: coeffs.len() as f64,
-                expected: "one coefficient per anchor",
-            });
+            return Err(isomorph_common::MorphError::bad_setting(
+                "coefficients",
+                coeffs.len(),
+                "one coefficient per anchor",
+            )
+            .into());
         }
         if coeffs.iter().any(|c| !c.is_finite()) {
             return Err(TsplineError::NonFinite("coefficients"));

@@ -6,7 +6,7 @@ use isomorph_common::marching_cubes::polygonize;
 use isomorph_common::mesh::distance::surface_distance;
 use isomorph_common::{Aabb, Morph, Shape};
 use isomorph_tspline::{Outcome, Speed, demo, morph};
-use std::ops::ControlFlow;
+use isomorph_common::Control;
 
 #[test]
 fn sphere_becomes_a_genus_three_holed_cube() {
@@ -15,7 +15,7 @@ fn sphere_becomes_a_genus_three_holed_cube() {
     let target = polygonize(&demo::holed_cube(), &bounds, 64, 0.0).unwrap();
     assert_eq!(target.genus(), Some(3));
     let settings = demo::holed_cube_settings();
-    let m = morph(&source, &target, &settings, &|_| ControlFlow::Continue(())).unwrap();
+    let m = morph(&source, &target, &settings, &Control::new()).unwrap();
     let ev = m.evolution();
     assert_eq!(m.tmesh().anchor_count(), 729, "a uniform depth-3 T-mesh");
     assert_eq!(ev.outcome, Outcome::Converged, "{:?}", ev.steps.last());

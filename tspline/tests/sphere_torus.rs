@@ -4,15 +4,14 @@
 
 use isomorph_common::marching_cubes::polygonize;
 use isomorph_common::mesh::distance::surface_distance;
-use isomorph_common::{Aabb, Morph, Shape, TriMesh};
-use isomorph_tspline::{MorphSettings, Speed, TsplineError, morph};
-use std::ops::ControlFlow;
+use isomorph_common::{Aabb, CancelToken, Control, Morph, MorphError, Shape, TriMesh};
+use isomorph_tspline::{Speed, TsplineError, TsplineSettings, morph};
 
-fn settings() -> MorphSettings {
-    let mut s = MorphSettings::default();
+fn settings() -> TsplineSettings {
+    let mut s = TsplineSettings::default();
     s.tmesh.max_depth = 3;
     s.tmesh.min_depth = 3;
-    s.evolve.speed = Speed::Robust { v_max: 0.2, beta: 0.25 };
+    s.evolve.speed = Speed::Robust { v_max: 0.2, beta_cells: 1.0 };
     s.evolve.max_steps = 40;
     s
 }
@@ -22,7 +21,7 @@ fn sphere_becomes_a_torus() {
     let bounds = Aabb::cube(0.5);
     let source = polygonize(&Shape::sphere(0.3), &bounds, 32, 0.0).unwrap();
     let target = polygonize(&Shape::torus(0.3, 0.15), &bounds, 40, 0.0).unwrap();
-    let m = morph(&source, &target, &settings(), &|_| ControlFlow::Continue(())).unwrap();
+    let m = morph(&source, &target, &settings(), &Control::new()).unwrap();
     let ev = m.evolution();
     let (ma, mb) = m.projection_frame_counts();
     assert!(ma >= 1 && mb >= 1);
@@ -44,7 +43,7 @@ fn sphere_becomes_a_torus() {
     };
     assert!(close(&m.frame_mesh(0.0, 0).unwrap().positions, &source.positions));
     assert!(close(&m.frame_mesh(1.0, 0).unwrap().positions, &target.positions));
-    assert!(matches!(m.frame(1.5), Err(TsplineError::InvalidTime(_))));
+    assert!(matches!(m.frame(1.5), Err(TsplineError::Morph(MorphError::InvalidTime(_)))));
 }
 
 #[test]
@@ -52,7 +51,7 @@ fn bad_inputs_are_typed_errors() {
     let bounds = Aabb::cube(0.5);
     let a = polygonize(&Shape::sphere(0.1).translated(glam::Vec3::splat(-0.3)), &bounds, 32, 0.0).unwrap();
     let b = polygonize(&Shape::sphere(0.1).translated(glam::Vec3::splat(0.3)), &bounds, 32, 0.0).unwrap();
-    let go = |_: &_| ControlFlow::Continue(());
+    let go = Control::new();
     assert!(matches!(morph(&a, &b, &settings(), &go), Err(TsplineError::NoOverlap)));
     assert!(matches!(
         morph(&TriMesh::default(), &b, &settings(), &go),
@@ -60,15 +59,19 @@ fn bad_inputs_are_typed_errors() {
     ));
     let mut bad = settings();
     bad.tmesh.max_depth = 12;
-    assert!(matches!(morph(&a, &a, &bad, &go), Err(TsplineError::BadSetting { .. })));
+    assert!(matches!(morph(&a, &a, &bad, &go), Err(TsplineError::Morph(MorphError::BadSetting { name: "max_depth", .. }))));
     let mut nan = a.clone();
     nan.positions[0].x = f32::NAN;
     assert!(morph(&nan, &a, &settings(), &go).is_err());
-    // Cancellation through the progress callback.
+    // Cancellation at the first evolution step.
     let c = polygonize(&Shape::sphere(0.25), &bounds, 32, 0.0).unwrap();
-    let stop = |_: &_| ControlFlow::Break(());
-    assert!(matches!(
-        morph(&c, &a.clone(), &settings(), &stop),
-        Err(TsplineError::Cancelled) | Err(TsplineError::NoOverlap)
-    ));
+    let d = polygonize(&Shape::sphere(0.3), &bounds, 32, 0.0).unwrap();
+    let token = CancelToken::new();
+    let trip = token.clone();
+    let stop = Control::new().with_cancel(token).with_progress(move |p| {
+        if p.stage == "evolution" {
+            trip.cancel();
+        }
+    });
+    assert!(matches!(morph(&c, &d, &settings(), &stop), Err(TsplineError::Morph(MorphError::Cancelled))));
 }

@@ -2,8 +2,8 @@
 
 use isomorph_common::marching_cubes::polygonize;
 use isomorph_common::{Aabb, Morph, Shape};
-use isomorph_tspline::{MorphSettings, Speed, TsplineMorph, morph};
-use std::ops::ControlFlow;
+use isomorph_tspline::{TsplineSettings, Speed, TsplineMorph, morph};
+use isomorph_common::Control;
 
 /// Morphs `source` into `target` (polygonized with `res` nodes over
 /// `[−0.5, 0.5]³`) on a T-mesh of maximum depth `depth` (minimum 3) with
@@ -19,7 +19,7 @@ pub fn run(
     let bounds = Aabb::cube(0.5);
     let source = polygonize(source, &bounds, res, 0.0).unwrap();
     let target = polygonize(target, &bounds, res, 0.0).unwrap();
-    let mut s = MorphSettings::default();
+    let mut s = TsplineSettings::default();
     s.tmesh.max_depth = depth;
     s.tmesh.min_depth = 3;
     s.margin = margin;
@@ -28,7 +28,7 @@ pub fn run(
     s.evolve.step = Some(0.5 * 2.0 / f64::from(1u32 << depth));
     s.evolve.max_steps = max_steps;
     s.evolve.stall_steps = stall_steps;
-    morph(&source, &target, &s, &|_| ControlFlow::Continue(())).unwrap()
+    morph(&source, &target, &s, &Control::new()).unwrap()
 }
 
 /// The connected components of every frame (the initial level set first),
