@@ -26,7 +26,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let report = export_sequence(&morph, &export, &control)?.report;
     for f in &report.frames {
-        println!("t = {:.2}: {} triangles, {} component(s), genus {:?}", f.t, f.triangles, f.components, f.genus);
+        println!(
+            "t = {:.2}: {} triangles, {} component(s), genus {:?}",
+            f.t, f.triangles, f.components, f.genus
+        );
     }
     println!("wrote {out}/frame_*.ply, contact_sheet.png, report.json");
     Ok(())

@@ -19,13 +19,16 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+/// Builds one method's morph under a [`Control`].
+pub type BuildMorph = Box<dyn FnOnce(&Control) -> Result<BoxedMorph, BoxedError>>;
+
 /// One method to compare: its name and how to build it, or why it cannot
 /// run on these inputs.
 pub struct Candidate {
     /// The method's name (also its output subfolder).
     pub name: String,
     /// Builds the morph, or says why the method does not apply.
-    pub build: Result<Box<dyn FnOnce(&Control) -> Result<BoxedMorph, BoxedError>>, String>,
+    pub build: Result<BuildMorph, String>,
     /// The method's own source and target surfaces for the endpoint
     /// distances, when its inputs differ from the others' (e.g. BlobTree
     /// scenes); `None` uses the export settings' references.

@@ -1,11 +1,16 @@
 //! The crate's typed errors.
 
-use isomorph_common::GridError;
+use isomorph_common::{GridError, MeshError, MorphError, MorphFailure};
 
-/// What can go wrong when fitting, slicing or morphing a variational implicit.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+/// What can go wrong when fitting, slicing or morphing a variational
+/// implicit: the kinds every method shares ([`MorphError`]: bad settings and
+/// times, cancellation, input conversion) and the method's own.
+#[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum RbfError {
+    /// One of the kinds every method shares.
+    #[error(transparent)]
+    Morph(#[from] MorphError),
     /// Fewer constraints than the degree-one polynomial has coefficients
     /// (`D + 1` in `D` dimensions); the interpolant is not determined.
     #[error(
@@ -67,9 +72,6 @@ pub enum RbfError {
         /// factorization succeeded).
         rcond: f64,
     },
-    /// A setting is out of range (negative smoothing, NaN tolerance, ...).
-    #[error("invalid setting: {0}")]
-    InvalidSetting(&'static str),
     /// A slice was asked for with the wrong number of fixed coordinates.
     #[error(
         "slicing a {dim}-dimensional interpolant to {slice_dim} dimensions needs {expected} fixed coordinates, got {got}"
@@ -91,12 +93,6 @@ pub enum RbfError {
     /// Points and normals differ in length, or a normal is zero.
     #[error("invalid points/normals input: {0}")]
     InvalidInput(String),
-    /// A PNG file could not be read or decoded.
-    #[error("PNG input: {0}")]
-    Image(String),
-    /// A morph time is NaN or outside `[0, 1]`.
-    #[error("time {0} is outside [0, 1]")]
-    InvalidTime(f32),
     /// A contour plane has a zero or non-finite origin or axis, or parallel
     /// axes (it spans no plane).
     #[error("degenerate contour plane: {0}")]
@@ -131,7 +127,25 @@ pub enum RbfError {
         /// The dimension of the shapes.
         dim: usize,
     },
-    /// A grid could not be made (from a polygonizer or sampler).
-    #[error(transparent)]
-    Grid(#[from] GridError),
+}
+
+impl From<GridError> for RbfError {
+    fn from(e: GridError) -> Self {
+        RbfError::Morph(MorphError::Grid(e))
+    }
+}
+
+impl From<MeshError> for RbfError {
+    fn from(e: MeshError) -> Self {
+        RbfError::Morph(MorphError::Mesh(e))
+    }
+}
+
+impl MorphFailure for RbfError {
+    fn shared(&self) -> Option<&MorphError> {
+        match self {
+            RbfError::Morph(e) => Some(e),
+            _ => None,
+        }
+    }
 }

@@ -13,8 +13,9 @@ use crate::interpolant::{Constraint, Interpolant};
 use crate::slice::Slice3;
 use crate::transform::{TransformSettings, lift};
 use glam::Vec3;
+use isomorph_common::MorphError;
 use isomorph_common::check_time;
-use isomorph_common::{Aabb, Frame, Morph};
+use isomorph_common::{Aabb, Frame, Morph, MorphReport, Outcome};
 
 #[derive(Debug, Clone)]
 enum Blend {
@@ -41,10 +42,12 @@ impl InfluenceShapes {
     /// and the errors of [`Interpolant::fit`].
     pub fn new(shapes: &[&[Constraint<3>]], settings: &TransformSettings) -> Result<Self, RbfError> {
         if !(settings.separation > 0.0 && settings.separation.is_finite()) {
-            return Err(RbfError::InvalidSetting("the separation must be positive and finite"));
+            return Err(
+                MorphError::bad_setting("separation", settings.separation, "a finite number > 0").into()
+            );
         }
         if !(settings.margin >= 0.0 && settings.margin.is_finite()) {
-            return Err(RbfError::InvalidSetting("the bounds margin must be finite and ≥ 0"));
+            return Err(MorphError::bad_setting("margin", settings.margin, "a finite number ≥ 0").into());
         }
         let s = settings.separation;
         let corners: Vec<Vec<f32>> = match shapes.len() {
@@ -133,7 +136,9 @@ impl InfluenceShapes {
                 "a path needs at least two finite control points of {dim} coordinates"
             )));
         }
-        Ok(InfluencePath { shapes: self, path })
+        let report =
+            MorphReport::new("rbf-influence", Outcome::Direct).with_detail("shapes", self.corners.len());
+        Ok(InfluencePath { shapes: self, path, report })
     }
 }
 
@@ -143,6 +148,7 @@ impl InfluenceShapes {
 pub struct InfluencePath {
     shapes: InfluenceShapes,
     path: Vec<Vec<f32>>,
+    report: MorphReport,
 }
 
 impl InfluencePath {
@@ -168,17 +174,25 @@ impl Morph for InfluencePath {
     type Field = Slice3;
     type Error = RbfError;
 
-    fn method(&self) -> &str {
+    fn method(&self) -> &'static str {
         "rbf-influence"
     }
 
     fn frame(&self, t: f32) -> Result<Frame<Slice3>, RbfError> {
-        let t = check_time(t).map_err(|_| RbfError::InvalidTime(t))?;
+        let t = check_time(t)?;
         Ok(Frame { field: self.shapes.slice(&self.point(t))?, iso: 0.0, transform: glam::Affine3A::IDENTITY })
     }
 
-    fn bounds(&self) -> Aabb {
+    fn field_bounds(&self) -> Aabb {
         self.shapes.bounds
+    }
+
+    fn world_bounds(&self) -> Aabb {
+        self.shapes.bounds
+    }
+
+    fn report(&self) -> &MorphReport {
+        &self.report
     }
 }
 
@@ -250,7 +264,7 @@ mod tests {
         assert_eq!(path.point(1.0), b);
         assert!(path.point(0.5)[1] > 0.0, "the path bends towards the third shape");
         assert!(path.frame(0.5).unwrap().field.value(Vec3::new(0.0, 0.0, 0.2)).is_finite());
-        assert!(matches!(path.frame(2.0), Err(RbfError::InvalidTime(_))));
+        assert!(matches!(path.frame(2.0), Err(RbfError::Morph(MorphError::InvalidTime(_)))));
         let two: Vec<&[Constraint<3>]> = refs[..2].to_vec();
         assert!(matches!(
             InfluenceShapes::new(&two, &TransformSettings::default()),

@@ -12,6 +12,7 @@ use crate::error::RbfError;
 use crate::kernel::Kernel;
 use crate::slice::{Slice2, Slice3, SliceEval};
 pub use crate::solve::{Factorization, Solver};
+use isomorph_common::MorphError;
 use rayon::prelude::*;
 
 /// One interpolation constraint: `f(position) = value`.
@@ -127,7 +128,7 @@ impl<const D: usize> Interpolant<D> {
     ///
     /// # Errors
     /// [`RbfError::NonFinite`] for NaN/infinite input,
-    /// [`RbfError::InvalidSetting`] for a negative or NaN smoothing or
+    /// [`MorphError::BadSetting`](isomorph_common::MorphError::BadSetting) for a negative or NaN smoothing or
     /// tolerance, [`RbfError::NearDuplicate`] per [`FitSettings::duplicates`],
     /// [`RbfError::TooFewConstraints`] with fewer than `D + 1`,
     /// [`RbfError::NotUnisolvent`] when the positions are coplanar in `D`
@@ -136,10 +137,17 @@ impl<const D: usize> Interpolant<D> {
     pub fn fit(constraints: &[Constraint<D>], settings: &FitSettings) -> Result<Self, RbfError> {
         const { assert!(D >= 2 && D <= 6, "Interpolant supports 2 to 6 dimensions") };
         if !(settings.smoothing >= 0.0 && settings.smoothing.is_finite()) {
-            return Err(RbfError::InvalidSetting("smoothing must be finite and ≥ 0"));
+            return Err(
+                MorphError::bad_setting("smoothing", settings.smoothing, "a finite number ≥ 0").into()
+            );
         }
         if !(settings.duplicate_tolerance >= 0.0 && settings.duplicate_tolerance.is_finite()) {
-            return Err(RbfError::InvalidSetting("duplicate_tolerance must be finite and ≥ 0"));
+            return Err(MorphError::bad_setting(
+                "duplicate_tolerance",
+                settings.duplicate_tolerance,
+                "a finite number ≥ 0",
+            )
+            .into());
         }
         for (index, c) in constraints.iter().enumerate() {
             if c.position.iter().any(|x| !x.is_finite()) {
@@ -484,7 +492,10 @@ mod tests {
             (0..10).map(|i| Constraint::new([i as f32, 2.0 * i as f32], 0.0)).collect();
         assert!(matches!(Interpolant::fit(&line, &s), Err(RbfError::NotUnisolvent { rank: 1, dim: 2 })));
         let bad = FitSettings { smoothing: -1.0, ..FitSettings::default() };
-        assert!(matches!(Interpolant::fit(&random_set::<2>(10, 1), &bad), Err(RbfError::InvalidSetting(_))));
+        assert!(matches!(
+            Interpolant::fit(&random_set::<2>(10, 1), &bad),
+            Err(RbfError::Morph(MorphError::BadSetting { .. }))
+        ));
     }
 
     #[test]

@@ -15,11 +15,11 @@
 //! | §3 variational interpolation, eq. 2–3, the bordered system | [`interpolant`] ([`Interpolant`], [`FitSettings`], [`FitReport`]), [`kernel`], the private `solve` |
 //! | §4.1 constraints from a grayscale image | [`image`] |
 //! | §4.2 constraints from points with normals / meshes | [`constraints`] |
-//! | §5.1, §5.2 shape transformation in N + 1 dimensions, §6.2 separation | [`transform`] ([`RbfMorph`], [`ContourMorph`]) |
+//! | §5.1, §5.2 shape transformation in N + 1 dimensions, §6.2 separation | [`transform`] ([`RbfMorph`], [`RbfSettings`], [`ContourMorph`]) |
 //! | §6, §6.1, §6.2 surface reconstruction from parallel (any spacing) and non-parallel contours | [`reconstruct`] ([`ContourSet`], [`Plane`], [`ContourSurface`]) |
 //! | appendix: warping by point correspondences, eq. 4–5 unwarping | [`warp`] ([`WarpedContourMorph`] for 2D shapes as in Fig. 9, [`WarpedMorph`] for 3D, [`HalfwayWarps`], [`DisplacementWarp`]) |
 //! | §7 influence shapes (triangle in N + 2, tetrahedron in N + 3 dimensions) | [`influence`] ([`InfluenceShapes`], [`InfluencePath`]) |
-//! | §5.2 polygonizing only near the surface (the paper uses Bloomenthal's continuation polygonizer) | [`polygonize`] |
+//! | §5.2 polygonizing only near the surface (the paper uses Bloomenthal's continuation polygonizer) | `isomorph_common::marching_cubes::level_set_mesh` |
 //! | fast evaluation of slices (what the paper's Bloomenthal polygonizer calls) | [`slice`](mod@slice) ([`Slice3`], [`Slice2`]) |
 //!
 //!
@@ -71,62 +71,34 @@
 //! fitting costs `O(n³)` time and `12 n²` bytes (3 GiB at 16000 constraints).
 //!
 //! # Cost
-//! Fitting is `O(n³)`: the Cholesky factorizations (of the whole projected
-//! block, or of the two slab blocks with the slab solver, a quarter of the
-//! flops), plus `O(n²)` for the matrix, the conjugate-gradient iterations,
-//! the condition estimate and the residual check; evaluating a slice is
-//! `O(n)` per point. Criterion medians on the 2-core machine, quiet (other
-//! jobs paused), `cargo bench -p isomorph-benches --bench rbf`, reference
-//! case sphere → torus in 4D (`n` constraints):
-//!
-//! | bench | `r² log r` | `r³` | issue target |
-//! |---|---|---|---|
-//! | `fit/sphere_torus_4d/2000` | 0.079 s | 0.076 s | |
-//! | `fit/sphere_torus_4d/4000` | 0.368 s | 0.362 s | |
-//! | `fit/sphere_torus_4d/8000` | 1.659 s | 1.642 s | ≤ 2.5 s — met |
-//! | `fit/sphere_torus_4d/16000` (one run each, `Interpolant::fit`) | 8.77 s | 8.69 s | |
-//! | `eval_grid/…/2000/64`, `eval_grid_r3/…/2000/64` | 0.348 s | 0.090 s | |
-//! | `eval_grid/…/4000/64`, `eval_grid_r3/…/4000/64` | 0.697 s | 0.179 s | |
-//! | `eval_grid/…/8000/64`, `eval_grid_r3/…/8000/64` | 1.394 s | 0.355 s | ≤ 1.5 s / ≤ 0.5 s — met |
-//! | `eval_grid/…/16000/64`, `eval_grid_r3/…/16000/64` | 2.80 s | 0.715 s | |
-//! | `polygonize/sphere_torus_4d/8000/64` (near-surface, [`polygonize`]) | 0.281 s | | ≤ 0.3 s — met |
-//! | `polygonize/sphere_torus_4d/8000/full/64` (full grid + marching cubes) | 1.506 s | | |
-//!
-//! With [`Solver::Dense`] the 8000 fit takes 3.3 s (the f64 Cholesky alone
-//! 2.57 s, 66 GFlop/s from faer on both cores); the 16000 one took 24–29 s
-//! before the matrix build was vectorized. The fit grows like `n³` past
-//! 4000 (×4.5 from 4000 to 8000, ×5.3 to 16000, with the slab solver);
-//! evaluation scales linearly in `n` (×2.0 per doubling).
-//! Memory: `8 n²` bytes for the matrix plus `4 n²` for the slab factors
-//! (3 GiB at 16000).
+//! Fitting is `O(n³)` time and `12 n²` bytes for `n` constraints;
+//! evaluating a slice is `O(n)` per point, and frame meshes evaluate it only
+//! near the surface. At the defaults ([`RbfSettings`]: 400 points per shape,
+//! 1600 constraints) a morph is built in a fraction of a second; measured
+//! figures are in `docs/EXPERIMENTS.md` (`cargo bench -p isomorph-benches
+//! --bench rbf`).
 
 //! # Example: a 3D morph
 //! ```
-//! use isomorph_common::{Aabb, Morph, Shape};
-//! use isomorph_rbf::constraints::{NormalOffset, Subsample, SurfaceSettings, field_constraints};
-//! use isomorph_rbf::{RbfMorph, TransformSettings};
+//! use isomorph_common::{Control, Morph, Shape, Solid};
+//! use isomorph_rbf::{Kernel, RbfMorph, RbfSettings};
 //!
-//! let s = SurfaceSettings { offset: NormalOffset::Absolute(0.01), subsample: Subsample::FarthestPoint(80) };
-//! let sphere = field_constraints(&Shape::sphere(0.3), &Aabb::cube(0.5), 20, &s)?;
-//! let cube = field_constraints(&Shape::rounded_cuboid(glam::Vec3::splat(0.25), 0.05), &Aabb::cube(0.5), 20, &s)?;
-//! let morph = RbfMorph::new(&sphere, &cube, &TransformSettings::default())?;
-//! assert!(morph.interpolant().report().max_residual.unwrap() < 1e-8);
+//! let sphere = Solid::shape(Shape::sphere(0.3));
+//! let cube = Solid::shape(Shape::rounded_cuboid(glam::Vec3::splat(0.25), 0.05));
+//! let settings = RbfSettings { points: 80, kernel: Kernel::ThinPlate, ..Default::default() };
+//! let morph = RbfMorph::new(&sphere, &cube, &settings, &Control::new())?;
+//! assert!(morph.report().residual.as_ref().unwrap().value < 1e-8);
 //! let mid = morph.frame_mesh(0.5, 32)?;
 //! assert_eq!(mid.connected_components(), 1);
 //! # Ok::<(), isomorph_rbf::RbfError>(())
 //! ```
 //!
-//! # CLI wiring
-//! `isomorph morph --method rbf` builds constraints with
-//! [`constraints::mesh_constraints`] (meshes) or
-//! [`constraints::field_constraints`] (built-in shapes), subsampled with
-//! [`constraints::Subsample::FarthestPoint`]`(--points)`, and fits
-//! [`RbfMorph::new`] with [`TransformSettings`] (`--separation`, `--kernel`
-//! via [`Kernel::from_name`]); [`RbfMorph`] is a [`Morph`](isomorph_common::Morph)
-//! for the sequence exporter. `isomorph contours A.png B.png` reads images
-//! with [`image::read_png_gray`], makes constraints with
-//! [`image::image_constraints`] at mid-gray 0.5 and fits a [`ContourMorph`],
-//! whose [`ContourMorph::frame_grid`] gives the frames.
+//! The paper-level pieces stay public: [`constraints`] makes constraints
+//! from meshes and fields, [`RbfMorph::from_constraints`] fits them with
+//! [`TransformSettings`], [`Interpolant::fit`] fits any constraint set in
+//! 2–6 dimensions, and [`ContourMorph`] morphs 2D shapes (e.g. images read
+//! with `isomorph_io::png_gray::read_png_gray` and made into constraints
+//! with [`image::image_constraints`]).
 
 // Index loops mirror the formulas of the numeric code (reflectors, slices).
 #![allow(clippy::needless_range_loop)]
@@ -138,7 +110,7 @@ pub mod image;
 pub mod influence;
 pub mod interpolant;
 pub mod kernel;
-pub mod polygonize;
+
 pub mod reconstruct;
 pub mod slice;
 pub mod transform;
@@ -156,5 +128,5 @@ pub use kernel::Kernel;
 pub use reconstruct::{ContourSet, ContourSurface, Plane, ReconstructSettings};
 pub use slice::{Slice2, Slice3};
 pub use solve::{Factorization, Solver};
-pub use transform::{ContourMorph, RbfMorph, TransformSettings};
+pub use transform::{ContourMorph, RbfMorph, RbfSettings, TransformSettings};
 pub use warp::{DisplacementWarp, HalfwayWarps, WarpedContourMorph, WarpedMorph, WarpedSlice, WarpedSlice2};

@@ -42,6 +42,8 @@ use crate::image::image_constraints;
 use crate::interpolant::{Constraint, FitSettings, Interpolant};
 use crate::slice::Slice3;
 use glam::{Vec2, Vec3};
+use isomorph_common::MorphError;
+use isomorph_common::marching_cubes::level_set_mesh;
 use isomorph_common::{Aabb, Field3, Grid2, TriMesh};
 
 /// A plane in 3D carrying 2D contour coordinates: the 2D point `(x, y)` sits
@@ -248,7 +250,7 @@ impl ContourSet {
     /// Fits one variational implicit through the constraints of all slices.
     ///
     /// # Errors
-    /// [`RbfError::EmptyShape`] for an empty set, [`RbfError::InvalidSetting`]
+    /// [`RbfError::EmptyShape`] for an empty set, [`MorphError::BadSetting`](isomorph_common::MorphError::BadSetting)
     /// for a bad offset or margin, [`RbfError::NotUnisolvent`] when all
     /// contours lie in one plane (a single slice does not determine a
     /// surface), and the other errors of [`Interpolant::fit`].
@@ -257,7 +259,7 @@ impl ContourSet {
             return Err(RbfError::EmptyShape("contour set"));
         }
         if !(settings.margin >= 0.0 && settings.margin.is_finite()) {
-            return Err(RbfError::InvalidSetting("the bounds margin must be finite and ≥ 0"));
+            return Err(MorphError::bad_setting("margin", settings.margin, "a finite number ≥ 0").into());
         }
         let points: Vec<Vec3> = (self.constraints.iter().map(|c| Vec3::from_array(c.position)))
             .chain(self.oriented.iter().map(|&(p, _)| p))
@@ -268,7 +270,7 @@ impl ContourSet {
             NormalOffset::Absolute(k) => k,
         };
         if !(k > 0.0 && k.is_finite()) {
-            return Err(RbfError::InvalidSetting("the normal offset must be positive and finite"));
+            return Err(MorphError::bad_setting("offset", k, "a finite number > 0").into());
         }
         let mut all = self.constraints.clone();
         for &(p, inward) in &self.oriented {
@@ -328,9 +330,9 @@ impl ContourSurface {
     /// only.
     ///
     /// # Errors
-    /// [`RbfError::Grid`] for `res < 2` or a lattice too large.
+    /// [`MorphError::Grid`](isomorph_common::MorphError::Grid) for `res < 2` or a lattice too large.
     pub fn mesh(&self, res: u32) -> Result<TriMesh, RbfError> {
-        crate::polygonize::zero_set_mesh(&self.field(), &self.bounds, res)
+        Ok(level_set_mesh(&self.field(), &self.bounds, res, 0.0)?)
     }
 }
 
@@ -543,6 +545,6 @@ mod tests {
         set.add_polylines(&plane, &[circle(1.0, 8)]).unwrap();
         assert!(matches!(set.fit(&ReconstructSettings::default()), Err(RbfError::NotUnisolvent { .. })));
         let s = ReconstructSettings { offset: NormalOffset::Absolute(-1.0), ..Default::default() };
-        assert!(matches!(set.fit(&s), Err(RbfError::InvalidSetting(_))));
+        assert!(matches!(set.fit(&s), Err(RbfError::Morph(MorphError::BadSetting { .. }))));
     }
 }

@@ -7,13 +7,16 @@
 //! ones let the global shape guide the in-between shapes (which then round
 //! off and bulge more, especially with the `r³` kernel).
 
+use crate::Kernel;
+use crate::constraints::{NormalOffset, Subsample, SurfaceSettings, mesh_constraints};
 use crate::error::RbfError;
 use crate::interpolant::{Constraint, FitSettings, Interpolant};
 use crate::slice::{Slice2, Slice3};
 use glam::{UVec2, Vec2, Vec3};
+use isomorph_common::MorphError;
 use isomorph_common::marching_squares::{Polyline2, marching_squares};
-use isomorph_common::check_time;
-use isomorph_common::{Aabb, Frame, Grid2, Morph, TriMesh};
+use isomorph_common::{Aabb, Control, Frame, Grid2, Morph, MorphReport, Outcome, Residual, Solid, Stages};
+use isomorph_common::{check, check_time};
 
 /// Settings of a shape transformation.
 #[derive(Debug, Clone, PartialEq)]
@@ -24,7 +27,7 @@ pub struct TransformSettings {
     /// 1, in the shapes' world units).
     pub separation: f32,
     /// Margin added around the union of the inputs' bounding boxes for
-    /// [`Morph::bounds`], as a fraction of its diagonal (default 0.1):
+    /// [`Morph::field_bounds`], as a fraction of its diagonal (default 0.1):
     /// in-between shapes may bulge beyond both inputs.
     pub margin: f32,
 }
@@ -97,55 +100,187 @@ fn fit_pair<const N: usize, const M: usize>(
 
 fn check_separation(settings: &TransformSettings) -> Result<(), RbfError> {
     if !(settings.separation > 0.0 && settings.separation.is_finite()) {
-        return Err(RbfError::InvalidSetting("the separation t_max must be positive and finite"));
+        return Err(MorphError::bad_setting("separation", settings.separation, "a finite number > 0").into());
     }
     if !(settings.margin >= 0.0 && settings.margin.is_finite()) {
-        return Err(RbfError::InvalidSetting("the bounds margin must be finite and ≥ 0"));
+        return Err(MorphError::bad_setting("margin", settings.margin, "a finite number ≥ 0").into());
     }
     Ok(())
 }
 
+/// Settings of [`RbfMorph::new`]: how many surface points of each solid
+/// become constraints, and the fit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RbfSettings {
+    /// Surface points per shape, chosen by farthest-point sampling (each
+    /// gives a boundary and a normal constraint: `4 · points` constraints in
+    /// all; 8–8000, default 400). The fit costs `O(points³)`.
+    pub points: usize,
+    /// The separation `t_max` of the shapes along the fourth axis, in world
+    /// units (paper §6.2: small keeps local features, large lets the global
+    /// shape lead; > 0, default 1).
+    pub separation: f32,
+    /// The radial basis function (default `r² log r`, eq. 2).
+    pub kernel: Kernel,
+    /// Inward offset of the normal constraints as a fraction of each
+    /// shape's bounding-box diagonal (§4.2's `k`; (0, 0.2], default 0.01).
+    pub normal_offset: f32,
+    /// Nodes along the longest edge of the grid on which non-mesh solids
+    /// are polygonized to find their surface points (16–1024, default 64).
+    pub surface_resolution: u32,
+    /// Margin around both shapes' boxes for [`Morph::field_bounds`], as a
+    /// fraction of the union's diagonal (0–2, default 0.1): in-between
+    /// shapes may bulge beyond both inputs.
+    pub margin: f32,
+}
+
+impl Default for RbfSettings {
+    fn default() -> Self {
+        Self {
+            points: 400,
+            separation: 1.0,
+            kernel: Kernel::ThinPlate,
+            normal_offset: 0.01,
+            surface_resolution: 64,
+            margin: 0.1,
+        }
+    }
+}
+
+impl RbfSettings {
+    /// Checks the ranges.
+    ///
+    /// # Errors
+    /// [`MorphError::BadSetting`] naming the field, its value and the range.
+    pub fn validate(&self) -> Result<(), MorphError> {
+        check::count("points", self.points as u64, 8, 8000)?;
+        check::positive("separation", f64::from(self.separation))?;
+        check::range("normal_offset", f64::from(self.normal_offset), 1e-6, 0.2)?;
+        check::count("surface_resolution", u64::from(self.surface_resolution), 16, 1024)?;
+        check::range("margin", f64::from(self.margin), 0.0, 2.0)
+    }
+}
+
 /// Transformation between two 3D shapes through one 4D variational implicit
 /// (§5.2); implements [`Morph`] with [`Slice3`] frames (iso 0, positive
-/// inside).
+/// inside, field space = world space).
 ///
 /// ```
-/// use glam::Vec3;
-/// use isomorph_common::{Aabb, Field3, Morph, Shape};
-/// use isomorph_rbf::constraints::{field_constraints, NormalOffset, SurfaceSettings, Subsample};
-/// use isomorph_rbf::transform::{RbfMorph, TransformSettings};
+/// use isomorph_common::{Control, Morph, Shape, Solid};
+/// use isomorph_rbf::{RbfMorph, RbfSettings};
 ///
-/// let s = SurfaceSettings { offset: NormalOffset::Absolute(0.01), subsample: Subsample::FarthestPoint(60) };
-/// let a = field_constraints(&Shape::sphere(0.3), &Aabb::cube(0.5), 16, &s).unwrap();
-/// let b = field_constraints(&Shape::sphere(0.2).translated(Vec3::X * 0.1), &Aabb::cube(0.5), 16, &s).unwrap();
-/// let morph = RbfMorph::new(&a, &b, &TransformSettings::default()).unwrap();
-/// let start = morph.frame(0.0).unwrap().field;
-/// assert!(start.value(Vec3::new(0.3, 0.0, 0.0)).abs() < 0.05); // on the sphere
-/// assert!(start.value(Vec3::ZERO) > 0.0); // inside
+/// let sphere = Solid::shape(Shape::sphere(0.3));
+/// let torus = Solid::shape(Shape::torus(0.3, 0.12));
+/// let settings = RbfSettings { points: 200, ..Default::default() };
+/// let morph = RbfMorph::new(&sphere, &torus, &settings, &Control::new())?;
+/// assert!(morph.interpolant().report().max_residual.unwrap() < 1e-8);
+/// let torus_frame = morph.frame_mesh(1.0, 48)?;
+/// assert_eq!(torus_frame.genus(), Some(1));
+/// # Ok::<(), isomorph_rbf::RbfError>(())
 /// ```
 #[derive(Debug, Clone)]
 pub struct RbfMorph {
     interpolant: Interpolant<4>,
     separation: f32,
     bounds: Aabb,
+    report: MorphReport,
 }
 
 impl RbfMorph {
-    /// Fits the 4D implicit through `source` at `t = 0` and `target` at
+    /// Samples `settings.points` surface points of each solid (the mesh
+    /// itself, or the polygonized distance volume of other solids),
+    /// makes their boundary and inward normal constraints (§4.2) and fits
+    /// the 4D implicit with the source at `t = 0` and the target at
     /// `t = separation`.
+    ///
+    /// Cancellation is checked between the stages; the fit itself (0.1 s at
+    /// the defaults, `O(points³)`) runs to its end.
+    ///
+    /// # Errors
+    /// [`MorphError::BadSetting`], [`MorphError::Cancelled`], the solids'
+    /// conversion errors, and those of [`RbfMorph::from_constraints`].
+    pub fn new(
+        source: &Solid,
+        target: &Solid,
+        settings: &RbfSettings,
+        control: &Control,
+    ) -> Result<Self, RbfError> {
+        settings.validate()?;
+        control.install(|| {
+            let mut stages = Stages::start();
+            let surface = SurfaceSettings {
+                offset: NormalOffset::RelativeToDiagonal(settings.normal_offset),
+                subsample: Subsample::FarthestPoint(settings.points),
+            };
+            let mut sides = Vec::with_capacity(2);
+            for (k, solid) in [source, target].into_iter().enumerate() {
+                control.progress("constraints", Some(k as f32 / 2.0), String::new);
+                let mesh = solid.surface(settings.surface_resolution, control)?;
+                sides.push(mesh_constraints(&mesh, &surface)?);
+                control.check()?;
+            }
+            stages.lap("constraints");
+            control
+                .progress("fit", None, || format!("{} constraints in 4D", sides[0].len() + sides[1].len()));
+            let transform = TransformSettings {
+                fit: FitSettings::default().with_kernel(settings.kernel),
+                separation: settings.separation,
+                margin: settings.margin,
+            };
+            let mut morph = Self::from_constraints(&sides[0], &sides[1], &transform)?;
+            control.check()?;
+            stages.lap("fit");
+            morph.report = morph.report.with_stages(stages);
+            Ok(morph)
+        })
+    }
+
+    /// Fits the 4D implicit through `source` at `t = 0` and `target` at
+    /// `t = separation` (the paper-level constructor: constraints made by
+    /// the caller, e.g. with [`crate::constraints`]).
+    ///
+    /// ```
+    /// use glam::Vec3;
+    /// use isomorph_common::{Aabb, Field3, Morph, Shape};
+    /// use isomorph_rbf::constraints::{field_constraints, NormalOffset, SurfaceSettings, Subsample};
+    /// use isomorph_rbf::transform::{RbfMorph, TransformSettings};
+    ///
+    /// let s = SurfaceSettings { offset: NormalOffset::Absolute(0.01), subsample: Subsample::FarthestPoint(60) };
+    /// let a = field_constraints(&Shape::sphere(0.3), &Aabb::cube(0.5), 16, &s).unwrap();
+    /// let b = field_constraints(&Shape::sphere(0.2).translated(Vec3::X * 0.1), &Aabb::cube(0.5), 16, &s).unwrap();
+    /// let morph = RbfMorph::from_constraints(&a, &b, &TransformSettings::default()).unwrap();
+    /// let start = morph.frame(0.0).unwrap().field;
+    /// assert!(start.value(Vec3::new(0.3, 0.0, 0.0)).abs() < 0.05); // on the sphere
+    /// assert!(start.value(Vec3::ZERO) > 0.0); // inside
+    /// ```
     ///
     /// # Errors
     /// [`RbfError::EmptyShape`] for an empty constraint set,
-    /// [`RbfError::InvalidSetting`] for a bad separation or margin, and the
+    /// [`MorphError::BadSetting`] for a bad separation or margin, and the
     /// errors of [`Interpolant::fit`].
-    pub fn new(
+    pub fn from_constraints(
         source: &[Constraint<3>],
         target: &[Constraint<3>],
         settings: &TransformSettings,
     ) -> Result<Self, RbfError> {
         let (interpolant, lo, hi) = fit_pair::<3, 4>(source, target, settings)?;
         let bounds = Aabb::new(Vec3::from_array(lo), Vec3::from_array(hi));
-        Ok(Self { interpolant, separation: settings.separation, bounds })
+        let fit = interpolant.report();
+        let n = fit.constraints;
+        let mut report = MorphReport::new("rbf", Outcome::Direct)
+            .with_rcond(fit.rcond)
+            .with_memory(n * (4 + 1) * size_of::<f64>(), Some(12 * n * n))
+            .with_detail("constraints", n)
+            .with_detail("merged", fit.merged)
+            .with_detail("factorization", format!("{:?}", fit.factorization).as_str());
+        if let Some(r) = fit.max_residual {
+            report = report.with_residual(Residual {
+                what: "largest residual at the constraints",
+                value: r,
+                unit: "relative",
+            });
+        }
+        Ok(Self { interpolant, separation: settings.separation, bounds, report })
     }
 
     /// The issue's reference case: a sphere (radius 0.3) at `t = 0` and a
@@ -156,9 +291,9 @@ impl RbfMorph {
     /// in 4D, with a degree-one polynomial.
     ///
     /// # Errors
-    /// As [`RbfMorph::new`].
+    /// As [`RbfMorph::from_constraints`].
     pub fn sphere_torus(points_per_shape: usize, kernel: crate::Kernel) -> Result<Self, RbfError> {
-        use crate::constraints::{NormalOffset, Subsample, SurfaceSettings, field_constraints};
+        use crate::constraints::field_constraints;
         use isomorph_common::Shape;
         let s = SurfaceSettings {
             offset: NormalOffset::Absolute(0.01),
@@ -168,7 +303,7 @@ impl RbfMorph {
         let b = field_constraints(&Shape::torus(0.3, 0.12), &Aabb::cube(0.5), 64, &s)?;
         let settings =
             TransformSettings { fit: FitSettings::default().with_kernel(kernel), ..Default::default() };
-        Self::new(&a, &b, &settings)
+        Self::from_constraints(&a, &b, &settings)
     }
 
     /// The 4D interpolant (its report tells the conditioning).
@@ -184,18 +319,21 @@ impl RbfMorph {
     /// The slice at morph time `t ∈ [0, 1]` (4D coordinate `t · t_max`).
     ///
     /// # Errors
-    /// [`RbfError::InvalidTime`] for NaN or `t ∉ [0, 1]`.
+    /// [`MorphError::InvalidTime`] for NaN or `t ∉ [0, 1]`.
     pub fn slice(&self, t: f32) -> Result<Slice3, RbfError> {
-        let t = check_time(t).map_err(|_| RbfError::InvalidTime(t))?;
+        let t = check_time(t)?;
         Ok(self.interpolant.slice3(&[t * self.separation])?.with_bounds(self.bounds))
     }
 }
 
+/// Frames are slices of the 4D implicit in world space (identity transform);
+/// [`Morph::frame_mesh`] is the default near-surface polygonizer, which
+/// evaluates the `O(n)` slice only in blocks the surface crosses.
 impl Morph for RbfMorph {
     type Field = Slice3;
     type Error = RbfError;
 
-    fn method(&self) -> &str {
+    fn method(&self) -> &'static str {
         "rbf"
     }
 
@@ -203,17 +341,16 @@ impl Morph for RbfMorph {
         Ok(Frame { field: self.slice(t)?, iso: 0.0, transform: glam::Affine3A::IDENTITY })
     }
 
-    fn bounds(&self) -> Aabb {
+    fn field_bounds(&self) -> Aabb {
         self.bounds
     }
 
-    /// The slice polygonized near its surface only
-    /// ([`polygonize_near_surface`](crate::polygonize::polygonize_near_surface)):
-    /// the same mesh as marching cubes on the full grid over
-    /// [`Morph::bounds`] for fields without sub-block features, at a fraction
-    /// of the O(n) kernel evaluations per node.
-    fn frame_mesh(&self, t: f32, res: u32) -> Result<TriMesh, RbfError> {
-        crate::polygonize::zero_set_mesh(&self.slice(t)?, &self.bounds, res)
+    fn world_bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    fn report(&self) -> &MorphReport {
+        &self.report
     }
 }
 
@@ -263,9 +400,9 @@ impl ContourMorph {
     /// The 2D field of the shape at morph time `t ∈ [0, 1]`.
     ///
     /// # Errors
-    /// [`RbfError::InvalidTime`] for NaN or `t ∉ [0, 1]`.
+    /// [`MorphError::InvalidTime`](isomorph_common::MorphError::InvalidTime) for NaN or `t ∉ [0, 1]`.
     pub fn slice(&self, t: f32) -> Result<Slice2, RbfError> {
-        let t = check_time(t).map_err(|_| RbfError::InvalidTime(t))?;
+        let t = check_time(t)?;
         self.interpolant.slice2(&[t * self.separation])
     }
 
@@ -273,7 +410,7 @@ impl ContourMorph {
     /// nodes along the longer edge.
     ///
     /// # Errors
-    /// [`RbfError::InvalidTime`]; [`RbfError::Grid`] for `res < 2`.
+    /// [`MorphError::InvalidTime`](isomorph_common::MorphError::InvalidTime); [`MorphError::Grid`](isomorph_common::MorphError::Grid) for `res < 2`.
     pub fn frame_grid(&self, t: f32, res: u32) -> Result<Grid2<f32>, RbfError> {
         let (dims, spacing) = frame_lattice(self.lo, self.hi, res)?;
         Ok(self.slice(t)?.sample(dims, self.lo, spacing)?)
@@ -294,7 +431,7 @@ impl ContourMorph {
 pub(crate) fn frame_lattice(lo: Vec2, hi: Vec2, res: u32) -> Result<(UVec2, f32), RbfError> {
     if res < 2 {
         let dims = glam::UVec3::new(res, res, 1);
-        return Err(RbfError::Grid(isomorph_common::GridError::TooSmall { dims, min: 2 }));
+        return Err(isomorph_common::GridError::TooSmall { dims, min: 2 }.into());
     }
     let size = hi - lo;
     let spacing = size.max_element() / (res - 1) as f32;
@@ -356,8 +493,8 @@ mod tests {
         let g = slice.gradient(p);
         let e = morph.interpolant().gradient_f64([0.1, 0.2, 0.05, 0.37].map(|x: f32| f64::from(x)));
         assert!((g - Vec3::new(e[0] as f32, e[1] as f32, e[2] as f32)).length() < 1e-3 * (1.0 + g.length()));
-        assert!(matches!(morph.slice(1.5), Err(RbfError::InvalidTime(_))));
-        assert!(matches!(morph.frame(f32::NAN), Err(RbfError::InvalidTime(_))));
+        assert!(matches!(morph.slice(1.5), Err(RbfError::Morph(MorphError::InvalidTime(_)))));
+        assert!(matches!(morph.frame(f32::NAN), Err(RbfError::Morph(MorphError::InvalidTime(_)))));
     }
 
     #[test]
@@ -399,7 +536,7 @@ mod tests {
     fn bad_morph_input() {
         let s = TransformSettings { separation: 0.0, ..Default::default() };
         let a = vec![Constraint::new([0.0, 0.0], 0.0); 3];
-        assert!(matches!(ContourMorph::new(&a, &a, &s), Err(RbfError::InvalidSetting(_))));
+        assert!(matches!(ContourMorph::new(&a, &a, &s), Err(RbfError::Morph(MorphError::BadSetting { .. }))));
         assert!(matches!(
             ContourMorph::new(&a, &[], &TransformSettings::default()),
             Err(RbfError::EmptyShape("target"))

@@ -28,9 +28,9 @@ use crate::interpolant::{Constraint, FitSettings, Interpolant};
 use crate::slice::{Slice2, Slice3, sample_lattice};
 use crate::transform::{ContourMorph, RbfMorph, TransformSettings, frame_lattice};
 use glam::{Mat2, Mat3, Vec2, Vec3};
-use isomorph_common::marching_squares::{Polyline2, marching_squares};
 use isomorph_common::check_time;
-use isomorph_common::{Aabb, Field3, Frame, Grid2, Morph, TriMesh};
+use isomorph_common::marching_squares::{Polyline2, marching_squares};
+use isomorph_common::{Aabb, Field3, Frame, Grid2, Morph, MorphReport};
 use rayon::prelude::*;
 use std::sync::Arc;
 
@@ -176,6 +176,7 @@ pub struct WarpedMorph {
     warped: RbfMorph,
     warps: Arc<HalfwayWarps<3>>,
     bounds: Aabb,
+    report: MorphReport,
 }
 
 impl WarpedMorph {
@@ -195,15 +196,18 @@ impl WarpedMorph {
     ) -> Result<Self, RbfError> {
         let arrays = |p: &[Vec3]| p.iter().map(|v| v.to_array()).collect::<Vec<_>>();
         let warps = HalfwayWarps::new(&arrays(on_source), &arrays(on_target), &settings.fit)?;
-        let warped = RbfMorph::new(
+        let warped = RbfMorph::from_constraints(
             &warps.source().displace(source, 1.0),
             &warps.target().displace(target, 1.0),
             settings,
         )?;
         let inputs: Vec<Vec3> = source.iter().chain(target).map(|c| Vec3::from_array(c.position)).collect();
         let inputs = Aabb::from_points(&inputs);
-        let bounds = inputs.expanded(settings.margin * inputs.diagonal()).union(&warped.bounds());
-        Ok(Self { warped, warps: Arc::new(warps), bounds })
+        let bounds = inputs.expanded(settings.margin * inputs.diagonal()).union(&warped.field_bounds());
+        let mut report = warped.report().clone();
+        report.method = "rbf-warp";
+        report = report.with_detail("correspondences", on_source.len());
+        Ok(Self { warped, warps: Arc::new(warps), bounds, report })
     }
 
     /// The transformation between the warped shapes, before unwarping (the
@@ -220,9 +224,9 @@ impl WarpedMorph {
     /// The unwarped frame at morph time `t ∈ [0, 1]`.
     ///
     /// # Errors
-    /// [`RbfError::InvalidTime`] for NaN or `t ∉ [0, 1]`.
+    /// [`MorphError::InvalidTime`](isomorph_common::MorphError::InvalidTime) for NaN or `t ∉ [0, 1]`.
     pub fn slice(&self, t: f32) -> Result<WarpedSlice, RbfError> {
-        let t = check_time(t).map_err(|_| RbfError::InvalidTime(t))?;
+        let t = check_time(t)?;
         Ok(WarpedSlice {
             slice: self.warped.slice(t)?,
             warps: Arc::clone(&self.warps),
@@ -236,7 +240,7 @@ impl Morph for WarpedMorph {
     type Field = WarpedSlice;
     type Error = RbfError;
 
-    fn method(&self) -> &str {
+    fn method(&self) -> &'static str {
         "rbf-warp"
     }
 
@@ -244,14 +248,16 @@ impl Morph for WarpedMorph {
         Ok(Frame { field: self.slice(t)?, iso: 0.0, transform: glam::Affine3A::IDENTITY })
     }
 
-    fn bounds(&self) -> Aabb {
+    fn field_bounds(&self) -> Aabb {
         self.bounds
     }
 
-    /// The frame polygonized near its surface only, as
-    /// [`RbfMorph`]'s frames.
-    fn frame_mesh(&self, t: f32, res: u32) -> Result<TriMesh, RbfError> {
-        crate::polygonize::zero_set_mesh(&self.slice(t)?, &self.bounds, res)
+    fn world_bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    fn report(&self) -> &MorphReport {
+        &self.report
     }
 }
 
@@ -386,7 +392,7 @@ impl WarpedContourMorph {
     /// The unwarped 2D field at morph time `t ∈ [0, 1]`.
     ///
     /// # Errors
-    /// [`RbfError::InvalidTime`] for NaN or `t ∉ [0, 1]`.
+    /// [`MorphError::InvalidTime`](isomorph_common::MorphError::InvalidTime) for NaN or `t ∉ [0, 1]`.
     pub fn slice(&self, t: f32) -> Result<WarpedSlice2, RbfError> {
         Ok(WarpedSlice2 { slice: self.warped.slice(t)?, warps: Arc::clone(&self.warps), tau: t })
     }
@@ -395,7 +401,7 @@ impl WarpedContourMorph {
     /// `res` nodes along the longer edge.
     ///
     /// # Errors
-    /// [`RbfError::InvalidTime`]; [`RbfError::Grid`] for `res < 2`.
+    /// [`MorphError::InvalidTime`](isomorph_common::MorphError::InvalidTime); [`MorphError::Grid`](isomorph_common::MorphError::Grid) for `res < 2`.
     pub fn frame_grid(&self, t: f32, res: u32) -> Result<Grid2<f32>, RbfError> {
         let (dims, spacing) = frame_lattice(self.lo, self.hi, res)?;
         let slice = self.slice(t)?;
@@ -564,7 +570,7 @@ mod tests {
         }
         // Without the warp the two spheres blend into an elongated blob
         // (measured half-length 0.27 half-way) instead of moving.
-        let plain = RbfMorph::new(&a, &b, &settings).unwrap();
+        let plain = RbfMorph::from_constraints(&a, &b, &settings).unwrap();
         let (lo, hi) = crossings(&plain.frame(0.5).unwrap().field);
         assert!(hi - lo > 0.5, "plain half-way length {}", hi - lo);
     }
@@ -636,7 +642,7 @@ mod tests {
         let points = poles(Vec3::ZERO);
         let settings = TransformSettings::default();
         let warped = WarpedMorph::new(&a, &b, &points, &points, &settings).unwrap();
-        let plain = RbfMorph::new(&a, &b, &settings).unwrap();
+        let plain = RbfMorph::from_constraints(&a, &b, &settings).unwrap();
         let probe: Vec<Vec3> =
             (0..50).map(|i| Vec3::new((i as f32).sin(), (i as f32 * 1.7).cos(), 0.3) * 0.3).collect();
         for t in [0.0, 0.3, 0.5, 0.8, 1.0] {
@@ -670,6 +676,6 @@ mod tests {
         let flat = [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::ONE.with_z(0.0)];
         assert!(matches!(WarpedMorph::new(&a, &a, &flat, &flat, &s), Err(RbfError::NotUnisolvent { .. })));
         let m = WarpedMorph::new(&a, &a, &p, &p, &s).unwrap();
-        assert!(matches!(m.frame(-0.1), Err(RbfError::InvalidTime(_))));
+        assert!(matches!(m.frame(-0.1), Err(RbfError::Morph(isomorph_common::MorphError::InvalidTime(_)))));
     }
 }

@@ -37,8 +37,8 @@ use crate::lsq::{self, LeafRows};
 use crate::sampling::{Sample, zero_set_samples};
 use crate::tspline::TSpline;
 use glam::DVec3;
-use rayon::prelude::*;
 use isomorph_common::Control;
+use rayon::prelude::*;
 
 /// The speed function of the evolution.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -296,7 +296,10 @@ fn evolve_on_pool<D: Fn(DVec3) -> f64 + Sync + Send>(
         };
         steps.push(stats);
         control.progress("evolution", Some(steps.len() as f32 / settings.max_steps as f32), || {
-            format!("step {}, RMS to target {:.4}, {} samples", stats.step, stats.rms_to_target, stats.samples)
+            format!(
+                "step {}, RMS to target {:.4}, {} samples",
+                stats.step, stats.rms_to_target, stats.samples
+            )
         });
         control.check()?;
     };

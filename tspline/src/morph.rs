@@ -163,9 +163,10 @@ impl TsplineMorph {
     /// # Errors
     /// [`MorphError::BadSetting`] for `i >= n_l`.
     pub fn level_set(&self, i: usize) -> Result<TSpline, TsplineError> {
-        let c = self.evolution.frames.get(i).ok_or_else(|| {
-            MorphError::bad_setting("level set index", i, "below the number of level sets")
-        })?;
+        let c =
+            self.evolution.frames.get(i).ok_or_else(|| {
+                MorphError::bad_setting("level set index", i, "below the number of level sets")
+            })?;
         TSpline::new(self.mesh.clone(), c.clone())
     }
 

@@ -642,7 +642,10 @@ mod tests {
     #[test]
     fn bad_settings_are_errors() {
         let s = TMeshSettings { max_depth: 9, ..Default::default() };
-        assert!(matches!(TMesh::build(&[], &s), Err(TsplineError::Morph(isomorph_common::MorphError::BadSetting { name: "max_depth", .. }))));
+        assert!(matches!(
+            TMesh::build(&[], &s),
+            Err(TsplineError::Morph(isomorph_common::MorphError::BadSetting { name: "max_depth", .. }))
+        ));
         let s = TMeshSettings { sample_spacing: f64::NAN, ..Default::default() };
         assert!(TMesh::build(&[], &s).is_err());
     }

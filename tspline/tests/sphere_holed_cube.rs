@@ -2,11 +2,11 @@
 //! (genus 0 → 3) on a depth-3 T-mesh, as coarse as the paper's (729
 //! coefficients here, 651 there).
 
+use isomorph_common::Control;
 use isomorph_common::marching_cubes::polygonize;
 use isomorph_common::mesh::distance::surface_distance;
 use isomorph_common::{Aabb, Morph, Shape};
 use isomorph_tspline::{Outcome, Speed, demo, morph};
-use isomorph_common::Control;
 
 #[test]
 fn sphere_becomes_a_genus_three_holed_cube() {

@@ -59,7 +59,10 @@ fn bad_inputs_are_typed_errors() {
     ));
     let mut bad = settings();
     bad.tmesh.max_depth = 12;
-    assert!(matches!(morph(&a, &a, &bad, &go), Err(TsplineError::Morph(MorphError::BadSetting { name: "max_depth", .. }))));
+    assert!(matches!(
+        morph(&a, &a, &bad, &go),
+        Err(TsplineError::Morph(MorphError::BadSetting { name: "max_depth", .. }))
+    ));
     let mut nan = a.clone();
     nan.positions[0].x = f32::NAN;
     assert!(morph(&nan, &a, &settings(), &go).is_err());

@@ -1,9 +1,9 @@
 //! Shared set-up of the Fig. 2–3 comparisons (`t_to_c.rs`, `corner.rs`).
 
+use isomorph_common::Control;
 use isomorph_common::marching_cubes::polygonize;
 use isomorph_common::{Aabb, Morph, Shape};
-use isomorph_tspline::{TsplineSettings, Speed, TsplineMorph, morph};
-use isomorph_common::Control;
+use isomorph_tspline::{Speed, TsplineMorph, TsplineSettings, morph};
 
 /// Morphs `source` into `target` (polygonized with `res` nodes over
 /// `[−0.5, 0.5]³`) on a T-mesh of maximum depth `depth` (minimum 3) with
