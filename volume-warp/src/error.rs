@@ -1,12 +1,17 @@
 //! The typed errors of volume warping.
 
 use glam::{UVec3, Vec3};
-use isomorph_common::GridError;
+use isomorph_common::{GridError, MorphError, MorphFailure};
 
-/// What can go wrong when building or editing a warp.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+/// What can go wrong when building or editing a warp: the kinds every
+/// morph method shares ([`MorphError`]) and the warp's own.
+#[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum WarpError {
+    /// One of the kinds every method shares (bad settings and times,
+    /// cancellation, input conversion, grids).
+    #[error(transparent)]
+    Morph(#[from] MorphError),
     /// The control lattice has fewer than 4 points along an axis (one cubic
     /// B-spline region needs 4).
     #[error(
@@ -66,10 +71,19 @@ pub enum WarpError {
     /// (its region of influence excludes every control point that moves it).
     #[error("handle {0} cannot move: no control point inside the region of influence affects it")]
     Unreachable(usize),
-    /// A morph time is NaN or outside `[0, 1]`.
-    #[error("time {0} is outside [0, 1]")]
-    InvalidTime(f32),
-    /// A volume could not be allocated.
-    #[error(transparent)]
-    Grid(#[from] GridError),
+}
+
+impl From<GridError> for WarpError {
+    fn from(e: GridError) -> Self {
+        WarpError::Morph(MorphError::Grid(e))
+    }
+}
+
+impl MorphFailure for WarpError {
+    fn shared(&self) -> Option<&MorphError> {
+        match self {
+            WarpError::Morph(e) => Some(e),
+            _ => None,
+        }
+    }
 }

@@ -19,7 +19,8 @@
 //! | §5.4 antialiasing box filter, weight normalization | [`pushforward`] ([`Filter::Box`]) |
 //! | §6 direct manipulation (after Hsu et al. 1992) | [`manipulate`] ([`solve_drag`], [`VolumeWarp::drag`]) |
 //! | beyond the thesis: backward resampling by Newton inversion | [`Filter::Backward`], [`BSplineMap::inverse`] |
-//! | the map in world space (`Fn(Vec3) -> Vec3`, approximate inverse), the warp as a [`isomorph_common::Morph`] | [`morph`] ([`WorldMap`], [`WarpMorph`]) |
+//! | the map in world space (`Fn(Vec3) -> Vec3`, approximate inverse), one volume's warp animated ([`WarpAnimation`]) | [`morph`] ([`WorldMap`]) |
+//! | the morph contract: two solids warped towards each other and cross-dissolved | [`contract`] ([`WarpMorph`], [`WarpMorphSettings`], [`WarpSpec`]) |
 //!
 //! # Choices where the thesis is open
 //! - Coordinates are source voxel indices; a lattice of `C` points per axis
@@ -51,29 +52,31 @@
 //! conservation (the box filter's bounding boxes over-cover sheared voxels;
 //! the weight normalization compensates only approximately).
 //!
-//! # Performance
-//! `cargo bench -p isomorph-benches --bench warp` (CSIZE 11, so 128 and 256
-//! are multiples of the 8 regions and the table applies; every control point
-//! displaced). Medians on the 2-core machine, quiet (load ≈ 1–2), default
-//! build (baseline x86-64: SSE2, no FMA):
+//! # The morph contract
+//! [`WarpMorph::new`] morphs two [`Solid`](isomorph_common::Solid)s by
+//! warping both densities towards each other and cross-dissolving them
+//! ([`contract`]); its correspondence is the moment alignment by default,
+//! or landmarks solved by direct manipulation.
 //!
-//! | bench | median | issue target |
-//! |---|---|---|
-//! | `pushforward_box/256` (full box-filtered warp of 256³ u8) | 304 ms | ≤ 0.5 s — met |
-//! | `local_update/128` (one control point, 4×4×4 regions of 16³ voxels) | 8.3 ms | ≤ 10 ms — met |
-//! | `map_eval/table/128` vs `map_eval/direct/128` | 21.0 ms vs 111 ms (5.3×) | table ≥ 3× faster — met |
-//! | `map_eval/separable/128` (what [`Evaluation::Auto`] uses) | 4.4 ms | — |
+//! ```
+//! use isomorph_common::{Control, Morph, Shape, Solid, models};
+//! use isomorph_warp::{WarpMorph, WarpMorphSettings};
 //!
-//! Where the time went: the box filter's accumulation is a scatter of each
-//! source voxel's box onto (usually) 2 × 2 × 2 target voxels. Its common
-//! case runs branch-free in SIMD (box from the six neighbours read as row
-//! slices, floor and overlaps as vector operations, one bounds check per
-//! block); by cachegrind, a local update went from 310 M to 122 M
-//! instructions and a full 128³ recompute from 1.42 G to under 0.63 G. A
-//! local update costs in proportion to `(4·G)³` source voxels (`G` voxels
-//! per region), so finer lattices update faster.
+//! let (ball, torus) = (Solid::shape(Shape::sphere(0.3)), Solid::shape(models::torus()));
+//! let morph = WarpMorph::new(&ball, &torus, &WarpMorphSettings::default(), &Control::new())?;
+//! assert_eq!(morph.frame_mesh(0.0, 0)?.genus(), Some(0));
+//! assert_eq!(morph.frame_mesh(1.0, 0)?.genus(), Some(1));
+//! # Ok::<(), isomorph_warp::WarpError>(())
+//! ```
 //!
-//! # Example
+//! # Cost
+//! A full box-filtered warp of a 256³ `u8` volume takes about 0.3 s on two
+//! cores and a one-control-point local update of 128³ under 10 ms
+//! (`cargo bench -p isomorph-benches --bench warp`; figures and history in
+//! `docs/EXPERIMENTS.md`). A [`WarpMorph`] frame costs two backward warps
+//! of its lattice.
+
+//! # Example: one volume, direct manipulation
 //! ```
 //! use isomorph_common::Grid3;
 //! use isomorph_warp::{Filter, Handle, VolumeWarp, WarpSettings};
@@ -99,6 +102,7 @@
 //! ```
 
 pub mod basis;
+pub mod contract;
 mod error;
 pub mod manipulate;
 pub mod map;
@@ -107,10 +111,11 @@ pub mod pushforward;
 pub mod table;
 pub mod warp;
 
+pub use contract::{WarpMorph, WarpMorphSettings, WarpSpec};
 pub use error::WarpError;
 pub use manipulate::{Drag, Handle, solve_drag};
 pub use map::BSplineMap;
-pub use morph::{WarpMorph, WorldMap};
+pub use morph::{WarpAnimation, WorldMap};
 pub use pushforward::{Density, Filter};
 pub use table::{CoefficientTable, DeformationArray, Evaluation, Evaluator};
 pub use warp::{VolumeWarp, WarpSettings};

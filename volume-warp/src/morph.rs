@@ -1,12 +1,14 @@
 //! The warp as a plain map of world space (for other methods, e.g. as
 //! Breen & Whitaker's generalized warp `T`) and as a [`Morph`] that animates
-//! the control points from the identity to the user's configuration.
+//! the control points of one volume from the identity to the user's
+//! configuration ([`WarpAnimation`]; the two-solid morph is
+//! [`crate::WarpAnimation`]).
 
 use crate::pushforward::Density;
 use crate::{BSplineMap, VolumeWarp, WarpError, WarpSettings};
 use glam::{Affine3A, Vec3};
 use isomorph_common::marching_cubes::marching_cubes;
-use isomorph_common::{Aabb, Frame, Grid3, Morph, TriMesh};
+use isomorph_common::{Aabb, Frame, Grid3, Morph, MorphReport, Outcome, TriMesh, check_time};
 
 /// A [`BSplineMap`] placed in world space by a source grid's origin and
 /// spacing: `apply(p) = origin + spacing · B((p − origin)/spacing)`.
@@ -52,14 +54,15 @@ impl<T: Density> VolumeWarp<T> {
 /// ones (linear in t, so every frame is a B-spline warp and frame 0 is the
 /// source exactly).
 #[derive(Debug, Clone)]
-pub struct WarpMorph<T> {
+pub struct WarpAnimation<T> {
     source: Grid3<T>,
     map: BSplineMap,
     settings: WarpSettings,
     iso: f32,
+    report: MorphReport,
 }
 
-impl<T: Density> WarpMorph<T> {
+impl<T: Density> WarpAnimation<T> {
     /// The morph of `source` to its warp by `map`; `iso` is the surface level
     /// of the volume's values (127.5 for thesis-style u8 densities).
     ///
@@ -78,14 +81,14 @@ impl<T: Density> WarpMorph<T> {
                 source.dims()
             )));
         }
-        Ok(Self { source, map, settings, iso })
+        let bytes = source.len() * size_of::<T>() + size_of_val(map.displacements());
+        let report = MorphReport::new("warp-animation", Outcome::Direct).with_memory(bytes, None);
+        Ok(Self { source, map, settings, iso, report })
     }
 
     /// The warped volume at time `t` (values as `f32`).
     fn warped(&self, t: f32) -> Result<Grid3<f32>, WarpError> {
-        if !(0.0..=1.0).contains(&t) {
-            return Err(WarpError::InvalidTime(t));
-        }
+        let t = check_time(t)?;
         let mut map = self.map.clone();
         let c = map.controls();
         for k in 0..c.z {
@@ -101,12 +104,12 @@ impl<T: Density> WarpMorph<T> {
     }
 }
 
-impl<T: Density> Morph for WarpMorph<T> {
+impl<T: Density> Morph for WarpAnimation<T> {
     type Field = Grid3<f32>;
     type Error = WarpError;
 
-    fn method(&self) -> &str {
-        "volume-warp"
+    fn method(&self) -> &'static str {
+        "warp-animation"
     }
 
     fn frame(&self, t: f32) -> Result<Frame<Grid3<f32>>, WarpError> {
@@ -114,10 +117,18 @@ impl<T: Density> Morph for WarpMorph<T> {
     }
 
     /// The padded target box (every frame lives on it).
-    fn bounds(&self) -> Aabb {
+    fn field_bounds(&self) -> Aabb {
         let pad = Vec3::splat(self.settings.pad as f32 * self.source.spacing());
         let b = self.source.bounds();
         Aabb::new(b.min - pad, b.max + pad)
+    }
+
+    fn world_bounds(&self) -> Aabb {
+        self.field_bounds()
+    }
+
+    fn report(&self) -> &MorphReport {
+        &self.report
     }
 
     /// Marching cubes directly on the warped grid (`res` is ignored).
@@ -158,14 +169,17 @@ mod tests {
         let mut map = BSplineMap::identity(dims, 6).unwrap();
         map.set_displacement(UVec3::new(2, 2, 2), Vec3::new(3.0, 0.0, 0.0)).unwrap();
         let settings = WarpSettings { csize: 6, pad: 3, filter: Filter::Box, ..Default::default() };
-        let morph = WarpMorph::new(src.clone(), map.clone(), settings, 127.5).unwrap();
+        let morph = WarpAnimation::new(src.clone(), map.clone(), settings, 127.5).unwrap();
         let f0 = morph.frame(0.0).unwrap();
         let f1 = morph.frame(1.0).unwrap();
         let end = VolumeWarp::with_map(src.clone(), map, settings).unwrap();
         assert_eq!(*f0.field.get(3 + 7, 3 + 7, 3 + 7).unwrap(), f32::from(*src.get(7, 7, 7).unwrap()));
         assert!(f1.field.data().iter().zip(end.target().data()).all(|(a, b)| *a == f32::from(*b)));
         assert!(morph.frame_mesh(0.5, 0).unwrap().metrics().triangles > 0);
-        assert!(matches!(morph.frame(1.5), Err(WarpError::InvalidTime(_))));
-        assert!(morph.bounds().contains(f1.field.bounds().center()));
+        assert!(matches!(
+            morph.frame(1.5),
+            Err(WarpError::Morph(isomorph_common::MorphError::InvalidTime(_)))
+        ));
+        assert!(morph.field_bounds().contains(f1.field.bounds().center()));
     }
 }

@@ -370,7 +370,10 @@ mod tests {
         // One region over 1024³ voxels: 2³⁰ entries of 256 bytes.
         let map = BSplineMap::with_controls(UVec3::splat(1024), UVec3::splat(4)).unwrap();
         match CoefficientTable::new(&map) {
-            Err(WarpError::Grid(GridError::TooLarge { requested, .. })) => assert_eq!(requested, 256 << 30),
+            Err(WarpError::Morph(isomorph_common::MorphError::Grid(GridError::TooLarge {
+                requested,
+                ..
+            }))) => assert_eq!(requested, 256 << 30),
             other => panic!("expected TooLarge, got {other:?}"),
         }
     }
