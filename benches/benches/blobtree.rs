@@ -15,7 +15,7 @@ use std::hint::black_box;
 /// The rook → queen morph and its frame at t = 0.5.
 fn rook_queen() -> (BlobMorph, BlobTree) {
     let (a, b, spec) = scenes::demo("rook_queen").expect("built-in demo");
-    let morph = BlobMorph::new(&a, &b, &spec).expect("valid demo");
+    let morph = BlobMorph::from_trees(&a, &b, &spec).expect("valid demo");
     let frame = morph.frame(0.5).expect("valid time").field;
     (morph, frame)
 }

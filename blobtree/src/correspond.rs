@@ -33,7 +33,7 @@
 //! level should not be matched unless their ancestor nodes have also been
 //! paired"); a link that is never reachable is an error.
 
-use crate::error::{MorphError, NodePath, Side};
+use crate::error::{BlobMorphError, NodePath, Side};
 use crate::node::{NaryOp, Node, Primitive};
 use crate::warp::Warp;
 use serde::{Deserialize, Serialize};
@@ -185,15 +185,21 @@ struct Ctx<'a> {
 /// a pair tree whose two sides overlap.
 ///
 /// # Errors
-/// [`MorphError::NoSuchNode`] for links to missing nodes,
-/// [`MorphError::LinkBreaksHierarchy`] for links whose parents are never matched.
-pub fn decompose(a: &Node, ta: f32, b: &Node, tb: f32, corr: &Correspondence) -> Result<Pair, MorphError> {
+/// [`BlobMorphError::NoSuchNode`] for links to missing nodes,
+/// [`BlobMorphError::LinkBreaksHierarchy`] for links whose parents are never matched.
+pub fn decompose(
+    a: &Node,
+    ta: f32,
+    b: &Node,
+    tb: f32,
+    corr: &Correspondence,
+) -> Result<Pair, BlobMorphError> {
     for l in &corr.links {
         if a.get(&l.a).is_none() {
-            return Err(MorphError::NoSuchNode { side: Side::Source, path: l.a.clone() });
+            return Err(BlobMorphError::NoSuchNode { side: Side::Source, path: l.a.clone() });
         }
         if b.get(&l.b).is_none() {
-            return Err(MorphError::NoSuchNode { side: Side::Target, path: l.b.clone() });
+            return Err(BlobMorphError::NoSuchNode { side: Side::Target, path: l.b.clone() });
         }
     }
     let mut ctx = Ctx {
@@ -207,7 +213,7 @@ pub fn decompose(a: &Node, ta: f32, b: &Node, tb: f32, corr: &Correspondence) ->
     let pair = pair(a, Some(&root), b, Some(&root), &mut ctx);
     if let Some(i) = ctx.used.iter().position(|u| !u) {
         let l = &corr.links[i];
-        return Err(MorphError::LinkBreaksHierarchy { a: l.a.clone(), b: l.b.clone() });
+        return Err(BlobMorphError::LinkBreaksHierarchy { a: l.a.clone(), b: l.b.clone() });
     }
     Ok(pair)
 }
@@ -570,12 +576,12 @@ mod tests {
         };
         assert!(matches!(
             decompose(&a, 0.5, &b, 0.5, &corr(vec![5], vec![0])),
-            Err(MorphError::NoSuchNode { side: Side::Source, .. })
+            Err(BlobMorphError::NoSuchNode { side: Side::Source, .. })
         ));
         // A grandchild of A linked with B's root: its parent is never matched with anything above B's root.
         assert!(matches!(
             decompose(&a, 0.5, &b, 0.5, &corr(vec![0, 0], vec![])),
-            Err(MorphError::LinkBreaksHierarchy { .. })
+            Err(BlobMorphError::LinkBreaksHierarchy { .. })
         ));
         assert!(decompose(&a, 0.5, &b, 0.5, &corr(vec![0], vec![1])).is_ok());
     }

@@ -1,7 +1,7 @@
 //! Typed errors: scene validation (with the path of the offending node) and
 //! metamorphosis set-up.
 
-use isomorph_common::{GridError, TransformError};
+use isomorph_common::{GridError, MorphFailure, TransformError};
 use std::fmt;
 
 /// The position of a node in a BlobTree: child indices from the root
@@ -129,6 +129,14 @@ pub enum BlobError {
     /// Serialization failed.
     #[error("cannot write the scene: {0}")]
     Write(String),
+    /// A scene or spec file could not be read, or a scene name is unknown.
+    #[error("cannot read {path}: {message}")]
+    Read {
+        /// The path or name given.
+        path: String,
+        /// Why.
+        message: String,
+    },
 }
 
 impl BlobError {
@@ -158,14 +166,11 @@ impl fmt::Display for Side {
 /// Errors of setting up or evaluating a BlobTree metamorphosis.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
-pub enum MorphError {
-    /// A frame time is NaN or outside `[0, 1]`
-    /// ([`isomorph_common::check_time`]), or another shared-core morph error.
+pub enum BlobMorphError {
+    /// One of the kinds every morph method shares: a time outside
+    /// `[0, 1]`, an input that is not a BlobTree, cancellation, grids.
     #[error(transparent)]
-    Time(#[from] isomorph_common::MorphError),
-    /// A grid could not be made (meshing a frame).
-    #[error(transparent)]
-    Grid(#[from] GridError),
+    Morph(#[from] isomorph_common::MorphError),
     /// A source or target tree (or an instantiated frame) is invalid.
     #[error(transparent)]
     Blob(#[from] BlobError),
@@ -228,4 +233,19 @@ pub enum MorphError {
         /// Why.
         source: TransformError,
     },
+}
+
+impl From<GridError> for BlobMorphError {
+    fn from(e: GridError) -> Self {
+        BlobMorphError::Morph(e.into())
+    }
+}
+
+impl MorphFailure for BlobMorphError {
+    fn shared(&self) -> Option<&isomorph_common::MorphError> {
+        match self {
+            BlobMorphError::Morph(e) => Some(e),
+            _ => None,
+        }
+    }
 }

@@ -25,15 +25,15 @@
 //! `C(1) ≡ B`.
 
 use crate::correspond::{Correspondence, Heuristic, Link, Origin, Pair, decompose};
-use crate::error::{MorphError, NodePath};
+use crate::error::{BlobMorphError, NodePath};
 use crate::minkowski::MinkowskiPath;
 use crate::node::{NaryOp, Node, Primitive};
 use crate::skeleton::Skeleton;
 use crate::tree::BlobTree;
 use crate::warp::Warp;
 use glam::{Affine3A, Vec3};
-use isomorph_common::{Frame, Morph};
 use isomorph_common::{Aabb, AffineParts};
+use isomorph_common::{Control, Frame, Morph, MorphReport, Outcome, Side, Solid, Stages};
 use serde::{Deserialize, Serialize};
 
 /// A speed curve `s(t)`: 0 before `start`, 1 after `end`, in between linear
@@ -112,7 +112,7 @@ impl MorphSpec {
     ///
     /// # Errors
     /// [`crate::BlobError::Parse`] (wrapped) for malformed text.
-    pub fn from_ron(text: &str) -> Result<Self, MorphError> {
+    pub fn from_ron(text: &str) -> Result<Self, BlobMorphError> {
         ron::Options::default()
             .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
             .from_str(text)
@@ -123,9 +123,26 @@ impl MorphSpec {
     ///
     /// # Errors
     /// [`crate::BlobError::Parse`] (wrapped) for malformed text.
-    pub fn from_json(text: &str) -> Result<Self, MorphError> {
+    pub fn from_json(text: &str) -> Result<Self, BlobMorphError> {
         serde_json::from_str(text)
             .map_err(|e| crate::BlobError::Parse { format: "JSON", message: e.to_string() }.into())
+    }
+
+    /// Reads a spec file: JSON for a `.json` extension, RON otherwise.
+    ///
+    /// # Errors
+    /// [`crate::BlobError::Read`] (wrapped) for an unreadable file, and as
+    /// [`MorphSpec::from_ron`] / [`MorphSpec::from_json`].
+    pub fn load(path: &std::path::Path) -> Result<Self, BlobMorphError> {
+        let text = std::fs::read_to_string(path).map_err(|e| crate::BlobError::Read {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })?;
+        if path.extension().is_some_and(|e| e == "json") {
+            Self::from_json(&text)
+        } else {
+            Self::from_ron(&text)
+        }
     }
 }
 
@@ -163,15 +180,19 @@ pub struct GenericTree {
     pair: Pair,
 }
 
-fn frame_parts(p: &Primitive, a: &Option<NodePath>, b: &Option<NodePath>) -> Result<AffineParts, MorphError> {
-    AffineParts::from_affine(&p.frame).map_err(|source| MorphError::Transform {
+fn frame_parts(
+    p: &Primitive,
+    a: &Option<NodePath>,
+    b: &Option<NodePath>,
+) -> Result<AffineParts, BlobMorphError> {
+    AffineParts::from_affine(&p.frame).map_err(|source| BlobMorphError::Transform {
         a: a.clone().unwrap_or_default(),
         b: b.clone().unwrap_or_default(),
         source,
     })
 }
 
-fn build(pair: &Pair) -> Result<GNode, MorphError> {
+fn build(pair: &Pair) -> Result<GNode, BlobMorphError> {
     let origin = pair.origin().clone();
     let (kind, children) = match pair {
         Pair::Leaf { a, b, .. } => {
@@ -311,16 +332,16 @@ impl GenericTree {
     /// Matches, decomposes and builds the generic tree of `a → b`.
     ///
     /// # Errors
-    /// Link errors of [`decompose`]; [`MorphError::InvalidSpeed`],
-    /// [`MorphError::InvalidTrajectory`], [`MorphError::UnmatchedPair`] for
+    /// Link errors of [`decompose`]; [`BlobMorphError::InvalidSpeed`],
+    /// [`BlobMorphError::InvalidTrajectory`], [`BlobMorphError::UnmatchedPair`] for
     /// bad speed curves and trajectories.
-    pub fn new(a: &BlobTree, b: &BlobTree, spec: &MorphSpec) -> Result<Self, MorphError> {
+    pub fn new(a: &BlobTree, b: &BlobTree, spec: &MorphSpec) -> Result<Self, BlobMorphError> {
         let corr = Correspondence { links: spec.links.clone(), heuristic: spec.heuristic };
         let pair = decompose(a.root(), a.threshold(), b.root(), b.threshold(), &corr)?;
         let mut root = build(&pair)?;
         for sc in &spec.speeds {
             if !sc.speed.valid() {
-                return Err(MorphError::InvalidSpeed {
+                return Err(BlobMorphError::InvalidSpeed {
                     a: sc.a.clone(),
                     b: sc.b.clone(),
                     start: sc.speed.start,
@@ -329,7 +350,7 @@ impl GenericTree {
             }
             let speed = sc.speed;
             if for_matching(&mut root, &sc.a, &sc.b, &mut |n| n.speed = speed) == 0 {
-                return Err(MorphError::UnmatchedPair {
+                return Err(BlobMorphError::UnmatchedPair {
                     what: "speed curve",
                     a: sc.a.clone(),
                     b: sc.b.clone(),
@@ -339,7 +360,7 @@ impl GenericTree {
         for tr in &spec.trajectories {
             let h = tr.handles.map(Vec3::from_array);
             if !h.iter().all(|v| v.is_finite()) {
-                return Err(MorphError::InvalidTrajectory { a: tr.a.clone(), b: tr.b.clone() });
+                return Err(BlobMorphError::InvalidTrajectory { a: tr.a.clone(), b: tr.b.clone() });
             }
             let mut leaves = 0;
             for_matching(&mut root, &tr.a, &tr.b, &mut |n| {
@@ -349,7 +370,7 @@ impl GenericTree {
                 }
             });
             if leaves == 0 {
-                return Err(MorphError::UnmatchedPair {
+                return Err(BlobMorphError::UnmatchedPair {
                     what: "trajectory",
                     a: tr.a.clone(),
                     b: tr.b.clone(),
@@ -377,39 +398,119 @@ impl GenericTree {
     /// The evaluable BlobTree `C(t)`.
     ///
     /// # Errors
-    /// [`MorphError::Time`] for `t ∉ [0, 1]` or NaN; [`MorphError::Blob`] if
+    /// [`BlobMorphError::Morph`] for `t ∉ [0, 1]` or NaN; [`BlobMorphError::Blob`] if
     /// an instantiated node is invalid (not expected for valid inputs).
-    pub fn at(&self, t: f32) -> Result<BlobTree, MorphError> {
+    pub fn at(&self, t: f32) -> Result<BlobTree, BlobMorphError> {
         let t = isomorph_common::check_time(t)?;
         Ok(BlobTree::new(self.node_at(t), self.threshold_at(t))?)
     }
 }
 
+/// Settings of [`BlobMorph::new`]: the animator's controls.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct BlobSettings {
+    /// Links, pairing heuristic, speed curves and trajectories (default: the
+    /// nearest-centre heuristic, no links).
+    pub spec: MorphSpec,
+}
+
 /// The BlobTree metamorphosis as a [`Morph`]: frames are `C(t)` as fields
 /// (`potential − T(t)`, iso 0, identity placement).
+///
+/// ```
+/// use isomorph_blobtree::{BlobMorph, BlobSettings, scenes};
+/// use isomorph_common::{Control, Morph, Solid};
+/// use std::sync::Arc;
+///
+/// let sphere = Solid::implicit(Arc::new(scenes::load("sphere")?))?;
+/// let torus = Solid::implicit(Arc::new(scenes::load("torus")?))?;
+/// let morph = BlobMorph::new(&sphere, &torus, &BlobSettings::default(), &Control::new())?;
+/// assert_eq!(morph.frame_mesh(1.0, 48)?.genus(), Some(1));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct BlobMorph {
     generic: GenericTree,
     bounds: Aabb,
+    report: MorphReport,
 }
 
 /// Instants sampled to bound the frames' supports.
 const BOUND_SAMPLES: usize = 33;
 
+/// The BlobTree inside `solid`, else [`isomorph_common::MorphError::UnsupportedInput`].
+fn as_tree(solid: &Solid, side: Side) -> Result<&BlobTree, isomorph_common::MorphError> {
+    solid.as_implicit().and_then(|i| i.as_any().downcast_ref::<BlobTree>()).ok_or(
+        isomorph_common::MorphError::UnsupportedInput {
+            method: "blobtree",
+            side,
+            kind: solid.kind(),
+            hint: BLOBTREE_INPUT,
+        },
+    )
+}
+
+/// What a BlobTree morph takes instead of other solids.
+const BLOBTREE_INPUT: &str = "a BlobTree scene (a built-in scene name or a .ron/.json scene file)";
+
 impl BlobMorph {
-    /// The morph `a → b` under the animator's `spec`.
+    /// The morph between two solids that are BlobTrees
+    /// ([`Solid::implicit`] of a [`BlobTree`], e.g. from [`crate::scenes::load`]).
+    ///
+    /// # Errors
+    /// [`isomorph_common::MorphError::UnsupportedInput`] for any other
+    /// solid, [`isomorph_common::MorphError::Cancelled`], and as
+    /// [`BlobMorph::from_trees`].
+    pub fn new(
+        source: &Solid,
+        target: &Solid,
+        settings: &BlobSettings,
+        control: &Control,
+    ) -> Result<Self, BlobMorphError> {
+        let (a, b) = (as_tree(source, Side::Source)?, as_tree(target, Side::Target)?);
+        control.install(|| {
+            let mut stages = Stages::start();
+            control.progress("correspondence", None, String::new);
+            control.check()?;
+            let generic = GenericTree::new(a, b, &settings.spec)?;
+            stages.lap("correspondence");
+            let bounds = Self::support(&generic, control)?;
+            stages.lap("bounds");
+            let report = Self::report_of(&generic).with_stages(stages);
+            Ok(Self { generic, bounds, report })
+        })
+    }
+
+    /// The morph `a → b` under the animator's `spec` (the paper-level
+    /// constructor, without a [`Control`]).
     ///
     /// # Errors
     /// As [`GenericTree::new`].
-    pub fn new(a: &BlobTree, b: &BlobTree, spec: &MorphSpec) -> Result<Self, MorphError> {
+    pub fn from_trees(a: &BlobTree, b: &BlobTree, spec: &MorphSpec) -> Result<Self, BlobMorphError> {
         let generic = GenericTree::new(a, b, spec)?;
+        let bounds = Self::support(&generic, &Control::new())?;
+        let report = Self::report_of(&generic);
+        Ok(Self { generic, bounds, report })
+    }
+
+    /// The union of the supports of `C(t)` at 33 instants, padded by 5 %
+    /// against motion between samples.
+    fn support(generic: &GenericTree, control: &Control) -> Result<Aabb, BlobMorphError> {
         let mut bounds = Aabb::EMPTY;
         for i in 0..BOUND_SAMPLES {
             let t = i as f32 / (BOUND_SAMPLES - 1) as f32;
+            control.progress("bounds", Some(t), String::new);
+            control.check()?;
             bounds = bounds.union(&generic.at(t)?.support());
         }
-        // Supports move continuously; pad by 5 % against motion between samples.
-        Ok(Self { generic, bounds: bounds.padded(0.05) })
+        Ok(bounds.padded(0.05))
+    }
+
+    fn report_of(generic: &GenericTree) -> MorphReport {
+        let leaves = generic.pair().leaf_count();
+        MorphReport::new("blobtree", Outcome::Direct)
+            .with_memory(leaves * size_of::<GLeaf>(), None)
+            .with_detail("generic leaves", leaves)
     }
 
     /// The generic tree.
@@ -420,19 +521,27 @@ impl BlobMorph {
 
 impl Morph for BlobMorph {
     type Field = BlobTree;
-    type Error = MorphError;
+    type Error = BlobMorphError;
 
-    fn method(&self) -> &str {
+    fn method(&self) -> &'static str {
         "blobtree"
     }
 
-    fn frame(&self, t: f32) -> Result<Frame<BlobTree>, MorphError> {
+    fn frame(&self, t: f32) -> Result<Frame<BlobTree>, BlobMorphError> {
         Ok(Frame { field: self.generic.at(t)?, iso: 0.0, transform: Affine3A::IDENTITY })
     }
 
     /// The union of the supports of `C(t)` at 33 instants, padded by 5 %.
-    fn bounds(&self) -> Aabb {
+    fn field_bounds(&self) -> Aabb {
         self.bounds
+    }
+
+    fn world_bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    fn report(&self) -> &MorphReport {
+        &self.report
     }
 }
 
@@ -467,20 +576,23 @@ mod tests {
         let a = BlobTree::from_ron(r#"(root: (kind: "point", vertices: [(0,0,0)], radius: 1))"#).unwrap();
         let spec = |s: &str| MorphSpec::from_ron(s).unwrap();
         let bad = spec("(speeds: [(a: [], b: [], speed: (start: 0.8, end: 0.2))])");
-        assert!(matches!(BlobMorph::new(&a, &a, &bad), Err(MorphError::InvalidSpeed { .. })));
+        assert!(matches!(BlobMorph::from_trees(&a, &a, &bad), Err(BlobMorphError::InvalidSpeed { .. })));
         let nan = spec("(speeds: [(a: [], b: [], speed: (start: NaN, end: 0.2))])");
-        assert!(matches!(BlobMorph::new(&a, &a, &nan), Err(MorphError::InvalidSpeed { .. })));
+        assert!(matches!(BlobMorph::from_trees(&a, &a, &nan), Err(BlobMorphError::InvalidSpeed { .. })));
         let elsewhere = spec("(speeds: [(a: [0], b: [], speed: (start: 0.1, end: 0.2))])");
-        assert!(matches!(BlobMorph::new(&a, &a, &elsewhere), Err(MorphError::UnmatchedPair { .. })));
+        assert!(matches!(
+            BlobMorph::from_trees(&a, &a, &elsewhere),
+            Err(BlobMorphError::UnmatchedPair { .. })
+        ));
         let ok = spec("(speeds: [(a: [], b: [], speed: (start: 0.2, end: 0.6, smooth: true))])");
-        let m = BlobMorph::new(&a, &a, &ok).unwrap();
+        let m = BlobMorph::from_trees(&a, &a, &ok).unwrap();
         assert!(matches!(
             m.frame(1.5),
-            Err(MorphError::Time(isomorph_common::MorphError::InvalidTime(_)))
+            Err(BlobMorphError::Morph(isomorph_common::MorphError::InvalidTime(_)))
         ));
         assert!(matches!(
             m.frame(f32::NAN),
-            Err(MorphError::Time(isomorph_common::MorphError::InvalidTime(_)))
+            Err(BlobMorphError::Morph(isomorph_common::MorphError::InvalidTime(_)))
         ));
         assert!(MorphSpec::from_ron("(links: 3)").is_err());
     }
@@ -525,7 +637,7 @@ mod tests {
         .unwrap();
         assert!(matches!(
             GenericTree::new(&a, &b, &bad),
-            Err(MorphError::UnmatchedPair { what: "trajectory", .. })
+            Err(BlobMorphError::UnmatchedPair { what: "trajectory", .. })
         ));
     }
 

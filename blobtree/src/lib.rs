@@ -83,16 +83,18 @@
 //! # Example
 //!
 //! ```
-//! use isomorph_blobtree::{BlobMorph, BlobTree, MorphSpec};
-//! use isomorph_common::{Field3, Morph};
+//! use isomorph_blobtree::{BlobMorph, BlobSettings, BlobTree};
+//! use isomorph_common::{Control, Field3, Morph, Solid};
 //! use glam::Vec3;
+//! use std::sync::Arc;
 //!
 //! let a = BlobTree::from_ron(r#"(root: (kind: "point", vertices: [(0, 0, 0)], radius: 1.0))"#)?;
 //! let b = BlobTree::from_ron(r#"(root: (kind: "union", children: [
 //!     (kind: "segment", vertices: [(-0.5, 0, 0), (0.5, 0, 0)], radius: 0.6),
 //!     (kind: "box", half: (0.1, 0.1, 0.4), radius: 0.4, p: "inf"),
 //! ]))"#)?;
-//! let morph = BlobMorph::new(&a, &b, &MorphSpec::default())?;
+//! let (sa, sb) = (Solid::implicit(Arc::new(a))?, Solid::implicit(Arc::new(b.clone()))?);
+//! let morph = BlobMorph::new(&sa, &sb, &BlobSettings::default(), &Control::new())?;
 //! // The ends are the inputs: the ball's surface is at distance R/2 = 0.5.
 //! let start = morph.frame(0.0)?.field;
 //! assert!(start.value(Vec3::new(0.49, 0.0, 0.0)) > 0.0);
@@ -119,8 +121,8 @@ pub mod tree;
 pub mod warp;
 
 pub use correspond::{Correspondence, Heuristic, Link, Origin, Pair, decompose};
-pub use error::{BlobError, MorphError, NodePath, NodeProblem, Side};
-pub use generic::{BlobMorph, GenericTree, MorphSpec, Speed, SpeedCurve, Trajectory};
+pub use error::{BlobError, BlobMorphError, NodePath, NodeProblem, Side};
+pub use generic::{BlobMorph, BlobSettings, GenericTree, MorphSpec, Speed, SpeedCurve, Trajectory};
 pub use kernel::Kernel;
 pub use minkowski::MinkowskiPath;
 pub use node::{NaryOp, Node, Primitive};

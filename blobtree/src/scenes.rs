@@ -11,6 +11,7 @@
 //! | `bear_bird` | blob bear → blob bird (Fig. 2) | nearest-centre matching of many blended primitives, segments ↔ polygons |
 
 use crate::correspond::Link;
+use crate::error::BlobError;
 use crate::error::NodePath;
 use crate::generic::{MorphSpec, Speed, SpeedCurve};
 use crate::kernel::Kernel;
@@ -25,6 +26,65 @@ pub const THRESHOLD: f32 = 0.5;
 
 /// Names of the built-in morphs (see [`demo`]).
 pub const DEMOS: [&str; 4] = ["cube_sphere", "sphere_propeller", "rook_queen", "bear_bird"];
+
+/// Names of the built-in scenes (see [`load`]).
+pub const NAMES: [&str; 9] =
+    ["rounded_cube", "pierced_sphere", "sphere", "propeller", "rook", "queen", "bear", "bird", "torus"];
+
+/// A built-in scene by name ([`NAMES`]), or a scene file (`.json` read as
+/// JSON, anything else as RON).
+///
+/// # Errors
+/// [`BlobError::Read`] for an unknown name or unreadable file, and the
+/// parse and validation errors of the file.
+pub fn load(spec: &str) -> Result<BlobTree, BlobError> {
+    let built_in = match spec {
+        "rounded_cube" => Some(rounded_cube()),
+        "pierced_sphere" => Some(pierced_sphere()),
+        "sphere" => Some(sphere()),
+        "propeller" => Some(propeller()),
+        "rook" => Some(rook()),
+        "queen" => Some(queen()),
+        "bear" => Some(bear()),
+        "bird" => Some(bird()),
+        "torus" => Some(torus()),
+        _ => None,
+    };
+    if let Some(tree) = built_in {
+        return Ok(tree);
+    }
+    let path = std::path::Path::new(spec);
+    let text = std::fs::read_to_string(path).map_err(|e| BlobError::Read {
+        path: spec.to_string(),
+        message: format!("{e} (built-in scenes: {})", NAMES.join(", ")),
+    })?;
+    if path.extension().is_some_and(|e| e == "json") {
+        BlobTree::from_json(&text)
+    } else {
+        BlobTree::from_ron(&text)
+    }
+}
+
+/// The animator's spec of the built-in morph from scene `source` to scene
+/// `target` (e.g. `rook` → `queen`), when that pair is one of [`DEMOS`].
+pub fn demo_spec(source: &str, target: &str) -> Option<MorphSpec> {
+    let name = format!("{source}_{target}");
+    let name = match name.as_str() {
+        "rounded_cube_pierced_sphere" => "cube_sphere",
+        other => other,
+    };
+    DEMOS.contains(&name).then(|| demo(name).map(|(_, _, spec)| spec)).flatten()
+}
+
+/// A torus around z (ring radius 0.55, surface 0.2 from the ring): the
+/// union of 24 segments along the ring, so joints do not bulge.
+pub fn torus() -> BlobTree {
+    let ring = |i: usize| {
+        let a = std::f32::consts::TAU * i as f32 / 24.0;
+        Vec3::new(0.55 * a.cos(), 0.55 * a.sin(), 0.0)
+    };
+    tree(Node::union((0..24).map(|i| seg(ring(i), ring(i + 1), 0.4)).collect()))
+}
 
 fn prim(skeleton: Skeleton, radius: f32, at: Vec3) -> Node {
     Node::Primitive(
@@ -199,7 +259,7 @@ mod tests {
     fn every_demo_builds_and_reproduces_its_ends() {
         for name in DEMOS {
             let (a, b, spec) = demo(name).unwrap();
-            let m = BlobMorph::new(&a, &b, &spec).unwrap();
+            let m = BlobMorph::from_trees(&a, &b, &spec).unwrap();
             let (f0, f1) = (m.frame(0.0).unwrap().field, m.frame(1.0).unwrap().field);
             for i in 0..300 {
                 let p = Vec3::new((i as f32 * 0.37).sin(), (i as f32 * 0.61).cos(), (i as f32 * 0.23).sin())
@@ -218,7 +278,7 @@ mod tests {
     #[test]
     fn pierced_sphere_has_genus_five() {
         let (a, b, spec) = demo("cube_sphere").unwrap();
-        let m = BlobMorph::new(&a, &b, &spec).unwrap();
+        let m = BlobMorph::from_trees(&a, &b, &spec).unwrap();
         let start = m.frame_mesh(0.0, 48).unwrap();
         let end = m.frame_mesh(1.0, 48).unwrap();
         assert_eq!(start.genus(), Some(0));
@@ -234,7 +294,7 @@ mod tests {
     #[test]
     fn rook_to_queen_frames_are_single_components() {
         let (a, b, spec) = demo("rook_queen").unwrap();
-        let m = BlobMorph::new(&a, &b, &spec).unwrap();
+        let m = BlobMorph::from_trees(&a, &b, &spec).unwrap();
         for k in 0..=40 {
             let t = k as f32 / 40.0;
             assert_eq!(components(&m, t, 40), 1, "frame t = {t}");

@@ -276,6 +276,15 @@ fn nary_bounds(op: NaryOp, children: &[Compiled]) -> Aabb {
     }
 }
 
+/// A BlobTree is a [`Solid`](isomorph_common::Solid) input
+/// (`Solid::implicit(Arc::new(tree))`) that the BlobTree morph recovers as
+/// itself and the other methods sample as a field.
+impl isomorph_common::Implicit for BlobTree {
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+}
+
 impl Field3 for BlobTree {
     /// `potential(p) − T`: positive inside.
     fn value(&self, p: Vec3) -> f32 {
