@@ -22,7 +22,7 @@ fn rook_queen() -> (BlobMorph, BlobTree) {
 
 /// A 32³ lattice of query points over the morph's bounds.
 fn points(morph: &BlobMorph) -> Vec<Vec3> {
-    let b = morph.bounds();
+    let b = morph.field_bounds();
     let n = 32;
     let mut v = Vec::with_capacity(n * n * n);
     for k in 0..n {
@@ -58,7 +58,7 @@ fn eval(c: &mut Criterion) {
 
 fn polygonize_frame(c: &mut Criterion) {
     let (morph, frame) = rook_queen();
-    let bounds = morph.bounds();
+    let bounds = morph.field_bounds();
     c.bench_function("polygonize/rook_queen/128", |b| {
         b.iter(|| polygonize(black_box(&frame), &bounds, 128, 0.0).expect("grid fits"))
     });

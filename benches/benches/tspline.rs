@@ -15,7 +15,7 @@ use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use glam::DVec3;
 use isomorph_benches::data_path;
 use isomorph_common::marching_cubes::polygonize;
-use isomorph_common::mesh::io::read_mesh;
+use isomorph_io::mesh::read_mesh;
 use isomorph_common::{Aabb, Shape};
 use isomorph_tspline::{
     EvolveSettings, FitSettings, TsplineSettings, Speed, TMesh, TMeshSettings, demo, evolve, fit, morph,

@@ -136,16 +136,15 @@ pub fn build(
     settings: &Settings,
     control: &Control,
 ) -> Result<BoxedMorph, BoxedError> {
-    let boxed = BoxedError::new;
     Ok(match method {
-        Method::Baseline => DistanceBlend::new(source, target, &settings.baseline, control).map_err(boxed)?.boxed(),
+        Method::Baseline => DistanceBlend::new(source, target, &settings.baseline, control).map_err(BoxedError::new)?.boxed(),
         Method::LevelSet => {
-            LevelSetMorph::new(source, target, &settings.level_set, control).map_err(boxed)?.boxed()
+            LevelSetMorph::new(source, target, &settings.level_set, control).map_err(BoxedError::new)?.boxed()
         }
-        Method::Rbf => RbfMorph::new(source, target, &settings.rbf, control).map_err(boxed)?.boxed(),
-        Method::Warp => WarpMorph::new(source, target, &settings.warp, control).map_err(boxed)?.boxed(),
-        Method::Tspline => TsplineMorph::new(source, target, &settings.tspline, control).map_err(boxed)?.boxed(),
-        Method::Blobtree => BlobMorph::new(source, target, &settings.blobtree, control).map_err(boxed)?.boxed(),
+        Method::Rbf => RbfMorph::new(source, target, &settings.rbf, control).map_err(BoxedError::new)?.boxed(),
+        Method::Warp => WarpMorph::new(source, target, &settings.warp, control).map_err(BoxedError::new)?.boxed(),
+        Method::Tspline => TsplineMorph::new(source, target, &settings.tspline, control).map_err(BoxedError::new)?.boxed(),
+        Method::Blobtree => BlobMorph::new(source, target, &settings.blobtree, control).map_err(BoxedError::new)?.boxed(),
     })
 }
 

@@ -242,7 +242,7 @@ fn floats(v: &serde_json::Value) -> Vec<f32> {
 fn align_puts_a_moved_mesh_back() {
     use isomorph_common::glam::{Affine3A, Mat4, Quat, Vec3};
     use isomorph_common::mesh::distance::surface_distance;
-    use isomorph_common::mesh::io::{MeshFormat, read_mesh, write_mesh};
+    use isomorph_io::mesh::{MeshFormat, read_mesh, write_mesh};
     let out = scratch("align");
     std::fs::create_dir_all(&out).unwrap();
     let bunny_mesh = read_mesh(bunny()).unwrap();

@@ -3,7 +3,7 @@
 //! exporter and held to the same checks.
 
 use isomorph_cli::methods::{Method, Settings, build, load_input};
-use isomorph_common::{CancelToken, Control, MorphError};
+use isomorph_common::{CancelToken, Control, MorphError, MorphFailure};
 use isomorph_io::compare::{Candidate, Status, compare};
 use isomorph_io::export::{ExportSettings, export_sequence};
 
