@@ -69,9 +69,7 @@ fn mesh_with(n: usize) -> Arc<TMesh> {
         let count = (4.0 * std::f64::consts::PI * 0.36 / (spacing * spacing)) as usize;
         let mut pts = demo::sphere_samples(count, 0.5, DVec3::ZERO);
         pts.extend(demo::sphere_samples(count, 0.6, DVec3::ZERO));
-        let mut s = TMeshSettings::default();
-        s.sample_spacing = spacing;
-        s.min_depth = 1;
+        let s = TMeshSettings { sample_spacing: spacing, min_depth: 1, ..Default::default() };
         let mesh = Arc::new(TMesh::build(&pts, &s).unwrap());
         let got = mesh.anchor_count();
         let better = best.as_ref().is_none_or(|b| got.abs_diff(n) < b.anchor_count().abs_diff(n));
@@ -90,9 +88,7 @@ fn steps(c: &mut Criterion) {
         let mesh = mesh_with(n);
         eprintln!("step/{n}: {} coefficients, {} leaves", mesh.anchor_count(), mesh.leaf_count());
         let (f0, _) = fit(mesh, |p: DVec3| 0.5 - p.length(), &[], &FitSettings::default()).unwrap();
-        let mut settings = EvolveSettings::default();
-        settings.max_steps = 1;
-        settings.stall_steps = 10;
+        let settings = EvolveSettings { max_steps: 1, stall_steps: 10, ..Default::default() };
         group.bench_function(BenchmarkId::from_parameter(n), |b| {
             b.iter(|| {
                 let e =
