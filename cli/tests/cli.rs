@@ -344,10 +344,10 @@ fn level_set_morph_takes_an_align_file_and_prints_its_report() {
     let report: serde_json::Value = serde_json::from_slice(&o.stdout).expect("stdout is the JSON report");
     assert_eq!(report["method"], "level-set");
     assert_eq!(report["frames"].as_array().unwrap().len(), 3);
-    let details = &report["details"];
-    assert_eq!(details["placement"], "affine", "{details}");
-    assert_eq!(details["converged"], true, "{details}");
-    assert!(details["solver_iterations"].as_u64().unwrap() > 0);
+    let morph_report = &report["morph"];
+    assert_eq!(morph_report["details"]["placement"], "affine", "{morph_report}");
+    assert_eq!(morph_report["converged"], true, "{morph_report}");
+    assert!(morph_report["iterations"].as_u64().unwrap() > 0);
     // The aligned mug ends on the chain, placed in the chain's space.
     let target = &report["endpoints"]["target"];
     assert!(target["mean_voxels"].as_f64().unwrap() < 0.5, "{target}");
