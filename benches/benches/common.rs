@@ -11,8 +11,8 @@ use isomorph_common::alignment::Moments;
 use isomorph_common::fast_marching::{FastMarchingSettings, redistance};
 use isomorph_common::marching_cubes::marching_cubes;
 use isomorph_common::mesh::bvh::Lattice;
-use isomorph_io::mesh::{MeshFormat, read_mesh, read_mesh_from};
 use isomorph_common::sdf::{MeshSdf, SdfSettings, VolumeMode};
+use isomorph_io::mesh::{MeshFormat, read_mesh, read_mesh_from};
 use std::hint::black_box;
 use std::io::Cursor;
 

@@ -41,7 +41,9 @@ fn morph(c: &mut Criterion) {
         let sparse = evolve(&source, &speed, Placement::Identity, &settings, &Control::new()).unwrap();
         group.bench_function(BenchmarkId::new("sparse", n), |b| {
             b.iter(|| {
-                black_box(evolve(&source, &speed, Placement::Identity, &settings, &Control::new()).unwrap().len())
+                black_box(
+                    evolve(&source, &speed, Placement::Identity, &settings, &Control::new()).unwrap().len(),
+                )
             })
         });
         if n <= 128 {
@@ -53,7 +55,9 @@ fn morph(c: &mut Criterion) {
             };
             group.bench_function(BenchmarkId::new("dense", n), |b| {
                 b.iter(|| {
-                    black_box(evolve(&source, &speed, Placement::Identity, &dense, &Control::new()).unwrap().len())
+                    black_box(
+                        evolve(&source, &speed, Placement::Identity, &dense, &Control::new()).unwrap().len(),
+                    )
                 })
             });
         }

@@ -10,10 +10,10 @@
 //! `cargo bench -p isomorph-benches --bench rbf -- polygonize/sphere_torus_4d/8000/64`
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use isomorph_common::marching_cubes::{SparseSettings, polygonize_near_surface};
 use isomorph_common::marching_cubes::{marching_cubes, polygonize};
 use isomorph_common::{Aabb, Grid3};
 use isomorph_rbf::constraints::{NormalOffset, Subsample, SurfaceSettings, field_constraints};
-use isomorph_common::marching_cubes::{SparseSettings, polygonize_near_surface};
 use isomorph_rbf::{FitSettings, Interpolant, Kernel, RbfMorph, transform::lift};
 use std::hint::black_box;
 

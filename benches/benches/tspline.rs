@@ -14,14 +14,14 @@
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use glam::DVec3;
 use isomorph_benches::data_path;
+use isomorph_common::Control;
 use isomorph_common::marching_cubes::polygonize;
-use isomorph_io::mesh::read_mesh;
 use isomorph_common::{Aabb, Shape};
+use isomorph_io::mesh::read_mesh;
 use isomorph_tspline::{
-    EvolveSettings, FitSettings, TsplineSettings, Speed, TMesh, TMeshSettings, demo, evolve, fit, morph,
+    EvolveSettings, FitSettings, Speed, TMesh, TMeshSettings, TsplineSettings, demo, evolve, fit, morph,
 };
 use std::hint::black_box;
-use isomorph_common::Control;
 use std::sync::Arc;
 
 fn morphs(c: &mut Criterion) {
@@ -32,9 +32,7 @@ fn morphs(c: &mut Criterion) {
     let cube = polygonize(&demo::holed_cube(), &bounds, 64, 0.0).unwrap();
     let settings = demo::holed_cube_settings();
     group.bench_function("sphere_holed_cube", |b| {
-        b.iter(|| {
-            black_box(morph(&sphere, &cube, &settings, &Control::new()).unwrap().frame_count())
-        })
+        b.iter(|| black_box(morph(&sphere, &cube, &settings, &Control::new()).unwrap().frame_count()))
     });
     if let Ok(bunny) = read_mesh(data_path("bunny.ply")) {
         // The petal torus placed over the bunny's bounding box.
@@ -48,11 +46,7 @@ fn morphs(c: &mut Criterion) {
         settings.evolve.speed = Speed::Robust { v_max: 0.2, beta_cells: 0.5 };
         settings.evolve.max_steps = 80;
         group.bench_function("bunny_petal_torus", |b| {
-            b.iter(|| {
-                black_box(
-                    morph(&bunny, &torus, &settings, &Control::new()).unwrap().frame_count(),
-                )
-            })
+            b.iter(|| black_box(morph(&bunny, &torus, &settings, &Control::new()).unwrap().frame_count()))
         });
     }
     group.finish();
@@ -91,9 +85,7 @@ fn steps(c: &mut Criterion) {
         let settings = EvolveSettings { max_steps: 1, stall_steps: 10, ..Default::default() };
         group.bench_function(BenchmarkId::from_parameter(n), |b| {
             b.iter(|| {
-                let e =
-                    evolve(&f0, |p: DVec3| 0.6 - p.length(), &[], &settings, &Control::new())
-                        .unwrap();
+                let e = evolve(&f0, |p: DVec3| 0.6 - p.length(), &[], &settings, &Control::new()).unwrap();
                 black_box(e.frames.len())
             })
         });

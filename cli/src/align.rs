@@ -3,9 +3,9 @@
 
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
+use isomorph_common::Control;
 use isomorph_common::alignment::{AlignMode, Alignment, PrincipalFrame, align};
 use isomorph_common::glam::Mat4;
-use isomorph_common::Control;
 use isomorph_io::inputs::{LoadOptions, load_solid};
 use isomorph_io::mesh::{MeshFormat, write_mesh};
 use serde_json::{Value, json};

@@ -73,7 +73,8 @@ pub fn run(args: &CompareArgs, matches: &ArgMatches) -> anyhow::Result<()> {
         .collect::<anyhow::Result<Vec<_>>>()?;
     let comparison = compare(&args.io.source, &args.io.target, candidates, &export, &control);
     bar.finish_and_clear();
-    let comparison = comparison.with_context(|| format!("cannot write the comparison to {}", args.out.display()))?;
+    let comparison =
+        comparison.with_context(|| format!("cannot write the comparison to {}", args.out.display()))?;
     print_table(&comparison);
     println!("  wrote {}/compare.{{png,json,md,html}} and one folder per method", args.out.display());
     Ok(())

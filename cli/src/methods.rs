@@ -114,7 +114,9 @@ pub fn load_input(method: Method, spec: &str, options: &LoadOptions) -> Result<S
         return Ok(scene_solid(scenes::load(spec)?)?);
     }
     match load_solid(spec, options) {
-        Err(InputError::Unknown { .. }) if scenes::NAMES.contains(&spec) => Ok(scene_solid(scenes::load(spec)?)?),
+        Err(InputError::Unknown { .. }) if scenes::NAMES.contains(&spec) => {
+            Ok(scene_solid(scenes::load(spec)?)?)
+        }
         other => Ok(other?),
     }
 }
@@ -137,14 +139,24 @@ pub fn build(
     control: &Control,
 ) -> Result<BoxedMorph, BoxedError> {
     Ok(match method {
-        Method::Baseline => DistanceBlend::new(source, target, &settings.baseline, control).map_err(BoxedError::new)?.boxed(),
+        Method::Baseline => {
+            DistanceBlend::new(source, target, &settings.baseline, control).map_err(BoxedError::new)?.boxed()
+        }
         Method::LevelSet => {
             LevelSetMorph::new(source, target, &settings.level_set, control).map_err(BoxedError::new)?.boxed()
         }
-        Method::Rbf => RbfMorph::new(source, target, &settings.rbf, control).map_err(BoxedError::new)?.boxed(),
-        Method::Warp => WarpMorph::new(source, target, &settings.warp, control).map_err(BoxedError::new)?.boxed(),
-        Method::Tspline => TsplineMorph::new(source, target, &settings.tspline, control).map_err(BoxedError::new)?.boxed(),
-        Method::Blobtree => BlobMorph::new(source, target, &settings.blobtree, control).map_err(BoxedError::new)?.boxed(),
+        Method::Rbf => {
+            RbfMorph::new(source, target, &settings.rbf, control).map_err(BoxedError::new)?.boxed()
+        }
+        Method::Warp => {
+            WarpMorph::new(source, target, &settings.warp, control).map_err(BoxedError::new)?.boxed()
+        }
+        Method::Tspline => {
+            TsplineMorph::new(source, target, &settings.tspline, control).map_err(BoxedError::new)?.boxed()
+        }
+        Method::Blobtree => {
+            BlobMorph::new(source, target, &settings.blobtree, control).map_err(BoxedError::new)?.boxed()
+        }
     })
 }
 

@@ -101,7 +101,12 @@ impl Io {
     ///
     /// # Errors
     /// Inputs whose surface cannot be made.
-    pub fn export(&self, out: PathBuf, inputs: &(Solid, Solid), control: &Control) -> anyhow::Result<ExportSettings> {
+    pub fn export(
+        &self,
+        out: PathBuf,
+        inputs: &(Solid, Solid),
+        control: &Control,
+    ) -> anyhow::Result<ExportSettings> {
         let reference = (2 * self.resolution()).min(256);
         Ok(ExportSettings {
             frames: self.frames as usize,

@@ -111,7 +111,8 @@ const OWNERS: [(&str, Method); 16] = [
 /// The options given on the command line that belong to a method not in
 /// `methods` (as `--name (method)`); `refine_rounds` and `links` count too.
 pub fn foreign_options(matches: &ArgMatches, methods: &[Method]) -> Vec<String> {
-    let owners = OWNERS.iter().copied().chain([("refine_rounds", Method::Tspline), ("links", Method::Blobtree)]);
+    let owners =
+        OWNERS.iter().copied().chain([("refine_rounds", Method::Tspline), ("links", Method::Blobtree)]);
     owners
         .filter(|(id, owner)| {
             !methods.contains(owner) && matches.value_source(id) == Some(ValueSource::CommandLine)
@@ -181,7 +182,9 @@ impl MethodArgs {
             .map(|tolerance| isomorph_tspline::Refinement { tolerance, max_rounds: self.refine_rounds });
 
         settings.blobtree.spec = match &self.links {
-            Some(path) => MorphSpec::load(path).with_context(|| format!("invalid links file {}", path.display()))?,
+            Some(path) => {
+                MorphSpec::load(path).with_context(|| format!("invalid links file {}", path.display()))?
+            }
             None => isomorph_blobtree::scenes::demo_spec(source, target).unwrap_or_default(),
         };
         Ok(settings)

@@ -14,7 +14,9 @@ use std::sync::OnceLock;
 pub fn control(label: &str, threads: Option<usize>) -> Result<(Control, ProgressBar), MorphError> {
     let bar = ProgressBar::with_draw_target(Some(1000), ProgressDrawTarget::stderr());
     bar.set_style(
-        ProgressStyle::with_template("{prefix:>12} [{bar:24}] {msg}").expect("valid template").progress_chars("=> "),
+        ProgressStyle::with_template("{prefix:>12} [{bar:24}] {msg}")
+            .expect("valid template")
+            .progress_chars("=> "),
     );
     bar.set_prefix(label.to_string());
     let shown = bar.clone();

@@ -164,10 +164,34 @@ fn bad_input_is_one_clear_line_and_nonzero_exit() {
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("--curvature (level-set)") && err.contains("tspline"), "{err}");
-    let o = isomorph(&["morph", "--method", "level-set", "--source", "sphere", "--target", "torus", "--curvature", "sometimes"]);
+    let o = isomorph(&[
+        "morph",
+        "--method",
+        "level-set",
+        "--source",
+        "sphere",
+        "--target",
+        "torus",
+        "--curvature",
+        "sometimes",
+    ]);
     assert!(!o.status.success());
-    let o = isomorph(&["morph", "--method", "level-set", "--source", "sphere", "--target", "torus", "--points", "10"]);
-    assert!(String::from_utf8_lossy(&o.stderr).contains("--points (rbf)"), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = isomorph(&[
+        "morph",
+        "--method",
+        "level-set",
+        "--source",
+        "sphere",
+        "--target",
+        "torus",
+        "--points",
+        "10",
+    ]);
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("--points (rbf)"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
 }
 
 /// Splits `.npy` bytes into the header text and the f32 values.

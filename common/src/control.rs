@@ -75,7 +75,7 @@ impl CancelToken {
 type ProgressFn = dyn Fn(&Progress<'_>) + Send + Sync;
 
 /// Progress callback, cancellation token and thread pool of a long
-/// operation (see the [module docs](self)). `Control::default()` reports
+/// operation (see the [crate docs](crate)). `Control::default()` reports
 /// nothing, is never cancelled and uses rayon's global pool.
 #[derive(Clone, Default)]
 pub struct Control {

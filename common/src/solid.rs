@@ -57,7 +57,7 @@ enum Repr {
     Implicit { field: Arc<dyn Implicit>, bounds: Aabb },
 }
 
-/// A shape to morph (see the [module docs](self)).
+/// A shape to morph (see the [crate docs](crate)).
 #[derive(Debug, Clone)]
 pub struct Solid(Arc<Repr>);
 

@@ -20,11 +20,17 @@
 //!
 //! Units: grids are world units; solver values and speeds are in voxels.
 //!
-//! [`LevelSetMorph::new`] assembles the whole pipeline from two
-//! [`isomorph_common::Solid`]s (meshes, distance volumes, CSG models,
-//! implicits): moment alignment or a user map ([`Align`]), true signed
-//! distances for the embedding and the speed (scan conversion for CSG,
-//! Breen §6.1), the evolution, and frames placed by the interpolated map.
+//! # Paper sections → modules
+//! | paper | where |
+//! |---|---|
+//! | §3 the goal-driven motion along `γ_B N`; §4 steady state and overlap | [`evolve`], [`SpeedGrid`], [`Response`], [`check_overlap`] |
+//! | §5.1–5.2.1 the level-set equation, up-wind differences and the time-step bound | [`DenseSolver`], [`StepParams`] |
+//! | §5.2.2 Whitaker's sparse field: active layer, ±1 and ±2 layers, status changes | [`SparseFieldSolver`] |
+//! | §6.1 scan conversion of CSG models into signed distances | `isomorph_common::scan_conversion`, through [`isomorph_common::Solid`] |
+//! | §6.2 coordinate transforms `T` and their interpolation (eq. 25); the Appendix's moment alignment | [`Placement`], [`Align`], `isomorph_common::alignment` |
+//! | §6.3 level-set deformation, frames kept near the surface; §6.4 polygonization | [`LevelSetMorph`], [`BandFrame`] |
+//! | beyond the paper: a weighted mean-curvature term | [`Curvature`] |
+//! | the whole pipeline from two solids | [`LevelSetMorph::new`], [`LevelSetSettings`] |
 //!
 //! # Guarantees
 //! - Frame 0 is the source's distance volume and the last frame the

@@ -128,7 +128,7 @@ impl<const D: usize> Interpolant<D> {
     ///
     /// # Errors
     /// [`RbfError::NonFinite`] for NaN/infinite input,
-    /// [`MorphError::BadSetting`](isomorph_common::MorphError::BadSetting) for a negative or NaN smoothing or
+    /// [`MorphError::BadSetting`] for a negative or NaN smoothing or
     /// tolerance, [`RbfError::NearDuplicate`] per [`FitSettings::duplicates`],
     /// [`RbfError::TooFewConstraints`] with fewer than `D + 1`,
     /// [`RbfError::NotUnisolvent`] when the positions are coplanar in `D`

@@ -250,7 +250,7 @@ impl ContourSet {
     /// Fits one variational implicit through the constraints of all slices.
     ///
     /// # Errors
-    /// [`RbfError::EmptyShape`] for an empty set, [`MorphError::BadSetting`](isomorph_common::MorphError::BadSetting)
+    /// [`RbfError::EmptyShape`] for an empty set, [`MorphError::BadSetting`]
     /// for a bad offset or margin, [`RbfError::NotUnisolvent`] when all
     /// contours lie in one plane (a single slice does not determine a
     /// surface), and the other errors of [`Interpolant::fit`].
@@ -330,7 +330,7 @@ impl ContourSurface {
     /// only.
     ///
     /// # Errors
-    /// [`MorphError::Grid`](isomorph_common::MorphError::Grid) for `res < 2` or a lattice too large.
+    /// [`MorphError::Grid`] for `res < 2` or a lattice too large.
     pub fn mesh(&self, res: u32) -> Result<TriMesh, RbfError> {
         Ok(level_set_mesh(&self.field(), &self.bounds, res, 0.0)?)
     }

@@ -400,7 +400,7 @@ impl ContourMorph {
     /// The 2D field of the shape at morph time `t ∈ [0, 1]`.
     ///
     /// # Errors
-    /// [`MorphError::InvalidTime`](isomorph_common::MorphError::InvalidTime) for NaN or `t ∉ [0, 1]`.
+    /// [`MorphError::InvalidTime`] for NaN or `t ∉ [0, 1]`.
     pub fn slice(&self, t: f32) -> Result<Slice2, RbfError> {
         let t = check_time(t)?;
         self.interpolant.slice2(&[t * self.separation])
@@ -410,7 +410,7 @@ impl ContourMorph {
     /// nodes along the longer edge.
     ///
     /// # Errors
-    /// [`MorphError::InvalidTime`](isomorph_common::MorphError::InvalidTime); [`MorphError::Grid`](isomorph_common::MorphError::Grid) for `res < 2`.
+    /// [`MorphError::InvalidTime`]; [`MorphError::Grid`] for `res < 2`.
     pub fn frame_grid(&self, t: f32, res: u32) -> Result<Grid2<f32>, RbfError> {
         let (dims, spacing) = frame_lattice(self.lo, self.hi, res)?;
         Ok(self.slice(t)?.sample(dims, self.lo, spacing)?)

@@ -62,7 +62,8 @@ fn compare_page_renders_in_a_browser() {
             }
         })
         .collect();
-    let settings = ExportSettings { frames: 3, resolution: 32, out_dir: dir.clone(), ..ExportSettings::default() };
+    let settings =
+        ExportSettings { frames: 3, resolution: 32, out_dir: dir.clone(), ..ExportSettings::default() };
     compare("sphere", "torus", candidates, &settings, &Control::new()).unwrap();
     let page = dir.join("compare.html");
     let text = std::fs::read_to_string(&page).unwrap();

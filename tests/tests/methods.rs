@@ -42,7 +42,12 @@ fn every_method_morphs_sphere_into_torus_with_its_defaults() {
         assert_eq!((genus[0], genus[4]), (Some(0), Some(1)), "{}: genus {genus:?}", method.name());
         for (end, e) in [("source", report.endpoints.source), ("target", report.endpoints.target)] {
             let e = e.unwrap();
-            println!("{} {end}: mean {:.3}, Hausdorff {:.3} voxels", method.name(), e.mean_voxels, e.hausdorff_voxels);
+            println!(
+                "{} {end}: mean {:.3}, Hausdorff {:.3} voxels",
+                method.name(),
+                e.mean_voxels,
+                e.hausdorff_voxels
+            );
             assert!(e.mean_voxels < 1.0, "{} {end}: {e:?}", method.name());
         }
     }
@@ -59,11 +64,16 @@ fn boxed_errors_keep_their_shared_kinds() {
     let cancelled = Control::new().with_cancel(token);
     for method in Method::ALL {
         let (a, b) = if method == Method::Blobtree {
-            (load_input(method, "sphere", &Default::default()).unwrap(), load_input(method, "torus", &Default::default()).unwrap())
+            (
+                load_input(method, "sphere", &Default::default()).unwrap(),
+                load_input(method, "torus", &Default::default()).unwrap(),
+            )
         } else {
             (source.clone(), target.clone())
         };
-        let e = build(method, &a, &b, &Settings::default(), &cancelled).err().expect("cancelled before it starts");
+        let e = build(method, &a, &b, &Settings::default(), &cancelled)
+            .err()
+            .expect("cancelled before it starts");
         assert!(e.is_cancelled(), "{}: {e}", method.name());
     }
     // The BlobTree method takes BlobTrees only, and says so.
@@ -92,12 +102,15 @@ fn compare_writes_a_row_per_method() {
             );
             Candidate {
                 name,
-                build: Ok(Box::new(move |c: &Control| build(method, &inputs.0, &inputs.1, &Settings::default(), c))),
+                build: Ok(Box::new(move |c: &Control| {
+                    build(method, &inputs.0, &inputs.1, &Settings::default(), c)
+                })),
                 references: None,
             }
         })
         .collect();
-    let settings = ExportSettings { frames: 3, resolution: 40, out_dir: dir.clone(), ..ExportSettings::default() };
+    let settings =
+        ExportSettings { frames: 3, resolution: 40, out_dir: dir.clone(), ..ExportSettings::default() };
     let table = compare("sphere", "torus", candidates, &settings, &control).unwrap();
     let status: Vec<Status> = table.rows.iter().map(|r| r.status).collect();
     assert_eq!(status, [Status::Ok, Status::Ok, Status::Failed]);

@@ -39,7 +39,7 @@ impl CoefficientTable {
     ///
     /// # Errors
     /// [`WarpError::NotTableable`] when a source dimension is not an integer
-    /// multiple of the region count along that axis; [`WarpError::Grid`]
+    /// multiple of the region count along that axis; [`MorphError::Grid`](isomorph_common::MorphError::Grid)
     /// ([`GridError::TooLarge`]) when the table's `G³ · 64` weights (256
     /// bytes per entry) exceed the process-wide grid memory limit.
     pub fn new(map: &BSplineMap) -> Result<Self, WarpError> {
@@ -146,7 +146,7 @@ impl DeformationArray {
     /// The identity array (every voxel maps to itself) for `dims` voxels.
     ///
     /// # Errors
-    /// [`WarpError::Grid`] when the array does not fit the memory limit.
+    /// [`MorphError::Grid`](isomorph_common::MorphError::Grid) when the array does not fit the memory limit.
     pub fn identity(dims: UVec3) -> Result<Self, WarpError> {
         let grid = isomorph_common::Grid3::new(dims, Vec3::ZERO, 1.0, Vec3A::ZERO)?;
         let mut points = grid.into_data();
@@ -161,7 +161,7 @@ impl DeformationArray {
     ///
     /// # Errors
     /// [`WarpError::NotTableable`] for [`Evaluation::Table`] on a size the
-    /// table cannot serve, [`WarpError::Grid`] for memory.
+    /// table cannot serve, [`MorphError::Grid`](isomorph_common::MorphError::Grid) for memory.
     pub fn compute(map: &BSplineMap, evaluation: Evaluation) -> Result<Self, WarpError> {
         let mut out = Self::identity(map.source_dims())?;
         let table = match evaluation {

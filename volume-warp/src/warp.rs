@@ -60,7 +60,7 @@ impl<T: Density> VolumeWarp<T> {
     /// Lattice errors of [`BSplineMap::identity`], [`WarpError::NonFiniteDensity`]
     /// for a NaN in an `f32` source, [`WarpError::NotTableable`] for
     /// [`Evaluation::Table`] on a size the table cannot serve, and
-    /// [`WarpError::Grid`] when the target does not fit the memory limit.
+    /// [`MorphError::Grid`](isomorph_common::MorphError::Grid) when the target does not fit the memory limit.
     pub fn new(source: Grid3<T>, settings: WarpSettings) -> Result<Self, WarpError> {
         let map = BSplineMap::identity(source.dims(), settings.csize)?;
         Self::with_map(source, map, settings)

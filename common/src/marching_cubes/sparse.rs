@@ -55,7 +55,7 @@ pub struct SparseStats {
 
 /// The mesh of `field`'s level set `iso` on the lattice of
 /// [`Grid3::sample_box`]`(bounds, res)`, evaluating the field only near the
-/// surface (see the [module docs](self)).
+/// surface (see [`crate::marching_cubes`]).
 ///
 /// # Errors
 /// [`MorphError::Grid`] for a bad box, `res < 2` or a lattice too large;

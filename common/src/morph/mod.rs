@@ -58,7 +58,7 @@ pub struct Frame<F> {
 }
 
 /// A time-parameterized shape: `frame(0)` is the source, `frame(1)` the
-/// target (see the [module docs](self) for the contract).
+/// target (see the [crate docs](crate) and `docs/ARCHITECTURE.md` for the contract).
 pub trait Morph: Send + Sync {
     /// The field of one frame.
     type Field: Field3 + Send;
