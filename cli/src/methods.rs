@@ -101,16 +101,17 @@ pub enum LoadError {
     Solid(#[from] isomorph_common::MorphError),
 }
 
-/// The input `spec` for `method`: a BlobTree scene (built-in name or
-/// `.ron`/`.json` file) for the BlobTree method; for the others a built-in
+/// The input `spec` for `method`: a `.ron`/`.json` BlobTree scene file, or
+/// for the BlobTree method a built-in scene name; otherwise a built-in
 /// shape, `bunny`, a mesh file or a `.npy` volume ([`load_solid`]), else a
-/// BlobTree scene, which every method can sample as an implicit.
+/// built-in BlobTree scene, which every method can sample as an implicit
+/// (the BlobTree method refuses non-BlobTree solids when it is built).
 ///
 /// # Errors
 /// [`LoadError`] naming the input and what is wrong with it.
 pub fn load_input(method: Method, spec: &str, options: &LoadOptions) -> Result<Solid, LoadError> {
     let is_scene_file = spec.ends_with(".ron") || spec.ends_with(".json");
-    if method == Method::Blobtree || is_scene_file {
+    if is_scene_file || (method == Method::Blobtree && scenes::NAMES.contains(&spec)) {
         return Ok(scene_solid(scenes::load(spec)?)?);
     }
     match load_solid(spec, options) {

@@ -13,7 +13,7 @@
 use crate::export::{ExportError, ExportSettings, Exported, Report, frame_tiles};
 use crate::render::{Camera, ContactSheet, RenderError};
 use base64::Engine;
-use isomorph_common::{Aabb, BoxedError, BoxedMorph, Control, MorphFailure, StageTime, TriMesh};
+use isomorph_common::{Aabb, BoxedError, BoxedMorph, Control, MorphError, MorphFailure, StageTime, TriMesh};
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -188,8 +188,9 @@ pub struct Comparison {
 /// Runs every candidate on the pair (`source` and `target` name it in the
 /// outputs), exporting each into `settings.out_dir/<name>/`, and writes
 /// `compare.png`, `compare.json`, `compare.md` and `compare.html` into
-/// `settings.out_dir`. A method that fails is a [`Status::Failed`] row; a
-/// cancelled run stops everything.
+/// `settings.out_dir`. A method that fails is a [`Status::Failed`] row, one
+/// that does not take the inputs ([`MorphError::UnsupportedInput`]) a
+/// [`Status::Skipped`] row; a cancelled run stops everything.
 ///
 /// # Errors
 /// [`CompareError`] for files that cannot be written and cancellation.
@@ -222,7 +223,10 @@ pub fn compare(
             Ok(m) => m,
             Err(e) if e.is_cancelled() => return Err(CompareError::Cancelled),
             Err(e) => {
-                rows.push(Row::new(&name, Status::Failed, Some(error_chain(&e))));
+                // A method that does not take these inputs is skipped, not failed.
+                let unsupported = matches!(e.shared(), Some(MorphError::UnsupportedInput { .. }));
+                let status = if unsupported { Status::Skipped } else { Status::Failed };
+                rows.push(Row::new(&name, status, Some(error_chain(&e))));
                 continue;
             }
         };
