@@ -145,23 +145,8 @@ impl BlobError {
     }
 }
 
-/// Which of the two shapes of a morph.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Side {
-    /// The source `A`.
-    Source,
-    /// The target `B`.
-    Target,
-}
-
-impl fmt::Display for Side {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            Side::Source => "source",
-            Side::Target => "target",
-        })
-    }
-}
+/// Which of the two shapes of a morph (the shared core's).
+pub use isomorph_common::Side;
 
 /// Errors of setting up or evaluating a BlobTree metamorphosis.
 #[derive(Debug, thiserror::Error)]

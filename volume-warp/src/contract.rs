@@ -241,7 +241,7 @@ impl WarpMorph {
         match &self.correspondence {
             Correspondence::Identity => self.identity(),
             Correspondence::Affine { alignment, .. } => self.affine_map(alignment.at(t)),
-            Correspondence::Landmarks { forward, .. } => scaled(forward, t),
+            Correspondence::Landmarks { forward, .. } => forward.scaled(t),
         }
     }
 
@@ -254,7 +254,7 @@ impl WarpMorph {
         match &self.correspondence {
             Correspondence::Identity => self.identity(),
             Correspondence::Affine { alignment, inverse } => self.affine_map(alignment.at(t) * *inverse),
-            Correspondence::Landmarks { backward, .. } => scaled(backward, 1.0 - t),
+            Correspondence::Landmarks { backward, .. } => backward.scaled(1.0 - t),
         }
     }
 
@@ -267,16 +267,10 @@ impl WarpMorph {
     fn affine_map(&self, world: Affine3A) -> Result<BSplineMap, WarpError> {
         let mut map = self.identity()?;
         let (o, h) = (self.source.origin(), self.source.spacing());
-        let c = map.controls();
-        for k in 0..c.z {
-            for j in 0..c.y {
-                for i in 0..c.x {
-                    let idx = UVec3::new(i, j, k);
-                    let rest = map.rest_position(idx);
-                    let image = (world.transform_point3(o + h * rest) - o) / h;
-                    map.set_displacement(idx, image - rest)?;
-                }
-            }
+        for idx in map.control_indices() {
+            let rest = map.rest_position(idx);
+            let image = (world.transform_point3(o + h * rest) - o) / h;
+            map.set_displacement(idx, image - rest)?;
         }
         Ok(map)
     }
@@ -330,21 +324,6 @@ fn swept_bounds(source: Aabb, target: Aabb, spec: &WarpSpec, alignment: Option<&
         }
     }
     bounds
-}
-
-/// `map` with every displacement scaled by `s`.
-fn scaled(map: &BSplineMap, s: f32) -> Result<BSplineMap, WarpError> {
-    let mut out = map.clone();
-    let c = map.controls();
-    for k in 0..c.z {
-        for j in 0..c.y {
-            for i in 0..c.x {
-                let idx = UVec3::new(i, j, k);
-                out.set_displacement(idx, s * map.displacement(idx)?)?;
-            }
-        }
-    }
-    Ok(out)
 }
 
 /// The least-motion map carrying each world landmark `p` to its partner `q`

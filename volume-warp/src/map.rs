@@ -78,6 +78,27 @@ impl BSplineMap {
         self.controls
     }
 
+    /// Every control point index, x fastest.
+    pub fn control_indices(&self) -> impl Iterator<Item = UVec3> + use<> {
+        let c = self.controls;
+        (0..c.z).flat_map(move |k| (0..c.y).flat_map(move |j| (0..c.x).map(move |i| UVec3::new(i, j, k))))
+    }
+
+    /// The map with every displacement multiplied by `s`: the identity for
+    /// `s = 0`, this map for `s = 1`, every map in between a B-spline map
+    /// too (how morphs animate a warp).
+    ///
+    /// # Errors
+    /// [`WarpError::NonFinite`] for a non-finite `s`.
+    pub fn scaled(&self, s: f32) -> Result<Self, WarpError> {
+        if !s.is_finite() {
+            return Err(WarpError::NonFinite { what: "displacement scale", value: Vec3::splat(s) });
+        }
+        let mut out = self.clone();
+        out.displacement.iter_mut().for_each(|d| *d *= s);
+        Ok(out)
+    }
+
     /// Regions per axis (`controls − 3`).
     pub fn regions(&self) -> UVec3 {
         self.controls - UVec3::splat(3)

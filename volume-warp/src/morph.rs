@@ -89,16 +89,7 @@ impl<T: Density> WarpAnimation<T> {
     /// The warped volume at time `t` (values as `f32`).
     fn warped(&self, t: f32) -> Result<Grid3<f32>, WarpError> {
         let t = check_time(t)?;
-        let mut map = self.map.clone();
-        let c = map.controls();
-        for k in 0..c.z {
-            for j in 0..c.y {
-                for i in 0..c.x {
-                    let idx = glam::UVec3::new(i, j, k);
-                    map.set_displacement(idx, t * self.map.displacement(idx)?)?;
-                }
-            }
-        }
+        let map = self.map.scaled(t)?;
         let warp = VolumeWarp::with_map(self.source.clone(), map, self.settings)?;
         Ok(warp.target().map(|v| v.to_f32())?)
     }
