@@ -14,20 +14,36 @@ use isomorph_common::marching_cubes::{SparseSettings, polygonize_near_surface};
 use isomorph_common::marching_cubes::{marching_cubes, polygonize};
 use isomorph_common::{Aabb, Grid3};
 use isomorph_rbf::constraints::{NormalOffset, Subsample, SurfaceSettings, field_constraints};
-use isomorph_rbf::{FitSettings, Interpolant, Kernel, RbfMorph, transform::lift};
+use isomorph_rbf::{FitSettings, Interpolant, Kernel, RbfMorph, TransformSettings, transform::lift};
 use std::hint::black_box;
 
-/// The 4D constraints of the reference case with `total` constraints.
-fn constraints(total: usize) -> Vec<isomorph_rbf::Constraint<4>> {
+/// The reference case: a sphere (radius 0.3) and a torus (R = 0.3,
+/// r = 0.12), each with `total / 4` farthest-point samples of its surface
+/// (polygonized at 64³ over `[-0.5, 0.5]³`) giving a boundary and an inward
+/// normal constraint at offset 0.01.
+fn shapes(total: usize) -> [Vec<isomorph_rbf::Constraint<3>>; 2] {
     let s = SurfaceSettings {
         offset: NormalOffset::Absolute(0.01),
         subsample: Subsample::FarthestPoint(total / 4),
     };
-    let a = field_constraints(&isomorph_common::Shape::sphere(0.3), &Aabb::cube(0.5), 64, &s).unwrap();
-    let b = field_constraints(&isomorph_common::Shape::torus(0.3, 0.12), &Aabb::cube(0.5), 64, &s).unwrap();
+    [isomorph_common::Shape::sphere(0.3), isomorph_common::Shape::torus(0.3, 0.12)]
+        .map(|shape| field_constraints(&shape, &Aabb::cube(0.5), 64, &s).unwrap())
+}
+
+/// The 4D constraints of the reference case with `total` constraints.
+fn constraints(total: usize) -> Vec<isomorph_rbf::Constraint<4>> {
+    let [a, b] = shapes(total);
     let mut all = lift::<3, 4>(&a, &[0.0]);
     all.extend(lift::<3, 4>(&b, &[1.0]));
     all
+}
+
+/// The reference morph (sphere at `t = 0`, torus at `t = 1`).
+fn reference_morph(total: usize, kernel: Kernel) -> RbfMorph {
+    let [a, b] = shapes(total);
+    let settings =
+        TransformSettings { fit: FitSettings::default().with_kernel(kernel), ..Default::default() };
+    RbfMorph::from_constraints(&a, &b, &settings).unwrap()
 }
 
 /// The fit (projection, Cholesky, rcond estimate, residual check) at 2000 to
@@ -63,8 +79,7 @@ fn eval_grid(c: &mut Criterion) {
                     .unwrap();
             group.throughput(Throughput::Elements(u64::from(n).pow(3)));
             group.bench_function(BenchmarkId::new(total.to_string(), n), |b| {
-                let slice = slice
-                    .get_or_init(|| RbfMorph::sphere_torus(total / 4, kernel).unwrap().slice(0.5).unwrap());
+                let slice = slice.get_or_init(|| reference_morph(total, kernel).slice(0.5).unwrap());
                 b.iter(|| grid.fill_from(black_box(slice)))
             });
         }
@@ -79,7 +94,7 @@ fn polygonize_slice(c: &mut Criterion) {
     let mut group = c.benchmark_group("polygonize/sphere_torus_4d");
     group.sample_size(10);
     let total = 8000usize;
-    let morph = RbfMorph::sphere_torus(total / 4, Kernel::ThinPlate).unwrap();
+    let morph = reference_morph(total, Kernel::ThinPlate);
     let slice = morph.slice(0.5).unwrap();
     let settings = SparseSettings::default();
     group.bench_function(BenchmarkId::new(total.to_string(), 64), |b| {

@@ -283,29 +283,6 @@ impl RbfMorph {
         Ok(Self { interpolant, separation: settings.separation, bounds, report })
     }
 
-    /// The reference case: a sphere (radius 0.3) at `t = 0` and a
-    /// torus (R = 0.3, r = 0.12, around z) at `t = 1`, each with
-    /// `points_per_shape` farthest-point samples of its surface (polygonized
-    /// at 64³ over `[-0.5, 0.5]³`) giving a boundary constraint and an inward
-    /// normal constraint at offset 0.01: `4 · points_per_shape` constraints
-    /// in 4D, with a degree-one polynomial.
-    ///
-    /// # Errors
-    /// As [`RbfMorph::from_constraints`].
-    pub fn sphere_torus(points_per_shape: usize, kernel: crate::Kernel) -> Result<Self, RbfError> {
-        use crate::constraints::field_constraints;
-        use isomorph_common::Shape;
-        let s = SurfaceSettings {
-            offset: NormalOffset::Absolute(0.01),
-            subsample: Subsample::FarthestPoint(points_per_shape),
-        };
-        let a = field_constraints(&Shape::sphere(0.3), &Aabb::cube(0.5), 64, &s)?;
-        let b = field_constraints(&Shape::torus(0.3, 0.12), &Aabb::cube(0.5), 64, &s)?;
-        let settings =
-            TransformSettings { fit: FitSettings::default().with_kernel(kernel), ..Default::default() };
-        Self::from_constraints(&a, &b, &settings)
-    }
-
     /// The 4D interpolant (its report tells the conditioning).
     pub fn interpolant(&self) -> &Interpolant<4> {
         &self.interpolant
@@ -446,8 +423,17 @@ mod tests {
     use isomorph_common::mesh::distance::surface_distance;
     use isomorph_common::{Field3, Shape};
 
+    /// A sphere (radius 0.3) at `t = 0` and a torus (R = 0.3, r = 0.12) at
+    /// `t = 1`, `n` farthest-point surface samples each, normal offset 0.01.
     fn reference(n: usize, kernel: crate::Kernel) -> RbfMorph {
-        RbfMorph::sphere_torus(n, kernel).unwrap()
+        use crate::constraints::field_constraints;
+        let s =
+            SurfaceSettings { offset: NormalOffset::Absolute(0.01), subsample: Subsample::FarthestPoint(n) };
+        let a = field_constraints(&Shape::sphere(0.3), &Aabb::cube(0.5), 64, &s).unwrap();
+        let b = field_constraints(&Shape::torus(0.3, 0.12), &Aabb::cube(0.5), 64, &s).unwrap();
+        let settings =
+            TransformSettings { fit: FitSettings::default().with_kernel(kernel), ..Default::default() };
+        RbfMorph::from_constraints(&a, &b, &settings).unwrap()
     }
 
     #[test]

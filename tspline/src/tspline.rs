@@ -1,7 +1,7 @@
 //! The T-spline level-set function `f(x) = Σ c_i B_i(x) / Σ B_i(x)` (paper
 //! eq. 1) over a fixed [`TMesh`], as a [`Field3`].
 
-use crate::basis::{Eval, LocalBasis, blend, rational_derivatives};
+use crate::basis::{Eval, LocalBasis, blend};
 use crate::error::TsplineError;
 use crate::tmesh::TMesh;
 use glam::{DVec3, Vec3};
@@ -90,9 +90,10 @@ impl TSpline {
         SCRATCH.with(|s| s.borrow_mut().value(&self.mesh, &self.coeffs, p))
     }
 
-    /// Reference evaluation: the sums over **all** anchors (O(n) per point).
-    /// Agrees with [`TSpline::eval`]; for tests and verification.
-    pub fn eval_brute_force(&self, p: DVec3) -> Eval {
+    /// Reference evaluation: the sums over **all** anchors (O(n) per point),
+    /// for the tests that check [`TSpline::eval`].
+    #[cfg(test)]
+    fn eval_brute_force(&self, p: DVec3) -> Eval {
         let p = p.clamp(DVec3::splat(-1.0), DVec3::ONE);
         let (mut n, mut dn, mut hn) = (0.0, DVec3::ZERO, [0.0; 6]);
         let (mut d, mut dd, mut hd) = (0.0, DVec3::ZERO, [0.0; 6]);
@@ -110,7 +111,7 @@ impl TSpline {
         if d <= 0.0 {
             return Eval::default();
         }
-        rational_derivatives(n, dn, &hn, d, dd, &hd)
+        crate::basis::rational_derivatives(n, dn, &hn, d, dd, &hd)
     }
 
     /// `Σ B_i(p)` over all anchors (the normalization denominator; > 0 on `D`).
