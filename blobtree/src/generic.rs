@@ -468,6 +468,7 @@ impl BlobMorph {
         control: &Control,
     ) -> Result<Self, BlobMorphError> {
         let (a, b) = (as_tree(source, Side::Source)?, as_tree(target, Side::Target)?);
+        let warnings = isomorph_common::validate_inputs(source, target, control)?;
         control.install(|| {
             let mut stages = Stages::start();
             control.progress("correspondence", None, String::new);
@@ -476,7 +477,7 @@ impl BlobMorph {
             stages.lap("correspondence");
             let bounds = Self::support(&generic, control)?;
             stages.lap("bounds");
-            let report = Self::report_of(&generic).with_stages(stages);
+            let report = Self::report_of(&generic).with_stages(stages).with_warnings(warnings);
             Ok(Self { generic, bounds, report })
         })
     }

@@ -21,8 +21,10 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 pub enum GridError {
     /// The grid would need more memory than the configured limit allows.
     #[error(
-        "grid of {dims} nodes needs {requested} bytes, over the limit of {limit} bytes; \
-         lower the resolution or raise the limit with set_memory_limit"
+        "a grid of {dims} nodes needs {}, over the memory limit of {}; lower the resolution \
+         or raise the memory limit",
+        Bytes(*requested),
+        Bytes(*limit)
     )]
     TooLarge {
         /// Requested node counts.
@@ -76,19 +78,77 @@ pub enum GridError {
     },
 }
 
-/// Default memory limit for one grid: 8 GiB.
+/// Default memory limit for one grid or dense system: 8 GiB.
 pub const DEFAULT_MEMORY_LIMIT: usize = 8 << 30;
 
 static MEMORY_LIMIT: AtomicUsize = AtomicUsize::new(DEFAULT_MEMORY_LIMIT);
 
-/// Sets the largest number of bytes one grid may allocate (process-wide).
+/// Sets the largest number of bytes one grid, matrix or other allocation
+/// sized by the input may take (process-wide).
 pub fn set_memory_limit(bytes: usize) {
     MEMORY_LIMIT.store(bytes, Ordering::Relaxed);
 }
 
-/// The largest number of bytes one grid may allocate.
+/// The largest number of bytes one allocation sized by the input may take.
 pub fn memory_limit() -> usize {
     MEMORY_LIMIT.load(Ordering::Relaxed)
+}
+
+/// A byte count printed with a binary unit (`1.5 GiB`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Bytes(pub usize);
+
+impl std::fmt::Display for Bytes {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        const UNITS: [&str; 6] = ["bytes", "KiB", "MiB", "GiB", "TiB", "PiB"];
+        let mut value = self.0 as f64;
+        let mut unit = 0;
+        while value >= 1024.0 && unit + 1 < UNITS.len() {
+            value /= 1024.0;
+            unit += 1;
+        }
+        if unit == 0 { write!(f, "{} bytes", self.0) } else { write!(f, "{value:.1} {}", UNITS[unit]) }
+    }
+}
+
+/// A computation sized by its input would need more memory than the limit
+/// ([`set_memory_limit`]) allows. Raised before anything is allocated.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{what} needs {}, over the memory limit of {}; {advice} or raise the memory limit", Bytes(*requested), Bytes(*limit))]
+pub struct MemoryLimitError {
+    /// What would be allocated (e.g. "the dense RBF system of 40000 constraints").
+    pub what: String,
+    /// Bytes it would need (saturated at `usize::MAX`).
+    pub requested: usize,
+    /// The limit in force.
+    pub limit: usize,
+    /// Which input to lower (e.g. "use fewer points").
+    pub advice: &'static str,
+}
+
+/// Checks that `requested` bytes for `what` fit the memory limit, before
+/// allocating them; compute `requested` with saturating arithmetic so an
+/// absurd size fails here instead of wrapping.
+///
+/// ```
+/// use isomorph_common::reserve_memory;
+/// assert!(reserve_memory(|| "a small table".into(), 1 << 10, "use a smaller table").is_ok());
+/// let err = reserve_memory(|| "a huge table".into(), usize::MAX, "use a smaller table").unwrap_err();
+/// assert!(err.to_string().contains("use a smaller table"));
+/// ```
+///
+/// # Errors
+/// [`MemoryLimitError`] naming `what`, the bytes and `advice`.
+pub fn reserve_memory(
+    what: impl FnOnce() -> String,
+    requested: usize,
+    advice: &'static str,
+) -> Result<(), MemoryLimitError> {
+    let limit = memory_limit();
+    if requested > limit {
+        return Err(MemoryLimitError { what: what(), requested, limit, advice });
+    }
+    Ok(())
 }
 
 /// Allocates `len` copies of `value`, checked against the memory limit.

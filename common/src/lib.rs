@@ -82,7 +82,8 @@ pub use control::{CancelToken, Control, Progress};
 pub use field::{Bounded, Field3, GRADIENT_STEP};
 pub use glam;
 pub use grid::{
-    DEFAULT_MEMORY_LIMIT, Grid2, Grid3, GridError, lattice_for_box, memory_limit, set_memory_limit,
+    Bytes, DEFAULT_MEMORY_LIMIT, Grid2, Grid3, GridError, MemoryLimitError, lattice_for_box, memory_limit,
+    reserve_memory, set_memory_limit,
 };
 pub use mesh::trimesh::{MeshError, TriMesh};
 pub use morph::{
@@ -91,5 +92,5 @@ pub use morph::{
     check, check_time, placed_bounds,
 };
 pub use shape::{PlacedShape, Shape, ShapeError};
-pub use solid::{DistanceField, Implicit, Solid};
+pub use solid::{DistanceField, Implicit, PROBE_RESOLUTION, Solid, validate_inputs};
 pub use transform::{AffineParts, AffinePath, TransformError};

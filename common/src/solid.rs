@@ -30,7 +30,7 @@ use crate::control::Control;
 use crate::fast_marching::{FastMarchingSettings, redistance};
 use crate::grid::lattice_for_box;
 use crate::marching_cubes::marching_cubes;
-use crate::morph::MorphError;
+use crate::morph::{MorphError, Side};
 use crate::scan_conversion::scan_convert;
 use crate::sdf::MeshSdf;
 use crate::{Aabb, Field3, Grid3, Shape, TriMesh};
@@ -167,6 +167,99 @@ impl Solid {
         Ok(Self(Arc::new(Repr::Implicit { field, bounds })))
     }
 
+    /// Checks that the solid has a surface to morph, the same way for every
+    /// method (each method's constructor calls it through
+    /// [`validate_inputs`]), and returns warnings about what is usable but
+    /// unusual.
+    ///
+    /// - A closed mesh must enclose a positive volume: an inside-out mesh
+    ///   (faces pointing inward) is [`MorphError::InsideOut`], a flat one
+    ///   (a single polygon, all vertices coplanar) is
+    ///   [`MorphError::EmptyShape`].
+    /// - An open or non-manifold mesh is accepted with a warning (its inside
+    ///   comes from the generalized winding number) when some node of a
+    ///   [`PROBE_RESOLUTION`]-node probe grid over its box is inside it, and
+    ///   is [`MorphError::EmptyShape`] otherwise (e.g. a single triangle).
+    /// - A volume, analytic shape or implicit must be positive somewhere and
+    ///   negative somewhere on its own grid (volumes) or on the probe grid.
+    ///
+    /// # Errors
+    /// As above, and [`MorphError::Cancelled`].
+    pub fn validate(&self, side: Side, control: &Control) -> Result<Vec<String>, MorphError> {
+        control.check()?;
+        let empty = |detail: String| MorphError::EmptyShape { side, detail };
+        let probe = |field: &dyn Field3| -> Result<(bool, bool), MorphError> {
+            let grid = control
+                .install(|| Grid3::sample_box(field, &self.bounds().padded(0.05), PROBE_RESOLUTION))?;
+            Ok((grid.data().iter().any(|&v| v > 0.0), grid.data().iter().any(|&v| v <= 0.0)))
+        };
+        let mut warnings = Vec::new();
+        match &*self.0 {
+            Repr::Mesh { mesh, sdf } => {
+                let diagonal = f64::from(mesh.bounds().size().length());
+                if !(diagonal > 0.0) {
+                    return Err(empty("all its vertices coincide".into()));
+                }
+                let edges = mesh.edge_stats();
+                if edges.boundary_edges == 0 && edges.nonmanifold_edges == 0 {
+                    let volume = mesh.signed_volume();
+                    let negligible = 1e-9 * diagonal.powi(3);
+                    if volume < -negligible {
+                        return Err(MorphError::InsideOut { side, volume });
+                    }
+                    if volume <= negligible {
+                        return Err(empty(format!(
+                            "the closed mesh encloses no volume ({volume:.3e}; is it flat?)"
+                        )));
+                    }
+                    if edges.misoriented_edges > 0 {
+                        warnings.push(format!(
+                            "the {side} mesh has {} inconsistently oriented edges; its inside comes \
+                             from the generalized winding number",
+                            edges.misoriented_edges
+                        ));
+                    }
+                } else {
+                    if !probe(sdf)?.0 {
+                        return Err(empty(format!(
+                            "the open mesh ({} boundary edges) encloses nothing: no node of a {PROBE_RESOLUTION}³ \
+                             probe grid over its box has winding number above ½",
+                            edges.boundary_edges
+                        )));
+                    }
+                    warnings.push(format!(
+                        "the {side} mesh is open or non-manifold ({} boundary, {} non-manifold edges); its \
+                         inside comes from the generalized winding number",
+                        edges.boundary_edges, edges.nonmanifold_edges
+                    ));
+                }
+            }
+            Repr::Volume(grid) => {
+                if !grid.data().iter().any(|&v| v > 0.0) {
+                    return Err(empty("no node of the distance volume is inside (positive)".into()));
+                }
+                if !grid.data().iter().any(|&v| v <= 0.0) {
+                    return Err(empty("every node of the distance volume is inside: no surface".into()));
+                }
+            }
+            Repr::Shape(shape) => match probe(shape)? {
+                (false, _) => {
+                    return Err(empty(format!("no node of a {PROBE_RESOLUTION}³ probe grid is inside it")));
+                }
+                (_, false) => return Err(empty("it fills its whole box: no surface".into())),
+                _ => {}
+            },
+            Repr::Implicit { field, .. } => match probe(field.as_ref())? {
+                (false, _) => {
+                    return Err(empty(format!("no node of a {PROBE_RESOLUTION}³ probe grid is inside it")));
+                }
+                (_, false) => return Err(empty("it fills its whole box: no surface".into())),
+                _ => {}
+            },
+        }
+        Ok(warnings)
+    }
+
     /// `"mesh"`, `"distance volume"`, `"analytic shape"` or `"implicit"`.
     pub fn kind(&self) -> &'static str {
         match &*self.0 {
@@ -293,6 +386,21 @@ impl Solid {
     }
 }
 
+/// Nodes along the longest edge of the probe grid [`Solid::validate`]
+/// samples to find an inside.
+pub const PROBE_RESOLUTION: u32 = 24;
+
+/// Validates both inputs of a morph ([`Solid::validate`]) and returns their
+/// warnings; every method's constructor calls it first.
+///
+/// # Errors
+/// As [`Solid::validate`], for the source first.
+pub fn validate_inputs(source: &Solid, target: &Solid, control: &Control) -> Result<Vec<String>, MorphError> {
+    let mut warnings = source.validate(Side::Source, control)?;
+    warnings.extend(target.validate(Side::Target, control)?);
+    Ok(warnings)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -334,6 +442,45 @@ mod tests {
         let differ =
             raw.data().iter().zip(d.data()).filter(|(a, b)| (*a - *b).abs() > 0.1 * d.spacing()).count();
         assert!(differ > raw.len() / 10, "the raw CSG field is not a distance: {differ} nodes differ");
+    }
+
+    #[test]
+    fn unusable_meshes_are_refused_the_same_way() {
+        let control = Control::new();
+        let check = |mesh: TriMesh| Solid::mesh(mesh).unwrap().validate(Side::Target, &control);
+        let sphere = uv_sphere(Vec3::ZERO, 0.3, 16, 32);
+        assert_eq!(check(sphere.clone()).unwrap(), Vec::<String>::new());
+        // Inside out: every triangle reversed.
+        let mut flipped = sphere.clone();
+        flipped.triangles.iter_mut().for_each(|t| t.swap(1, 2));
+        assert!(
+            matches!(check(flipped), Err(MorphError::InsideOut { side: Side::Target, volume }) if volume < 0.0)
+        );
+        // A single triangle, and a flat 200-gon (fan-triangulated): no inside.
+        let triangle = TriMesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]]).unwrap();
+        assert!(matches!(check(triangle), Err(MorphError::EmptyShape { side: Side::Target, .. })));
+        let ring: Vec<Vec3> =
+            (0..200).map(|i| Vec3::new((i as f32 * 0.0314).cos(), (i as f32 * 0.0314).sin(), 0.0)).collect();
+        let fan = (1..199).map(|i| [0, i, i + 1]).collect();
+        assert!(matches!(check(TriMesh::new(ring, fan).unwrap()), Err(MorphError::EmptyShape { .. })));
+        // An open sphere (a band of triangles removed) still has an inside: a warning.
+        let mut open = sphere;
+        open.triangles.truncate(open.triangles.len() - 32);
+        let warnings = check(open).unwrap();
+        assert!(warnings.len() == 1 && warnings[0].contains("open"), "{warnings:?}");
+    }
+
+    #[test]
+    fn empty_volumes_and_implicits_are_refused() {
+        let control = Control::new();
+        let outside = Grid3::new(glam::UVec3::splat(8), Vec3::ZERO, 0.1, -1.0f32).unwrap();
+        let inside = Grid3::new(glam::UVec3::splat(8), Vec3::ZERO, 0.1, 1.0f32).unwrap();
+        for grid in [outside, inside] {
+            let err = Solid::volume(grid).unwrap().validate(Side::Source, &control).unwrap_err();
+            assert!(matches!(err, MorphError::EmptyShape { side: Side::Source, .. }), "{err}");
+        }
+        let sphere = Solid::shape(Shape::sphere(0.3));
+        assert!(validate_inputs(&sphere, &sphere, &control).unwrap().is_empty());
     }
 
     #[test]

@@ -6,7 +6,9 @@ use crate::{Curvature, EvolveSettings, FrameSchedule, LevelSetError, LevelSetMor
 use crate::{SolverKind, SpeedGrid, evolve};
 use isomorph_common::alignment::{AlignMode, align};
 use isomorph_common::glam::Affine3A;
-use isomorph_common::{AffinePath, Control, Morph, MorphError, Solid, Stages, check, lattice_for_box};
+use isomorph_common::{
+    AffinePath, Control, Morph, MorphError, Solid, Stages, check, lattice_for_box, validate_inputs,
+};
 
 /// How the source is placed on the target before evolving (Breen §6.2).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -101,6 +103,7 @@ impl LevelSetMorph {
         control: &Control,
     ) -> Result<Self, LevelSetError> {
         settings.validate()?;
+        let warnings = validate_inputs(source, target, control)?;
         let mut stages = Stages::start();
         let res = settings.resolution;
         let map = match settings.align {
@@ -148,7 +151,7 @@ impl LevelSetMorph {
         };
         let mut morph = evolve(&embedding, &speed, placement, &evolve_settings, control)?;
         let evolution = std::mem::take(&mut morph.report_mut().stages);
-        let mut report = morph.report().clone().with_stages(stages);
+        let mut report = morph.report().clone().with_stages(stages).with_warnings(warnings);
         report.stages.extend(evolution);
         if let Align::Auto | Align::Map(_) = settings.align {
             report = report.with_detail("aligned", true);

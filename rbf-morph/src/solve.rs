@@ -308,6 +308,7 @@ fn solve_ordered(
     if n < m {
         return Err(RbfError::TooFewConstraints { got: n, needed: m, dim });
     }
+    reserve_system(n, slab_end.is_some())?;
     let qr = PolyQr::new(positions, dim)?;
     let k = n - m;
     let mut g = values.to_vec();
@@ -375,6 +376,20 @@ fn solve_ordered(
         return Err(RbfError::Singular { rcond });
     }
     Ok(Solution { weights, poly: rhs, factorization, rcond })
+}
+
+/// Checks the dense system's memory (the `n × n` matrix of f64, and the
+/// slab preconditioner's diagonal-block factors when it is tried) against the
+/// memory limit before anything is allocated.
+fn reserve_system(n: usize, slab: bool) -> Result<(), RbfError> {
+    let matrices = if slab { 2 } else { 1 };
+    let requested = n.saturating_mul(n).saturating_mul(size_of::<f64>()).saturating_mul(matrices);
+    isomorph_common::reserve_memory(
+        || format!("the dense interpolation system of {n} constraints"),
+        requested,
+        "use fewer constraints (points per shape, or a coarser image)",
+    )
+    .map_err(|e| RbfError::from(isomorph_common::MorphError::from(e)))
 }
 
 /// Factors the projected block `B` (the trailing `k × k` block of the

@@ -206,6 +206,7 @@ impl RbfMorph {
         control: &Control,
     ) -> Result<Self, RbfError> {
         settings.validate()?;
+        let warnings = isomorph_common::validate_inputs(source, target, control)?;
         control.install(|| {
             let mut stages = Stages::start();
             let surface = SurfaceSettings {
@@ -230,7 +231,7 @@ impl RbfMorph {
             let mut morph = Self::from_constraints(&sides[0], &sides[1], &transform)?;
             control.check()?;
             stages.lap("fit");
-            morph.report = morph.report.with_stages(stages);
+            morph.report = morph.report.with_stages(stages).with_warnings(warnings);
             Ok(morph)
         })
     }

@@ -410,12 +410,15 @@ impl TsplineMorph {
         control: &Control,
     ) -> Result<Self, TsplineError> {
         settings.validate()?;
+        let warnings = isomorph_common::validate_inputs(source, target, control)?;
         let mut stages = Stages::start();
         let res = settings.surface_resolution;
         control.progress("surfaces", None, String::new);
         let (a, b) = (source.surface(res, control)?, target.surface(res, control)?);
         stages.lap("surfaces");
-        control.install(|| morph_on_pool(&a, &b, settings, control, stages))
+        let mut morph = control.install(|| morph_on_pool(&a, &b, settings, control, stages))?;
+        morph.report.warnings.extend(warnings);
+        Ok(morph)
     }
 }
 

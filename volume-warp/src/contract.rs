@@ -160,6 +160,7 @@ impl WarpMorph {
         control: &Control,
     ) -> Result<Self, WarpError> {
         settings.validate()?;
+        let warnings = isomorph_common::validate_inputs(source, target, control)?;
         control.install(|| {
             let mut stages = Stages::start();
             let res = settings.resolution;
@@ -210,7 +211,8 @@ impl WarpMorph {
                 .with_memory(bytes, Some(3 * bytes))
                 .with_detail("spec", settings.spec.name())
                 .with_detail("control points", (controls.x * controls.y * controls.z) as usize)
-                .with_detail("folded cells", folded);
+                .with_detail("folded cells", folded)
+                .with_warnings(warnings);
             if folded > 0 {
                 report = report.with_warnings([format!(
                     "the source map folds over itself in {folded} voxel cells: the warped shape overlaps itself there"

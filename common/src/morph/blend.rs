@@ -60,6 +60,7 @@ impl DistanceBlend {
         control: &Control,
     ) -> Result<Self, MorphError> {
         settings.validate()?;
+        let warnings = crate::validate_inputs(source, target, control)?;
         let mut stages = Stages::start();
         let bounds = source.bounds().union(&target.bounds()).padded(settings.padding);
         control.progress("distance volumes", Some(0.0), String::new);
@@ -69,7 +70,7 @@ impl DistanceBlend {
         stages.lap("distance volumes");
         let mut blend = Self::from_grids(a, b)?;
         blend.report.stages.clear();
-        blend.report = blend.report.with_stages(stages);
+        blend.report = blend.report.with_stages(stages).with_warnings(warnings);
         Ok(blend)
     }
 

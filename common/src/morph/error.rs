@@ -6,7 +6,7 @@ use crate::alignment::AlignError;
 use crate::fast_marching::FastMarchingError;
 use crate::scan_conversion::ScanError;
 use crate::sdf::SdfError;
-use crate::{GridError, MeshError, TransformError};
+use crate::{GridError, MemoryLimitError, MeshError, TransformError};
 use glam::Vec3;
 use std::fmt;
 
@@ -84,6 +84,18 @@ pub enum MorphError {
         /// What was found (e.g. "no grid node is inside it").
         detail: String,
     },
+    /// A closed mesh whose faces point inward: its signed volume is
+    /// negative, so its inside (positive) region is the unbounded outside.
+    #[error(
+        "the {side} mesh is inside out (signed volume {volume:.3e}): its faces point inward; reverse \
+         the triangles' vertex order"
+    )]
+    InsideOut {
+        /// Which input.
+        side: Side,
+        /// The mesh's signed volume (negative), cubed world units.
+        volume: f64,
+    },
     /// Parts of the target that the source does not overlap, which a method
     /// that grows the source cannot reach (Breen & Whitaker §4).
     #[error(
@@ -117,6 +129,9 @@ pub enum MorphError {
     /// do not share a lattice.
     #[error(transparent)]
     Grid(#[from] GridError),
+    /// A computation sized by the input would exceed the memory limit.
+    #[error(transparent)]
+    Memory(#[from] MemoryLimitError),
     /// A mesh input is invalid.
     #[error(transparent)]
     Mesh(#[from] MeshError),
