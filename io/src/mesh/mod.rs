@@ -4,7 +4,10 @@
 //! [`read_mesh`] picks the format from the file extension and, for PLY and
 //! STL, the encoding from the content; [`read_mesh_from`] and the per-format
 //! readers [`read_obj`], [`read_ply`] and [`read_stl`] parse any reader (for
-//! example bytes in memory). [`write_mesh`] and [`write_mesh_to`] write every
+//! example bytes in memory). [`read_mesh_with_warnings`] and
+//! [`read_mesh_from_with_warnings`] also return what the reader accepted
+//! but had to say ([`MeshRead`], [`ReadWarning`]); the other readers drop
+//! those warnings. [`write_mesh`] and [`write_mesh_to`] write every
 //! [`MeshFormat`].
 //!
 //! # What is kept
@@ -16,34 +19,66 @@
 //!   each vertex always gets the same one) and PLY (`nx ny nz`). Non-finite
 //!   normals are dropped (the normals are then `None`), because they can be
 //!   recomputed with [`TriMesh::compute_normals`].
-//! - STL stores a triangle soup; the reader welds bit-identical positions
-//!   (treating `-0.0` as `0.0`), numbered in order of first appearance, so a
-//!   closed mesh whose vertices have distinct positions reads back closed,
-//!   with its vertex count (renumbered).
-//!   Face normals in STL are ignored on read and recomputed on write.
+//! - STL stores a triangle soup; the reader welds positions that differ by at
+//!   most a tolerance `τ = min(4 ε M, 10⁻⁶ D)` per coordinate (4 `f32` ulps of
+//!   the largest coordinate magnitude `M`, capped at a millionth of the
+//!   bounding-box diagonal `D`; see [`read_stl`]), so a closed CAD part whose
+//!   exporter left rounding noise (`2.4e-18` for `0`) reads back closed.
+//!   Vertices are numbered in order of first appearance and keep their first
+//!   occurrence's position; welds that were not bit-identical are reported
+//!   ([`ReadWarning::StlWeldedWithinTolerance`]). Every `solid` of an ASCII
+//!   STL is read. Face normals in STL are ignored on read and recomputed on
+//!   write.
+//! - What is not kept is said: OBJ geometry this reader does not build (`l`,
+//!   `p`, curves, surfaces) and unknown statements, dropped normal or texture
+//!   references, and data after the declared PLY elements or binary STL
+//!   triangles, or after the last ASCII STL `endsolid`, each give a
+//!   [`ReadWarning`].
 //!
 //! # Hostile input
 //! Malformed, truncated or random input gives a [`MeshIoError`] naming the
-//! problem and, where known, the line (OBJ, ASCII PLY), the facet (ASCII
-//! STL) or the byte offset (binary formats); it never panics. Element counts from a header are checked
-//! against the bytes actually present before anything is allocated from
-//! them ([`MeshIoError::TooLarge`]); PLY and STL input is first read into
-//! memory, so allocation follows the real data, never a claim. Every mesh
-//! returned has passed [`TriMesh::validate`]: indices are in range and
-//! positions are finite.
+//! problem and, where known, the line (OBJ, ASCII PLY, ASCII STL) or the byte
+//! offset (binary formats); it never panics, and no claim in the data makes
+//! a reader allocate beyond the data itself:
+//! - Element counts from a header are checked against the bytes actually
+//!   present before anything is allocated from them
+//!   ([`MeshIoError::TooLarge`]); PLY and STL input is first read into
+//!   memory, so allocation follows the real data, never a claim.
+//! - OBJ is read line by line, a line holding at most
+//!   [`OBJ_MAX_LINE_BYTES`] (4 MiB): a "line" without end (a huge file
+//!   without line breaks, a device) is a [`MeshIoError::LineTooLong`] naming
+//!   the line, not an unbounded buffer. Lines end at `\n`, `\r\n` or a
+//!   lone `\r`; `\` at the end of a line joins the next one.
+//! - Data that is not the format is refused rather than read as an empty
+//!   mesh: OBJ with a control character (binary data) or in which no line is
+//!   an OBJ statement; a PLY without `ply` first; a PLY header declaring an
+//!   element, or a property of one element, twice (its columns would shift).
+//! - STL encoding: binary when the size is exactly `84 + 50·n` for the
+//!   header's count `n` (whatever the header text, `solid` included); ASCII
+//!   when it starts with `solid` and is text (bytes that are not UTF-8 are
+//!   fine, e.g. in names); binary otherwise. A binary file with trailing
+//!   bytes is read with a warning that says whether those bytes look like
+//!   triangles the header did not count.
+//!
+//! Every mesh returned has passed [`TriMesh::validate`]: indices are in range
+//! and positions are finite.
 //!
 //! # Crates used, and where not
 //! - **PLY**: `ply-rs-bw` parses the header and decodes each element record
 //!   (ASCII and binary, any scalar and list types). The element loop is ours:
 //!   it checks each header count against the remaining bytes first and
-//!   reports the byte offset or line of a broken record. Writing uses its
-//!   `Writer` record by record.
-//! - **STL**: `stl_io` parses ASCII STL and writes binary STL. Binary STL is
-//!   read here (50-byte records, a dozen lines) because `stl_io` decides
+//!   reports the byte offset or line of a broken record. Duplicate names are
+//!   checked here (`ply-rs-bw` keeps one silently). Writing uses its `Writer`
+//!   record by record.
+//! - **STL**: `stl_io` writes binary STL; both encodings are read here.
+//!   Binary STL (50-byte records, a dozen lines) because `stl_io` decides
 //!   "ASCII" for any file starting with `solid `, which many binary exporters
 //!   put in the 80-byte header, and it does not check the triangle count
-//!   against the file size. ASCII STL is written here (`stl_io` writes binary
-//!   only).
+//!   against the file size. ASCII STL (a small token parser) because
+//!   `stl_io` 0.11 stops after the first `solid … endsolid` block, so CAD
+//!   multi-body files lost every body but the first, refuses text that is
+//!   not UTF-8, and reports errors without a line. ASCII STL is written here
+//!   (`stl_io` writes binary only).
 //! - **OBJ**: read by a small parser here rather than with `tobj`, because
 //!   `tobj` (4.0) renumbers vertices in order of first use and drops
 //!   unreferenced ones (so OBJ and PLY of the same mesh would not give the
