@@ -63,8 +63,11 @@ type Facet = [Vec3; 3];
 /// # Errors
 /// [`MeshIoError::Parse`] for a malformed facet or a non-finite coordinate
 /// (with the byte offset for binary, the line and facet number for ASCII) or
-/// binary data shorter than its header; [`MeshIoError::TooLarge`] when the
-/// binary triangle count does not fit in the data;
+/// binary data shorter than its header, and for data that starts with
+/// `solid` but holds a control byte (so it is not ASCII) and does not fit as
+/// binary either, the offset and line of that byte;
+/// [`MeshIoError::TooLarge`] when the binary triangle count does not fit in
+/// the data;
 /// [`MeshIoError::Unsupported`] beyond `u32::MAX` distinct vertices;
 /// [`MeshIoError::Io`] when reading fails.
 pub fn read_stl(reader: impl Read) -> Result<TriMesh, MeshIoError> {
@@ -77,7 +80,7 @@ pub(super) fn read(mut reader: impl Read) -> Result<MeshRead, MeshIoError> {
     reader.read_to_end(&mut bytes)?;
     let mut warnings = Vec::new();
     let soup = if is_binary(&bytes) {
-        read_binary(&bytes, &mut warnings)?
+        read_binary(&bytes, &mut warnings).map_err(|e| ascii_hint(&bytes, e))?
     } else {
         read_ascii(&bytes, &mut warnings)?
     };
@@ -98,6 +101,32 @@ fn is_binary(bytes: &[u8]) -> bool {
     let solid = bytes.trim_ascii_start().get(..5).is_some_and(|w| w.eq_ignore_ascii_case(b"solid"));
     let end = bytes.iter().rposition(|&b| b != 0).map_or(0, |i| i + 1);
     exact_size || !solid || bytes[..end].iter().any(|&b| is_control(b))
+}
+
+/// When data that starts with `solid` failed as binary STL for its size:
+/// an error naming the control byte that kept it from being read as ASCII,
+/// as well as the binary reading, rather than a bare (bogus) triangle count.
+fn ascii_hint(bytes: &[u8], error: MeshIoError) -> MeshIoError {
+    let solid = bytes.trim_ascii_start().get(..5).is_some_and(|w| w.eq_ignore_ascii_case(b"solid"));
+    let binary = match &error {
+        MeshIoError::TooLarge { claimed, available, .. } => {
+            format!("its header claims {claimed} triangles where the data holds at most {available}")
+        }
+        _ if bytes.len() < HEADER => format!("it is shorter than the {HEADER}-byte header"),
+        _ => return error,
+    };
+    match bytes.iter().position(|&b| is_control(b)) {
+        Some(at) if solid => {
+            let line = 1 + bytes[..at].iter().filter(|&&b| b == b'\n').count();
+            let message = format!(
+                "the data starts with 'solid' like ASCII STL, but byte {at} is the control character \
+                 0x{:02x}, which text does not hold; read as binary STL, {binary}",
+                bytes[at]
+            );
+            MeshIoError::parse(FORMAT, Some(line), Some(at as u64), &message)
+        }
+        _ => error,
+    }
 }
 
 /// The corners of binary record `record`.
@@ -565,6 +594,23 @@ mod tests {
             }
             other => panic!("{other:?}"),
         }
+    }
+
+    #[test]
+    fn ascii_that_is_not_text_names_the_byte() {
+        let text = format!("solid x\n{FACET}{FACET}endsolid x\n").into_bytes();
+        let mut bad = text.clone();
+        bad[40] = 0x01;
+        match read_stl(&bad[..]) {
+            Err(e @ MeshIoError::Parse { line: Some(4), offset: Some(40), .. }) => {
+                let message = e.to_string();
+                assert!(message.contains("byte 40 is the control character 0x01"), "{message}");
+                assert!(message.contains("triangles where the data holds at most"), "{message}");
+            }
+            other => panic!("{other:?}"),
+        }
+        let short = b"solid x\n\x02";
+        assert!(read_stl(&short[..]).unwrap_err().to_string().contains("shorter than the 84-byte header"));
     }
 
     #[test]
