@@ -302,7 +302,8 @@ pub enum ReadWarning {
     /// OBJ face corners name a normal (`v//vn`, `v/vt/vn`) while no `vn` is
     /// defined before them; the normal references were dropped.
     #[error(
-        "OBJ: {corners} face corners from line {first_line} on name a normal, but no 'vn' is defined before them; the normal references were dropped"
+        "OBJ: {corners} face corners from line {first_line} on name a normal, but no 'vn' is defined \
+         before them; the normal references were dropped"
     )]
     ObjNormalsDropped {
         /// Face corners concerned.
@@ -314,7 +315,8 @@ pub enum ReadWarning {
     /// defined before them; the references were dropped (texture
     /// coordinates are never kept).
     #[error(
-        "OBJ: {corners} face corners from line {first_line} on name a texture coordinate, but no 'vt' is defined before them; the references were dropped"
+        "OBJ: {corners} face corners from line {first_line} on name a texture coordinate, but no 'vt' is \
+         defined before them; the references were dropped"
     )]
     ObjTexturesDropped {
         /// Face corners concerned.
@@ -325,7 +327,10 @@ pub enum ReadWarning {
     /// OBJ statements skipped: unknown keywords, or geometry this reader does
     /// not build (`l` lines, `p` points, curves and surfaces). One warning
     /// per keyword; past 16 keywords the rest are counted under `"…"`.
-    #[error("OBJ: {lines} '{keyword}' statements from line {first_line} on were skipped ({})", skipped_reason(.keyword))]
+    #[error(
+        "OBJ: {lines} '{keyword}' statements from line {first_line} on were skipped ({})",
+        skipped_reason(.keyword)
+    )]
     ObjStatementsSkipped {
         /// The keyword (lossy UTF-8, at most 32 bytes).
         keyword: String,
@@ -336,7 +341,11 @@ pub enum ReadWarning {
     },
     /// Data after the last element the PLY header declares was ignored
     /// (blank lines after an ASCII payload are not reported).
-    #[error("PLY: {bytes} bytes after the last declared element{} were ignored; the header's element counts may be too small", location(*.line, Some(*.offset)))]
+    #[error(
+        "PLY: {bytes} bytes after the last declared element{} were ignored; the header's element counts \
+         may be too small",
+        location(*.line, Some(*.offset))
+    )]
     PlyTrailingData {
         /// Bytes ignored.
         bytes: u64,
@@ -346,7 +355,10 @@ pub enum ReadWarning {
         line: Option<usize>,
     },
     /// Bytes after the triangles a binary STL header declares were ignored.
-    #[error("binary STL: {bytes} bytes after the {declared} triangles the header declares were ignored{}", uncounted(*.records))]
+    #[error(
+        "binary STL: {bytes} bytes after the {declared} triangles the header declares were ignored{}",
+        uncounted(*.records)
+    )]
     StlTrailingBytes {
         /// The header's triangle count.
         declared: u32,
@@ -368,7 +380,11 @@ pub enum ReadWarning {
     },
     /// STL corners that were close but not bit-identical were welded (see
     /// [`read_stl`] for the tolerance).
-    #[error("STL: {corners} triangle corners were welded to a vertex within {tolerance:e} of them (not bit-identical){}", collapsed(*.collapsed_triangles))]
+    #[error(
+        "STL: {corners} triangle corners were welded to a vertex within {tolerance:e} of them (not \
+         bit-identical){}",
+        collapsed(*.collapsed_triangles)
+    )]
     StlWeldedWithinTolerance {
         /// Corners welded to a vertex at a different position.
         corners: u64,
