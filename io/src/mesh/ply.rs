@@ -28,8 +28,9 @@ const FACE_LISTS: [&str; 2] = ["vertex_indices", "vertex_index"];
 /// are fan-triangulated. The whole input is read into memory first.
 ///
 /// An element or a property of one element declared twice is refused (the
-/// columns after it would shift). Data after the last declared element (more
-/// records than the header counts, or junk) is ignored with
+/// columns after it would shift), and so is an ASCII record line with more
+/// values than its element's properties take. Data after the last declared
+/// element (more records than the header counts, or junk) is ignored with
 /// [`ReadWarning::PlyTrailingData`], blank lines after an ASCII payload
 /// excepted; warnings are dropped here, [`read_mesh_from_with_warnings`]
 /// returns them.
@@ -38,8 +39,8 @@ const FACE_LISTS: [&str; 2] = ["vertex_indices", "vertex_index"];
 ///
 /// # Errors
 /// [`MeshIoError::Parse`] for a malformed header (with its line) or one that
-/// declares an element or property twice, a malformed
-/// or truncated record (with its line for ASCII, its byte offset for binary),
+/// declares an element or property twice, a malformed (in ASCII also an
+/// overlong) or truncated record (with its line for ASCII, its byte offset for binary),
 /// a face with fewer than three vertices or a negative index;
 /// [`MeshIoError::TooLarge`] when an element count cannot fit in the data;
 /// [`MeshIoError::Unsupported`] without `vertex` `x y z`, for a face list of
@@ -324,7 +325,11 @@ impl Payload<'_> {
                 rest = &rest[end..];
                 match std::str::from_utf8(text) {
                     _ if text.is_empty() => Err("the data ends before this record".to_owned()),
-                    Ok(text) => self.parser.read_ascii_element(text, def).map_err(|e| e.to_string()),
+                    Ok(text) => self
+                        .parser
+                        .read_ascii_element(text, def)
+                        .map_err(|e| e.to_string())
+                        .and_then(|record| extra_values(text, def).map(|()| record)),
                     Err(_) => Err("the line is not valid UTF-8".to_owned()),
                 }
             }
@@ -343,6 +348,35 @@ impl Payload<'_> {
                 &format!("'{}' record {index}: {message}", def.name),
             )),
         }
+    }
+}
+
+/// Refuses an ASCII record line holding more values than the properties of
+/// `def` take (`ply-rs-bw` ignores them): the header and the data disagree,
+/// so the values read may be the wrong columns. Called once the record
+/// parsed, so every list count is a valid integer.
+fn extra_values(line: &str, def: &ElementDef) -> Result<(), String> {
+    let mut tokens = line.split_ascii_whitespace();
+    let mut taken = 0usize;
+    for property in def.properties.values() {
+        let values = match property.data_type {
+            PropertyType::Scalar(_) => 1,
+            PropertyType::List(..) => {
+                taken += 1;
+                match tokens.next().map(str::parse::<usize>) {
+                    Some(Ok(count)) => count,
+                    _ => return Ok(()),
+                }
+            }
+        };
+        taken = taken.saturating_add(values);
+        if tokens.by_ref().take(values).count() < values {
+            return Ok(());
+        }
+    }
+    match tokens.count() {
+        0 => Ok(()),
+        extra => Err(format!("{} values where the header's properties take {taken}", taken + extra)),
     }
 }
 
@@ -638,6 +672,23 @@ mod tests {
             .replace("element face 6\n", "element face 6\nproperty uchar x\n")
             .replace("\n4 ", "\n7 4 ");
         assert_eq!(read(&ok).unwrap().triangles.len(), 12);
+    }
+
+    #[test]
+    fn ascii_records_with_extra_values_are_refused() {
+        // A property missing from the header: 4 values per vertex line.
+        let text = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n\
+                    property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
+                    0 0 0\n1 0 0 0.5\n3 0 1 1\n";
+        match read(text) {
+            Err(MeshIoError::Parse { line: Some(11), message, .. }) => {
+                assert_eq!(message, "'vertex' record 1: 4 values where the header's properties take 3")
+            }
+            other => panic!("{other:?}"),
+        }
+        let face = text.replace("1 0 0 0.5", "1 0 0").replace("3 0 1 1", "3 0 1 1 7");
+        assert!(matches!(read(&face), Err(MeshIoError::Parse { line: Some(12), .. })), "{:?}", read(&face));
+        assert_eq!(read(&face.replace("3 0 1 1 7", "3 0 1 1")).unwrap().triangles, vec![[0, 1, 1]]);
     }
 
     #[test]
