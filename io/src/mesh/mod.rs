@@ -52,7 +52,8 @@
 //! - Data that is not the format is refused rather than read as an empty
 //!   mesh: OBJ with a control character (binary data) or in which no line is
 //!   an OBJ statement; a PLY without `ply` first; a PLY header declaring an
-//!   element, or a property of one element, twice (its columns would shift).
+//!   element, or a property of one element, twice, or an ASCII PLY record
+//!   with more values than its properties take (columns would shift).
 //! - STL encoding: binary when the size is exactly `84 + 50·n` for the
 //!   header's count `n` (whatever the header text, `solid` included); ASCII
 //!   when it starts with `solid` and is text (bytes that are not UTF-8 are

@@ -373,6 +373,9 @@ fn weld(soup: &[Facet], warnings: &mut Vec<ReadWarning>) -> Result<TriMesh, Mesh
     // as `0.0`), so only equal values meet.
     let key = |x: f64| if cell > 0.0 { (x / cell).floor() as i64 } else { (x + 0.0).to_bits() as i64 };
     // Last vertex put in each cell; `previous[v]`: the one before it there.
+    // Vertices in one cell are more than `tolerance` apart in some
+    // coordinate, so a cell of `4 tolerance` holds at most 4³ of them: the
+    // work per corner is bounded whatever the input.
     let mut cells: HashMap<[i64; 3], u32> = HashMap::new();
     let mut previous: Vec<u32> = Vec::new();
     let mut positions: Vec<Vec3> = Vec::new();
