@@ -47,6 +47,22 @@
 //! `docs/EXPERIMENTS.md`; bench `mesh_sdf/bunny/128` and
 //! `mesh_sdf/bunny/band/128`).
 //!
+//! # Scale
+//! Squared `f32` distances overflow for meshes larger than about 10¹⁹ and
+//! underflow for meshes smaller than about 10⁻¹⁹, and the inside tests
+//! multiply lengths too. So [`MeshSdf`] works in a normalized frame: it
+//! multiplies the mesh by the power of two that brings its largest
+//! coordinate near 1, and every query point and lattice by the same factor,
+//! then divides the distances by it. Changing exponents only, this is exact:
+//! results are the same as in world units wherever those did not overflow,
+//! and a mesh at any finite scale, from subnormal coordinates to the largest
+//! `f32`, gets the same signs and (scaled) distances as its unit-size copy.
+//! Points too far from the mesh to express in that frame (farther from the
+//! origin than 2⁶⁰ times its largest coordinate) get minus their distance to the centre of its bounding box, which
+//! differs from the true distance by less than `f32` rounding there. A mesh
+//! whose triangles all collapse to one point is refused
+//! ([`SdfError::ZeroExtent`]), as one with non-finite coordinates is.
+//!
 //! # Example
 //! ```
 //! use isomorph_common::sdf::{MeshSdf, SdfSettings, mesh_sdf_grid};
@@ -96,6 +112,13 @@ pub enum SdfError {
     /// A narrow-band width that is not finite and positive.
     #[error("narrow band width {0} is not finite and positive")]
     BadBand(f32),
+    /// Every triangle corner is the same point: there is no surface of
+    /// positive size (also what remains of a small mesh far from the origin
+    /// once `f32` positions have rounded it away).
+    #[error(
+        "the mesh's triangles all collapse to one point; a distance field needs a surface of positive size"
+    )]
+    ZeroExtent,
 }
 
 /// How [`MeshSdf`] decides inside from outside (see the [module docs](self)).
@@ -213,6 +236,12 @@ impl Pseudonormals {
     }
 }
 
+/// Query points farther than this from the origin of a [`MeshSdf`]'s
+/// normalized frame, where the mesh lies within 4 units of the origin, are
+/// measured to the centre of its box instead (relative difference below
+/// 2⁻⁵⁷; the tree's squared distances would overflow beyond 2⁶³).
+const FAR: f32 = 1_152_921_504_606_846_976.0; // 2⁶⁰
+
 /// The inside test of a [`MeshSdf`].
 #[derive(Debug, Clone)]
 enum Sign {
@@ -222,6 +251,9 @@ enum Sign {
 
 /// Signed distance to a triangle mesh (positive inside), usable as a
 /// [`Field3`]; see the [module docs](self).
+///
+/// The tree and the inside test hold the mesh in a normalized frame (see
+/// [Scale](self#scale)); the public methods take and return world units.
 #[derive(Debug, Clone)]
 pub struct MeshSdf {
     bvh: TriangleBvh,
@@ -229,6 +261,9 @@ pub struct MeshSdf {
     closed: bool,
     bounds: Aabb,
     volume: VolumeMode,
+    /// The power of two taking world coordinates to the normalized frame
+    /// (its reciprocal, [`MeshSdf::unit`], takes distances back).
+    scale: f32,
 }
 
 impl MeshSdf {
@@ -236,7 +271,8 @@ impl MeshSdf {
     ///
     /// # Errors
     /// [`SdfError::EmptyMesh`] for a mesh without triangles, [`SdfError::Mesh`]
-    /// for invalid indices or coordinates.
+    /// for invalid indices or non-finite coordinates, [`SdfError::ZeroExtent`]
+    /// when all triangle corners coincide.
     pub fn new(mesh: &TriMesh) -> Result<Self, SdfError> {
         Self::with_settings(mesh, SdfSettings::default())
     }
@@ -250,19 +286,50 @@ impl MeshSdf {
         if mesh.is_empty() {
             return Err(SdfError::EmptyMesh);
         }
+        let (lo, hi) =
+            mesh.triangles.iter().flatten().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &v| {
+                (lo.min(mesh.positions[v as usize]), hi.max(mesh.positions[v as usize]))
+            });
+        if hi == lo {
+            return Err(SdfError::ZeroExtent);
+        }
+        let scale = mesh.unit_scale();
+        let local = mesh.scaled(scale);
         let sign = match settings.sign {
             SignMode::WindingNumber => {
-                Sign::Winding(WindingNumber::new(mesh).with_accuracy(settings.winding_accuracy))
+                Sign::Winding(WindingNumber::new(&local).with_accuracy(settings.winding_accuracy))
             }
-            SignMode::Pseudonormal => Sign::Pseudonormal(Pseudonormals::new(mesh)),
+            SignMode::Pseudonormal => Sign::Pseudonormal(Pseudonormals::new(&local)),
         };
+        let bounds = mesh.bounds();
         Ok(Self {
-            bvh: TriangleBvh::new(mesh),
+            bvh: TriangleBvh::new(&local),
             sign,
             closed: is_closed(mesh),
-            bounds: mesh.bounds(),
+            bounds,
             volume: settings.volume,
+            scale,
         })
+    }
+
+    /// One unit of the normalized frame in world units (exact: a power of two).
+    #[inline]
+    fn unit(&self) -> f32 {
+        1.0 / self.scale
+    }
+
+    /// `p` in the normalized frame, or `None` beyond [`FAR`] (or not finite).
+    #[inline]
+    fn local(&self, p: Vec3) -> Option<Vec3> {
+        let q = p * self.scale;
+        (q.abs().max_element() <= FAR).then_some(q)
+    }
+
+    /// Signed distance of a finite point beyond [`FAR`]: outside, at its
+    /// distance from the box centre (computed in `f64`, which cannot overflow).
+    fn far_away(&self, p: Vec3) -> f32 {
+        let center = 0.5 * (self.bounds.min.as_dvec3() + self.bounds.max.as_dvec3());
+        -((p.as_dvec3() - center).length() as f32)
     }
 
     /// The inside test in use.
@@ -281,28 +348,48 @@ impl MeshSdf {
         self.closed
     }
 
-    /// The nearest surface point to `p`, with its triangle; `None` for a
-    /// non-finite `p`.
+    /// The nearest surface point to `p`, with its triangle, in world units;
+    /// `None` for a non-finite `p` or one farther from the origin than 2⁶⁰
+    /// times the mesh's largest coordinate (see [Scale](self#scale)). The squared distance overflows to infinity
+    /// (or underflows) for distances beyond the `f32` range of squares, about
+    /// 10¹⁹ (or 10⁻¹⁹); [`MeshSdf::signed_distance`] has the distance itself.
     pub fn closest(&self, p: Vec3) -> Option<ClosestPoint> {
-        self.bvh.closest(p)
+        let hit = self.bvh.closest(self.local(p)?)?;
+        Some(ClosestPoint {
+            point: hit.point * self.unit(),
+            distance_squared: hit.distance_squared * self.unit() * self.unit(),
+            ..hit
+        })
     }
 
-    /// True when `p` is inside by the chosen test.
+    /// True when `p` is inside by the chosen test (false for a non-finite `p`).
     pub fn is_inside(&self, p: Vec3) -> bool {
+        self.local(p).is_some_and(|q| self.is_inside_local(q))
+    }
+
+    /// [`MeshSdf::is_inside`] for a point `q` of the normalized frame.
+    fn is_inside_local(&self, q: Vec3) -> bool {
         match &self.sign {
-            Sign::Winding(wn) => wn.is_inside(p),
+            Sign::Winding(wn) => wn.is_inside(q),
             Sign::Pseudonormal(normals) => {
-                self.closest(p).is_some_and(|hit| Self::pseudonormal_inside(normals, p, &hit))
+                self.bvh.closest(q).is_some_and(|hit| Self::pseudonormal_inside(normals, q, &hit))
             }
         }
     }
 
     /// Signed distance at `p` (positive inside); NaN for a non-finite `p`.
     pub fn signed_distance(&self, p: Vec3) -> f32 {
-        self.closest(p).map_or(f32::NAN, |hit| self.signed(p, &hit))
+        if !p.is_finite() {
+            return f32::NAN;
+        }
+        match self.local(p) {
+            Some(q) => self.bvh.closest(q).map_or(f32::NAN, |hit| self.signed(q, &hit) * self.unit()),
+            None => self.far_away(p),
+        }
     }
 
-    /// The signed distance at `p` given its nearest point `hit`.
+    /// The signed distance at `p` given its nearest point `hit`, both in the
+    /// normalized frame.
     fn signed(&self, p: Vec3, hit: &ClosestPoint) -> f32 {
         let distance = hit.distance_squared.sqrt();
         let inside = match &self.sign {
@@ -317,8 +404,49 @@ impl MeshSdf {
     }
 
     /// The exact signed distance at every node of `lattice`, x-fastest
-    /// (see the [module docs](self) for how signs are found).
+    /// (see the [module docs](self) for how signs are found); NaN
+    /// everywhere for a lattice with a non-finite origin or step.
     pub fn sample_lattice(&self, lattice: &Lattice) -> Vec<f32> {
+        match self.local_lattice(lattice) {
+            Some(local) => {
+                let mut out = self.sample_local(&local);
+                out.iter_mut().for_each(|d| *d *= self.unit());
+                out
+            }
+            None => {
+                let (nx, ny) = (lattice.dims.x as usize, lattice.dims.y as usize);
+                let points: Vec<Vec3> = (0..lattice.len())
+                    .map(|n| {
+                        lattice.position((n % nx) as u32, ((n / nx) % ny) as u32, (n / (nx * ny)) as u32)
+                    })
+                    .collect();
+                let mut out = vec![0.0; points.len()];
+                self.values(&points, &mut out);
+                out
+            }
+        }
+    }
+
+    /// `lattice` in the normalized frame; `None` when a node lies beyond
+    /// [`FAR`] there (while the lattice itself is finite and not empty).
+    fn local_lattice(&self, lattice: &Lattice) -> Option<Lattice> {
+        let local = Lattice {
+            dims: lattice.dims,
+            origin: lattice.origin * self.scale,
+            step: lattice.step * self.scale,
+        };
+        let world_finite = lattice.origin.is_finite() && lattice.step.is_finite();
+        if lattice.is_empty() || !world_finite {
+            return Some(local);
+        }
+        let last = lattice.dims - UVec3::ONE;
+        let far = local.position(last.x, last.y, last.z);
+        (local.origin.abs().max_element() <= FAR && far.abs().max_element() <= FAR).then_some(local)
+    }
+
+    /// [`MeshSdf::sample_lattice`] on a lattice of the normalized frame,
+    /// in its units.
+    fn sample_local(&self, lattice: &Lattice) -> Vec<f32> {
         let hits = self.bvh.nearest_on_lattice(lattice).expect("MeshSdf always has triangles");
         let mut out: Vec<f32> = hits.iter().map(|h| h.distance).collect();
         if out.is_empty() || !lattice.origin.is_finite() || !lattice.step.is_finite() {
@@ -376,11 +504,16 @@ impl MeshSdf {
     }
 
     /// The exact signed distance within `width` of the surface, marched
-    /// beyond (closest-point propagation from the band's nearest points).
-    fn sample_band(&self, lattice: &Lattice, width: f32) -> Result<Grid3<f32>, SdfError> {
+    /// beyond (closest-point propagation from the band's nearest points);
+    /// exact everywhere for a lattice beyond the normalized frame's reach.
+    fn sample_band(&self, world: &Lattice, width: f32) -> Result<Grid3<f32>, SdfError> {
         if !(width.is_finite() && width > 0.0) {
             return Err(SdfError::BadBand(width));
         }
+        let Some(lattice) = self.local_lattice(world) else {
+            return Ok(Grid3::from_vec(world.dims, world.origin, world.step.x, self.sample_lattice(world))?);
+        };
+        let (lattice, width) = (&lattice, width * self.scale);
         let hits = self.bvh.nearest_on_lattice_within(lattice, width).ok_or(SdfError::EmptyMesh)?;
         let (nx, ny) = (lattice.dims.x as usize, lattice.dims.y as usize);
         let seeds: Vec<Seed> = hits
@@ -397,7 +530,10 @@ impl MeshSdf {
             .collect();
         drop(hits);
         let settings = FastMarchingSettings { update: Update::ClosestPoint, max_distance: None };
-        Ok(march_with_discs(lattice.dims, lattice.origin, lattice.step.x, &seeds, &settings, false)?)
+        let local = march_with_discs(lattice.dims, lattice.origin, lattice.step.x, &seeds, &settings, false)?;
+        let mut data = local.into_data();
+        data.iter_mut().for_each(|d| *d *= self.unit());
+        Ok(Grid3::from_vec(world.dims, world.origin, world.step.x, data)?)
     }
 }
 
@@ -426,10 +562,16 @@ impl Field3 for MeshSdf {
     /// [`MeshSdf::sample_lattice`] is much faster.
     fn values(&self, points: &[Vec3], out: &mut [f32]) {
         assert_eq!(points.len(), out.len(), "values: points and out differ in length");
+        // Points beyond the normalized frame's reach become NaN there (no hit).
+        let local: Vec<Vec3> = points.iter().map(|&p| self.local(p).unwrap_or(Vec3::NAN)).collect();
         let mut hits = vec![None; points.len()];
-        self.bvh.closest_many(points, &mut hits);
-        for ((o, &p), hit) in out.iter_mut().zip(points).zip(&hits) {
-            *o = hit.map_or(f32::NAN, |hit| self.signed(p, &hit));
+        self.bvh.closest_many(&local, &mut hits);
+        for (((o, &p), &q), hit) in out.iter_mut().zip(points).zip(&local).zip(&hits) {
+            *o = match hit {
+                Some(hit) => self.signed(q, hit) * self.unit(),
+                None if p.is_finite() => self.far_away(p),
+                None => f32::NAN,
+            };
         }
     }
 
@@ -472,7 +614,12 @@ const LINK_MARGIN: f32 = 1e-4;
 /// once per region reached (see the [module docs](self)).
 fn propagate_signs(wn: &WindingNumber, lattice: &Lattice, d: &mut [f32]) {
     let (nx, ny) = (lattice.dims.x as usize, lattice.dims.y as usize);
-    let limits = lattice.step.abs() * (1.0 + LINK_MARGIN) + Vec3::splat(f32::MIN_POSITIVE);
+    // Node positions are rounded to f32: two neighbours can be farther apart
+    // than the step by the rounding of both (a sixteenth of a unit at 10⁶).
+    let last = lattice.dims.saturating_sub(UVec3::ONE);
+    let reach = lattice.origin.abs().max(lattice.position(last.x, last.y, last.z).abs()).max_element();
+    let limits = lattice.step.abs() * (1.0 + LINK_MARGIN)
+        + Vec3::splat(4.0 * f32::EPSILON * reach + f32::MIN_POSITIVE);
     // Two nodes one step apart along an axis share a sign when their
     // surface-free balls overlap: the distances add up to more than the step.
     let linked = |a: f32, b: f32, axis: usize| a + b > limits[axis];
@@ -669,6 +816,155 @@ mod tests {
         assert!(inside > 500, "{inside} nodes inside");
     }
 
+    /// Times the exact volumes of the bunny (closed: propagated signs) at
+    /// 128³ and the teapot (open: one winding number per node) at 96³, tree
+    /// builds included. Run with
+    /// `cargo test --release -p isomorph-common sdf_timing -- --ignored --nocapture`.
+    #[test]
+    #[ignore = "timing helper"]
+    fn sdf_timing() {
+        let teapot = read_obj(concat!(env!("CARGO_MANIFEST_DIR"), "/../data/teapot.obj"));
+        for (name, mesh, n) in [("bunny", bunny(), 128), ("teapot", teapot, 96)] {
+            let lattice = Lattice::spanning(&mesh.bounds().padded(0.1), UVec3::splat(n));
+            let mut times = Vec::new();
+            let mut inside = 0;
+            for _ in 0..5 {
+                let start = std::time::Instant::now();
+                let d = MeshSdf::new(&mesh).unwrap().sample_lattice(&lattice);
+                times.push(start.elapsed().as_secs_f64() * 1e3);
+                inside = d.iter().filter(|&&x| x > 0.0).count();
+            }
+            times.sort_by(f64::total_cmp);
+            println!("{name} {n}³: median {:.1} ms, min {:.1} ms, {inside} nodes inside", times[2], times[0]);
+            assert!(inside > 0);
+        }
+    }
+
+    /// A mesh at scale `factor`, sampled on the lattice scaled likewise,
+    /// gives the unit mesh's signs and `factor` times its distances, in both
+    /// sign modes, on closed and open meshes, on lattices and single points.
+    #[test]
+    fn distances_scale_with_the_mesh() {
+        let mut holed = uv_sphere(Vec3::ZERO, 1.0, 12, 24);
+        holed.triangles.remove(40);
+        let lattice = Lattice::spanning(&Aabb::cube(1.3), UVec3::new(15, 13, 11));
+        for (name, mesh) in
+            [("cube", cube(1.0)), ("sphere", uv_sphere(Vec3::ZERO, 1.0, 12, 24)), ("holed", holed)]
+        {
+            for sign in [SignMode::WindingNumber, SignMode::Pseudonormal] {
+                let settings = SdfSettings::default().with_sign(sign);
+                let unit = MeshSdf::with_settings(&mesh, settings).unwrap().sample_lattice(&lattice);
+                let inside = unit.iter().filter(|&&d| d > 0.0).count();
+                assert!(inside > 100 && inside < unit.len() - 100, "{name}: {inside} nodes inside");
+                for factor in [1e13f32, 1e20, 1e30, 1e-20, 1e-38, 1e-40] {
+                    let sdf = MeshSdf::with_settings(&mesh.scaled(factor), settings).unwrap();
+                    let scaled =
+                        Lattice { origin: lattice.origin * factor, step: lattice.step * factor, ..lattice };
+                    let got = sdf.sample_lattice(&scaled);
+                    // Rounding of the scaled coordinates: relative to f32 precision, or
+                    // to the subnormal spacing 2⁻¹⁴⁹ below 2⁻¹²⁶.
+                    let tolerance = 1e-5 + 16.0 * 2f64.powi(-149) / f64::from(factor);
+                    for (n, (&g, &u)) in got.iter().zip(&unit).enumerate() {
+                        let g = f64::from(g) / f64::from(factor);
+                        assert!(
+                            (g - f64::from(u)).abs() <= tolerance,
+                            "{name}, {sign:?}, × {factor:e}, node {n}: {g} vs {u}"
+                        );
+                        assert_eq!(g > 0.0, u > 0.0, "{name}, {sign:?}, × {factor:e}, node {n}: {g} vs {u}");
+                    }
+                    // The same through single points.
+                    for p in [Vec3::ZERO, Vec3::new(0.3, -0.5, 0.2), Vec3::new(1.2, 0.1, -0.4)] {
+                        let (got, want) = (
+                            sdf.signed_distance(p * factor),
+                            MeshSdf::with_settings(&mesh, settings).unwrap().value(p),
+                        );
+                        let got = f64::from(got) / f64::from(factor);
+                        assert!(
+                            (got - f64::from(want)).abs() <= tolerance,
+                            "{name} × {factor:e} at {p}: {got} vs {want}"
+                        );
+                        assert_eq!(sdf.is_inside(p * factor), want > 0.0);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn narrow_band_volume_scales_with_the_mesh() {
+        let mesh = uv_sphere(Vec3::ZERO, 1.0, 16, 32);
+        let h = 2.6 / 23.0;
+        let volume = |factor: f32, volume: VolumeMode| {
+            let bounds = Aabb::new(Vec3::splat(-1.3 * factor), Vec3::splat(1.3 * factor));
+            let grid =
+                mesh_sdf_grid(&mesh.scaled(factor), &bounds, 24, SdfSettings::default().with_volume(volume))
+                    .unwrap();
+            grid.data().iter().map(|&d| f64::from(d) / f64::from(factor)).collect::<Vec<_>>()
+        };
+        let unit = volume(1.0, VolumeMode::Exact);
+        for factor in [1.0, 1e20f32, 1e30, 1e-20, 1e-36] {
+            let exact = volume(factor, VolumeMode::Exact);
+            let band = volume(factor, VolumeMode::NarrowBand { width: 2.0 * h * factor });
+            assert_eq!((exact.len(), band.len()), (unit.len(), unit.len()));
+            // Exact in the band, within the marching's 0.4 voxel beyond (as at unit size).
+            for ((&e, &b), &u) in exact.iter().zip(&band).zip(&unit) {
+                assert!((e - u).abs() <= 1e-5 && (e > 0.0) == (u > 0.0), "× {factor:e}: {e} vs {u}");
+                let tolerance = if e.abs() <= 2.0 * f64::from(h) { 1e-5 } else { 0.4 * f64::from(h) };
+                assert!((b - e).abs() <= tolerance && (b > 0.0) == (e > 0.0), "× {factor:e}: {b} vs {e}");
+            }
+        }
+    }
+
+    /// Extreme but finite meshes are handled; what cannot be is an error.
+    #[test]
+    fn extreme_meshes() {
+        // Coordinates up to 3·10³⁸: the box's extent overflows f32.
+        let huge = MeshSdf::new(&cube(1.0).scaled(3e38)).unwrap();
+        assert!(huge.bounds.size().x.is_infinite());
+        for (p, want) in
+            [(Vec3::ZERO, 3e38), (Vec3::new(1.5e38, 0.0, 0.0), 1.5e38), (Vec3::new(0.0, -2e38, 2.5e38), 5e37)]
+        {
+            assert!(
+                (huge.signed_distance(p) / want - 1.0).abs() < 1e-5,
+                "at {p}: {}",
+                huge.signed_distance(p)
+            );
+        }
+        // Unit size far from the origin: the positions' own rounding (1/16
+        // at 10⁶) is the only limit; distances between them are exact.
+        let offset = Vec3::new(1e6, -1e6, 1e6);
+        let far = cube(1.0).transformed(&glam::Affine3A::from_translation(offset));
+        let sdf = MeshSdf::new(&far).unwrap();
+        let lattice = Lattice::spanning(
+            &Aabb::new(Vec3::splat(-1.3) + offset, Vec3::splat(1.3) + offset),
+            UVec3::splat(12),
+        );
+        let got = sdf.sample_lattice(&lattice);
+        for (n, &g) in got.iter().enumerate() {
+            let (nx, ny) = (12, 12);
+            let p = lattice.position((n % nx) as u32, (n / nx % ny) as u32, (n / (nx * ny)) as u32);
+            assert!((g - box_sd(p - offset)).abs() < 1e-6, "at {p}: {g} vs {}", box_sd(p - offset));
+        }
+        // At 10⁸ the unit cube rounds away to one point.
+        let gone = cube(1.0).transformed(&glam::Affine3A::from_translation(Vec3::splat(1e8)));
+        assert_eq!(MeshSdf::new(&gone).unwrap_err(), SdfError::ZeroExtent);
+        // Points far beyond a tiny mesh are measured to its centre; a lattice
+        // spanning both evaluates node by node.
+        let tiny = MeshSdf::new(&cube(1.0).scaled(1e-38)).unwrap();
+        assert!((tiny.signed_distance(Vec3::new(3.0, 4.0, 0.0)) + 5.0).abs() < 1e-6);
+        assert!(!tiny.is_inside(Vec3::X) && tiny.closest(Vec3::X).is_none());
+        let wide = tiny.sample_lattice(&Lattice::spanning(&Aabb::cube(1.0), UVec3::splat(3)));
+        assert_eq!(wide[13], 1e-38, "the centre node is inside");
+        assert!((wide[0] + 3f32.sqrt()).abs() < 1e-6 && (wide[14] + 1.0).abs() < 1e-6, "{wide:?}");
+        let band = SdfSettings::default().with_volume(VolumeMode::NarrowBand { width: 0.1 });
+        let grid = MeshSdf::with_settings(&cube(1.0).scaled(1e-38), band)
+            .unwrap()
+            .sample_grid(&Aabb::cube(1.0), 3)
+            .unwrap();
+        let lattice = Lattice { dims: grid.dims(), origin: grid.origin(), step: Vec3::splat(grid.spacing()) };
+        assert_eq!(grid.data(), &tiny.sample_lattice(&lattice)[..]);
+    }
+
     #[test]
     fn errors() {
         assert_eq!(MeshSdf::new(&TriMesh::default()).unwrap_err(), SdfError::EmptyMesh);
@@ -676,5 +972,12 @@ mod tests {
         assert!(matches!(sdf.sample_grid(&Aabb::cube(1.0), 1), Err(SdfError::Grid(_))));
         assert!(matches!(sdf.sample_grid(&Aabb::EMPTY, 8), Err(SdfError::Grid(_))));
         assert!(sdf.signed_distance(Vec3::NAN).is_nan());
+        assert!(!sdf.is_inside(Vec3::NAN) && sdf.closest(Vec3::INFINITY).is_none());
+        // Non-finite coordinates, and triangles that are all one point.
+        let mut bad = cube(1.0);
+        bad.positions[3].y = f32::INFINITY;
+        assert!(matches!(MeshSdf::new(&bad), Err(SdfError::Mesh(crate::MeshError::NonFinite(3)))));
+        let point = TriMesh::new(vec![Vec3::ONE; 3], vec![[0, 1, 2], [2, 1, 0]]).unwrap();
+        assert_eq!(MeshSdf::new(&point).unwrap_err(), SdfError::ZeroExtent);
     }
 }

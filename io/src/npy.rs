@@ -152,9 +152,14 @@ fn header_entry<'a>(header: &'a str, key: &str) -> Option<&'a str> {
 /// `(nx, ny, nz)` (the first axis fastest). Either way grid x is the fastest
 /// axis, so the bytes are used in place.
 ///
+/// Every size derived from the header (header length, value count, byte
+/// count) is computed with checked arithmetic: a header claiming more than
+/// fits is a [`NpyError::Format`], never a wrapped product.
+///
 /// # Errors
 /// [`NpyError::Format`] (`path` names the source) for a bad magic string,
-/// version, header, dtype, shape or length; [`NpyError::Grid`] for memory.
+/// version, header, dtype, shape (including one whose size overflows) or
+/// length; [`NpyError::Grid`] for memory.
 pub fn read_npy(bytes: &[u8], origin: Vec3, spacing: f32, path: &Path) -> Result<Volume, NpyError> {
     let bad = |reason: String| NpyError::Format { path: path.to_path_buf(), reason };
     if bytes.len() < 10 || &bytes[..6] != MAGIC {
@@ -167,7 +172,8 @@ pub fn read_npy(bytes: &[u8], origin: Vec3, spacing: f32, path: &Path) -> Result
         }
         v => return Err(bad(format!(".npy format version {v} is not supported (1, 2 or 3)"))),
     };
-    let data_start = header_start + header_len;
+    let data_start = usize::checked_add(header_start, header_len)
+        .ok_or_else(|| bad(format!("header length {header_len} overflows")))?;
     let header = bytes
         .get(header_start..data_start)
         .and_then(|h| std::str::from_utf8(h).ok())
@@ -191,12 +197,19 @@ pub fn read_npy(bytes: &[u8], origin: Vec3, spacing: f32, path: &Path) -> Result
         return Err(bad(format!("the array has shape {shape:?}; a volume needs three axes")));
     };
     let dims = if fortran { UVec3::new(a, b, c) } else { UVec3::new(c, b, a) };
-    let count = dims.as_u64vec3().element_product();
+    let count = u64::from(a).checked_mul(u64::from(b)).and_then(|ab| ab.checked_mul(u64::from(c)));
+    let size = count.and_then(|n| n.checked_mul(dtype.size() as u64));
+    let (Some(count), Some(size)) = (count, size) else {
+        return Err(bad(format!(
+            "shape {shape:?} of {}-byte values holds more than 2^64 bytes",
+            dtype.size()
+        )));
+    };
     let data = &bytes[data_start..];
-    if (data.len() as u64) != count * dtype.size() as u64 {
+    if data.len() as u64 != size {
         return Err(bad(format!("{} data bytes for {count} values of {} bytes", data.len(), dtype.size())));
     }
-    let requested = usize::try_from(count).unwrap_or(usize::MAX).saturating_mul(4);
+    let requested = usize::try_from(count).ok().and_then(|n| n.checked_mul(4)).unwrap_or(usize::MAX);
     if requested > isomorph_common::memory_limit() {
         return Err(GridError::TooLarge { dims, requested, limit: isomorph_common::memory_limit() }.into());
     }
@@ -453,14 +466,7 @@ mod tests {
             Err(NpyError::Format { .. })
         ));
         assert!(matches!(read_npy(b"not numpy at all", Vec3::ZERO, 1.0, here), Err(NpyError::Format { .. })));
-        let other = |dict: &str, data: &[u8]| {
-            let mut b = MAGIC.to_vec();
-            b.extend_from_slice(&[1, 0]);
-            b.extend_from_slice(&(dict.len() as u16).to_le_bytes());
-            b.extend_from_slice(dict.as_bytes());
-            b.extend_from_slice(data);
-            read_npy(&b, Vec3::ZERO, 1.0, here)
-        };
+        let other = |dict: &str, data: &[u8]| read_npy(&npy_bytes(dict, data), Vec3::ZERO, 1.0, here);
         let flat = other("{'descr': '<f4', 'fortran_order': False, 'shape': (2, 3), }", &[0; 24]);
         assert!(matches!(flat, Err(NpyError::Format { reason, .. }) if reason.contains("three axes")));
         let complex = other("{'descr': '<c8', 'fortran_order': False, 'shape': (1, 1, 1), }", &[0; 8]);
@@ -481,6 +487,48 @@ mod tests {
             panic!("f64 volume")
         };
         assert_eq!(*g.get(1, 1, 1).unwrap(), 3.5);
+    }
+
+    /// `.npy` version 1.0 bytes with header `dict` and `data`.
+    fn npy_bytes(dict: &str, data: &[u8]) -> Vec<u8> {
+        let mut b = MAGIC.to_vec();
+        b.extend_from_slice(&[1, 0]);
+        b.extend_from_slice(&(dict.len() as u16).to_le_bytes());
+        b.extend_from_slice(dict.as_bytes());
+        b.extend_from_slice(data);
+        b
+    }
+
+    #[test]
+    fn huge_shapes_are_refused_without_overflow() {
+        let here = Path::new("huge.npy");
+        // The value or byte counts of these shapes pass u64: the old
+        // products wrapped in release builds and panicked in debug builds.
+        for (descr, shape) in [
+            ("<f8", "(4294967295, 4294967295, 4294967295)"),
+            ("<f4", "(4294967295, 4294967295, 2)"),
+            ("<f8", "(2147483648, 2147483648, 4)"),
+            ("|u1", "(4294967295, 4294967295, 4294967295)"),
+        ] {
+            let dict = format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}");
+            match read_npy(&npy_bytes(&dict, &[0; 16]), Vec3::ZERO, 1.0, here) {
+                Err(NpyError::Format { reason, .. }) => assert!(reason.contains("2^64"), "{shape}: {reason}"),
+                other => panic!("{shape}: {other:?}"),
+            }
+        }
+        // 2^62 values of 4 bytes: the byte count 2^64 wrapped to 0, which
+        // matched empty data.
+        let dict = "{'descr': '<f4', 'fortran_order': False, 'shape': (2147483648, 2147483648, 1), }";
+        assert!(matches!(
+            read_npy(&npy_bytes(dict, &[]), Vec3::ZERO, 1.0, here),
+            Err(NpyError::Format { .. })
+        ));
+        // Version 3 header length near u32::MAX points past the data.
+        let mut v3 = MAGIC.to_vec();
+        v3.extend_from_slice(&[3, 0]);
+        v3.extend_from_slice(&u32::MAX.to_le_bytes());
+        v3.extend_from_slice(b"{}");
+        assert!(matches!(read_npy(&v3, Vec3::ZERO, 1.0, here), Err(NpyError::Format { .. })));
     }
 
     #[test]

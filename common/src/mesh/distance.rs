@@ -6,6 +6,11 @@
 //! vertex), and each sample's exact distance to the other surface is found
 //! with a [`TriangleBvh`]. The sampling is deterministic: the same meshes and
 //! sample count always give the same figures.
+//!
+//! Both meshes are first multiplied by the power of two that brings the
+//! larger one's coordinates near 1 (exact), so that squared `f32`
+//! distances neither overflow nor underflow at any mesh scale; the figures
+//! are scaled back in `f64`.
 
 use super::bvh::TriangleBvh;
 use crate::TriMesh;
@@ -60,15 +65,18 @@ pub enum DistanceError {
 pub fn surface_distance(a: &TriMesh, b: &TriMesh, samples: usize) -> Result<SurfaceDistance, DistanceError> {
     a.validate()?;
     b.validate()?;
+    let scale = a.unit_scale().min(b.unit_scale());
+    let (a, b) = (&a.scaled(scale), &b.scaled(scale));
     let points_a = surface_samples(a, samples).ok_or(DistanceError::EmptySurface { which: "first" })?;
     let points_b = surface_samples(b, samples).ok_or(DistanceError::EmptySurface { which: "second" })?;
     let (sum_ab, sq_ab, max_ab) = one_sided(&points_a, &TriangleBvh::new(b));
     let (sum_ba, sq_ba, max_ba) = one_sided(&points_b, &TriangleBvh::new(a));
     let n = (points_a.len() + points_b.len()) as f64;
+    let unit = 1.0 / f64::from(scale);
     Ok(SurfaceDistance {
-        mean: ((sum_ab + sum_ba) / n) as f32,
-        rms: ((sq_ab + sq_ba) / n).sqrt() as f32,
-        hausdorff: max_ab.max(max_ba) as f32,
+        mean: ((sum_ab + sum_ba) / n * unit) as f32,
+        rms: (((sq_ab + sq_ba) / n).sqrt() * unit) as f32,
+        hausdorff: (max_ab.max(max_ba) * unit) as f32,
     })
 }
 
@@ -142,6 +150,21 @@ mod tests {
         assert!((d.mean - 0.1).abs() < 2e-3, "{d:?}");
         assert!((d.hausdorff - 0.1).abs() < 4e-3, "{d:?}");
         assert!((d.rms - d.mean).abs() < 1e-3 && d.rms >= d.mean, "{d:?}");
+    }
+
+    #[test]
+    fn figures_scale_with_the_meshes() {
+        let (a, b) = (sphere(0.2, 32), sphere(0.3, 32));
+        let unit = surface_distance(&a, &b, 1000).unwrap();
+        for factor in [1e25f32, 1e-25, 1e-40] {
+            let d = surface_distance(&a.scaled(factor), &b.scaled(factor), 1000).unwrap();
+            for (got, want) in [(d.mean, unit.mean), (d.rms, unit.rms), (d.hausdorff, unit.hausdorff)] {
+                let got = f64::from(got) / f64::from(factor);
+                // Subnormal coordinates (× 10⁻⁴⁰) are rounded to 2⁻¹⁴⁹: 10⁻⁵ of the radius.
+                let tolerance = if factor < 1e-37 { 2e-3 } else { 1e-4 };
+                assert!((got / f64::from(want) - 1.0).abs() < tolerance, "× {factor:e}: {d:?} vs {unit:?}");
+            }
+        }
     }
 
     #[test]

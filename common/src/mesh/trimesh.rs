@@ -89,6 +89,30 @@ impl TriMesh {
         Aabb::from_points(&self.positions)
     }
 
+    /// A copy with every position multiplied by `s` (normals, being
+    /// directions, are kept).
+    pub(crate) fn scaled(&self, s: f32) -> TriMesh {
+        TriMesh {
+            positions: self.positions.iter().map(|&p| p * s).collect(),
+            triangles: self.triangles.clone(),
+            normals: self.normals.clone(),
+        }
+    }
+
+    /// The power of two `s` that brings the largest coordinate magnitude of
+    /// the vertices into `[1, 2)` (or as near as `f32` exponents allow:
+    /// within `[2⁻²², 4)` for the extreme magnitudes); 1 when all
+    /// coordinates are zero or the largest is infinite.
+    ///
+    /// Multiplying by `s` changes only exponents, so it is exact (except for
+    /// results below 2⁻¹²⁶, over 2¹²⁶ times smaller than the largest, which
+    /// lose bits as subnormals): computations that square or cube lengths can
+    /// run in the frame `x · s`, free of overflow and underflow, and their
+    /// results be scaled back exactly.
+    pub(crate) fn unit_scale(&self) -> f32 {
+        unit_scale(self.positions.iter().fold(0.0f32, |m, p| m.max(p.abs().max_element())))
+    }
+
     /// The three corner positions of triangle `t`.
     #[inline]
     pub fn corners(&self, t: usize) -> [Vec3; 3] {
@@ -156,6 +180,19 @@ impl TriMesh {
     }
 }
 
+/// The power of two `s` with `magnitude · s` in `[1, 2)`, within the
+/// normal `f32` exponents `[2⁻¹²⁶, 2¹²⁷]`; 1 for a zero or non-finite
+/// `magnitude`.
+pub(crate) fn unit_scale(magnitude: f32) -> f32 {
+    if !(magnitude.is_finite() && magnitude > 0.0) {
+        return 1.0;
+    }
+    // A normal `magnitude` with biased exponent `e` lies in [2^(e−127), 2^(e−126)):
+    // `s = 2^(127−e)` has biased exponent 254 − e (kept normal); subnormals have e = 0.
+    let biased = (magnitude.to_bits() >> 23) as i32;
+    f32::from_bits(((254 - biased).clamp(1, 254) as u32) << 23)
+}
+
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
@@ -176,6 +213,25 @@ pub(crate) mod tests {
             Err(MeshError::IndexOutOfRange { index: 1, .. })
         ));
         assert!(matches!(TriMesh::new(vec![Vec3::NAN], vec![]), Err(MeshError::NonFinite(0))));
+    }
+
+    #[test]
+    fn unit_scale_is_a_power_of_two_bringing_magnitudes_near_one() {
+        for m in [1.0f32, 1.5, 0.75, 3e-7, 1e13, 1e30, 3.3e38, f32::MAX, 1e-38, 1e-40, 1e-45] {
+            let s = unit_scale(m);
+            assert_eq!(s.to_bits() & 0x7f_ffff, 0, "{m}: {s} is not a power of two");
+            let scaled = m * s;
+            assert!((2f32.powi(-22)..4.0).contains(&scaled), "{m} · {s} = {scaled}");
+            if (1e-37..1.7e38).contains(&m) {
+                assert!((1.0..2.0).contains(&scaled), "{m} · {s} = {scaled}");
+            }
+        }
+        for m in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+            assert_eq!(unit_scale(m), 1.0);
+        }
+        let mut t = tetrahedron();
+        t.positions.iter_mut().for_each(|p| *p *= -3e20);
+        assert_eq!(t.unit_scale(), unit_scale(3e20));
     }
 
     #[test]

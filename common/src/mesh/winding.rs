@@ -28,6 +28,17 @@
 //! inside test, and within a few 10⁻³ of the exact sum elsewhere at the
 //! default β (measured: 1.7·10⁻³ on the bunny, 3·10⁻⁴ at β = 3, 6·10⁻⁵ at β = 4).
 //!
+//! # Scale
+//! The winding number does not depend on the mesh's size, and neither does
+//! its evaluation: [`WindingNumber::new`] multiplies the corners by a power
+//! of two that brings the largest coordinate near 1 (exact: only the
+//! exponent changes), and every query by the same factor. The exact solid
+//! angle is computed in `f64`, whose range holds the cubes of any `f32`
+//! lengths. So a mesh at 10³⁰ or 10⁻⁴⁰ has the same winding numbers as its
+//! unit-size copy. A query too far away to express in that frame (farther
+//! from the origin than 2⁶⁰ times the mesh's largest coordinate) has winding
+//! number 0, as the sum would be far below `f32` resolution there.
+//!
 //! # Example
 //! ```
 //! use isomorph_common::mesh::winding::WindingNumber;
@@ -59,22 +70,33 @@ const LEAF_SIZE: usize = 8;
 const STACK: usize = 64;
 /// Queries per work item of the batch evaluation.
 const CHUNK: usize = 256;
+/// Queries farther than this from the origin of the normalized frame (where
+/// the mesh lies within 4 units of the origin) have winding number 0: the
+/// true value is below `n_triangles · 2⁻¹¹⁰` there, and squared distances
+/// would overflow `f32` beyond 2⁶³.
+const FAR: f32 = 1_152_921_504_606_846_976.0; // 2⁶⁰
 
 /// Signed solid angle of the triangle `abc` seen from the origin (corners
 /// given relative to the query), by Van Oosterom & Strackee; positive when
 /// the query is on the side opposite the right-hand normal. In `(-2π, 2π)`;
 /// zero for a query in the triangle's plane (so a point on a smooth surface
 /// gets winding number ½).
+///
+/// Computed in `f64`, which holds the cubic products of any finite `f32`
+/// corners without overflow or underflow, so the result depends only on the
+/// directions of `a`, `b`, `c`, whatever their magnitude.
 #[inline]
 pub fn solid_angle(a: Vec3, b: Vec3, c: Vec3) -> f32 {
+    let (a, b, c) = (a.as_dvec3(), b.as_dvec3(), c.as_dvec3());
     let det = a.dot(b.cross(c));
     let (la, lb, lc) = (a.length(), b.length(), c.length());
-    // Within rounding of the plane the sign of `det` is noise.
-    if det.abs() <= 8.0 * f32::EPSILON * la * lb * lc {
+    // Within the rounding of the f32 offsets from the plane, the sign of
+    // `det` is noise.
+    if det.abs() <= 8.0 * f64::from(f32::EPSILON) * la * lb * lc {
         return 0.0;
     }
     let den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
-    2.0 * det.atan2(den)
+    (2.0 * det.atan2(den)) as f32
 }
 
 /// A node of the expansion tree: bounding sphere, Taylor coefficients and
@@ -102,13 +124,16 @@ struct Node {
 /// Generalized winding number of a triangle mesh or soup, with a
 /// precomputed hierarchy for fast queries (see the [module docs](self)).
 ///
-/// The structure keeps its own copy of the geometry; the mesh can be dropped.
+/// The structure keeps its own copy of the geometry, in a normalized frame
+/// (see [Scale](self#scale)); the mesh can be dropped.
 #[derive(Debug, Clone)]
 pub struct WindingNumber {
     nodes: Vec<Node>,
-    /// Triangle corners in tree order.
+    /// Triangle corners in tree order, times `scale`.
     tris: Vec<[Vec3; 3]>,
     beta: f32,
+    /// The power of two taking world coordinates to the normalized frame.
+    scale: f32,
 }
 
 impl WindingNumber {
@@ -118,13 +143,15 @@ impl WindingNumber {
     /// # Panics
     /// If a triangle index is out of range (a mesh [`TriMesh::validate`] rejects).
     pub fn new(mesh: &TriMesh) -> Self {
-        let mut tris: Vec<[Vec3; 3]> = (0..mesh.triangles.len()).map(|t| mesh.corners(t)).collect();
+        let scale = mesh.unit_scale();
+        let mut tris: Vec<[Vec3; 3]> =
+            (0..mesh.triangles.len()).map(|t| mesh.corners(t).map(|p| p * scale)).collect();
         let mut nodes = Vec::with_capacity(2 * tris.len().div_ceil(LEAF_SIZE));
         if !tris.is_empty() {
             nodes.push(Node::leaf(&tris, 0, tris.len(), DEFAULT_BETA));
             build(&mut nodes, &mut tris, 0, DEFAULT_BETA);
         }
-        Self { nodes, tris, beta: DEFAULT_BETA }
+        Self { nodes, tris, beta: DEFAULT_BETA, scale }
     }
 
     /// The same hierarchy with accuracy parameter `beta` (clamped to at
@@ -161,7 +188,8 @@ impl WindingNumber {
         if !p.is_finite() {
             return f32::NAN;
         }
-        if self.nodes.is_empty() {
+        let p = p * self.scale;
+        if self.nodes.is_empty() || p.abs().max_element() > FAR {
             return 0.0;
         }
         let mut stack = [0u32; STACK];
@@ -209,7 +237,16 @@ impl WindingNumber {
 
     /// Exact winding number at `p`: the plain sum of every triangle's solid
     /// angle, with no approximation (slow: linear in the triangle count).
+    /// NaN for a non-finite `p`, 0 beyond the normalized frame's reach (as
+    /// [`WindingNumber::winding_number`]).
     pub fn exact_winding_number(&self, p: Vec3) -> f32 {
+        if !p.is_finite() {
+            return f32::NAN;
+        }
+        let p = p * self.scale;
+        if p.abs().max_element() > FAR {
+            return 0.0;
+        }
         let sum: f64 = self.tris.iter().map(|&[a, b, c]| f64::from(solid_angle(a - p, b - p, c - p))).sum();
         (sum / (4.0 * std::f64::consts::PI)) as f32
     }
@@ -295,27 +332,28 @@ impl Node {
     }
 
     /// `4π ×` the expansion's winding number, for `r = center − query`
-    /// with `r2 = |r|²`.
+    /// with `r2 = |r|²`. Written in the direction `u = r / |r|` and powers
+    /// of `1/|r|`, so that no term grows with the distance (no overflow for
+    /// any finite `r2`).
     #[inline]
     fn expansion(&self, r: Vec3, r2: f32) -> f32 {
-        let inv2 = 1.0 / r2;
-        let inv = inv2.sqrt();
-        let inv3 = inv * inv2;
-        let inv5 = inv3 * inv2;
+        let inv = 1.0 / r2.sqrt();
+        let u = r * inv;
         let m = &self.first_moment;
-        // Order 0: r·d / |r|³.
-        let order0 = r.dot(self.dipole) * inv3;
-        // Order 1: Σ J_ij M_ij with J = I/|r|³ − 3 r rᵀ/|r|⁵.
-        let mr = *m * r; // (M r)_i = Σ_j M_ij r_j
-        let order1 = (m.x_axis.x + m.y_axis.y + m.z_axis.z) * inv3 - 3.0 * r.dot(mr) * inv5;
-        // Order 2: ½ Σ H_ijk S_ijk with H_ijk = −3(δ_ij r_k + δ_ik r_j + δ_jk r_i)/|r|⁵ + 15 r_i r_j r_k/|r|⁷.
+        // Order 0: r·d / |r|³ = u·d / |r|².
+        let order0 = u.dot(self.dipole);
+        // Order 1: Σ J_ij M_ij with J = I/|r|³ − 3 r rᵀ/|r|⁵ = (I − 3 u uᵀ)/|r|³.
+        let mu = *m * u; // (M u)_i = Σ_j M_ij u_j
+        let order1 = trace(m) - 3.0 * u.dot(mu);
+        // Order 2: ½ Σ H_ijk S_ijk with H_ijk = −3(δ_ij r_k + δ_ik r_j + δ_jk r_i)/|r|⁵
+        // + 15 r_i r_j r_k/|r|⁷ = (−3(δ_ij u_k + δ_ik u_j + δ_jk u_i) + 15 u_i u_j u_k)/|r|⁴.
         let s = &self.second_moment;
-        let sr = [s[0] * r, s[1] * r, s[2] * r];
-        let diag = sr[0].x + sr[1].y + sr[2].z; // Σ_ij S_iij r_j
+        let su = [s[0] * u, s[1] * u, s[2] * u];
+        let diag = su[0].x + su[1].y + su[2].z; // Σ_ij S_iij u_j
         let traces = Vec3::new(trace(&s[0]), trace(&s[1]), trace(&s[2]));
-        let cubic = r.x * r.dot(sr[0]) + r.y * r.dot(sr[1]) + r.z * r.dot(sr[2]);
-        let order2 = 0.5 * (-3.0 * inv5 * (2.0 * diag + r.dot(traces)) + 15.0 * inv5 * inv2 * cubic);
-        order0 + order1 + order2
+        let cubic = u.x * u.dot(su[0]) + u.y * u.dot(su[1]) + u.z * u.dot(su[2]);
+        let order2 = 0.5 * (-3.0 * (2.0 * diag + u.dot(traces)) + 15.0 * cubic);
+        inv * inv * (order0 + inv * (order1 + inv * order2))
     }
 }
 
@@ -377,6 +415,55 @@ mod tests {
         let w = solid_angle(Vec3::X, Vec3::Y, Vec3::Z);
         assert!((w - PI / 2.0).abs() < 1e-6, "{w}");
         assert!((solid_angle(Vec3::X, Vec3::Z, Vec3::Y) + PI / 2.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn solid_angle_does_not_depend_on_magnitude() {
+        for s in [1e-45f32, 1e-40, 1e-20, 1e13, 1e20, 1e30, 3e38] {
+            let w = solid_angle(Vec3::X * s, Vec3::Y * s, Vec3::Z * s);
+            assert!((w - PI / 2.0).abs() < 1e-6, "× {s:e}: {w}");
+            // Unequal magnitudes: the corners' directions alone count.
+            let w = solid_angle(Vec3::X * s, Vec3::Y * s.sqrt(), Vec3::Z * 3.0);
+            assert!((w - PI / 2.0).abs() < 1e-6, "× {s:e}, mixed: {w}");
+        }
+    }
+
+    /// A mesh scaled by `factor` has the unit mesh's winding numbers at the
+    /// points scaled likewise, by the tree and by the exact sum; points too
+    /// far to express relative to a tiny mesh have winding number 0.
+    #[test]
+    fn winding_numbers_do_not_depend_on_scale() {
+        let points = [
+            Vec3::ZERO,
+            Vec3::new(0.4, -0.7, 0.1),
+            Vec3::new(0.9, 0.2, -0.3),
+            Vec3::new(1.1, 0.0, 0.0),
+            Vec3::new(-0.6, 1.4, 0.2),
+            Vec3::splat(3.0),
+            Vec3::new(40.0, -2.0, 7.0),
+        ];
+        for mesh in [cube(1.0), uv_sphere(Vec3::ZERO, 1.0, 12, 24), torus(0.7, 0.3, 24, 12)] {
+            let unit = WindingNumber::new(&mesh);
+            for factor in [1e13f32, 1e20, 1e30, 1e-20, 1e-38, 1e-40] {
+                let wn = WindingNumber::new(&mesh.scaled(factor));
+                for p in points {
+                    // The tree may split the rounded copy differently: equal to
+                    // within its approximation error, and exact sums to rounding.
+                    let (want, got) = (unit.winding_number(p), wn.winding_number(p * factor));
+                    assert!((got - want).abs() < 2e-3, "× {factor:e} at {p}: {got} vs {want}");
+                    let (want, got) = (unit.exact_winding_number(p), wn.exact_winding_number(p * factor));
+                    assert!((got - want).abs() < 1e-5, "× {factor:e} at {p}, exact: {got} vs {want}");
+                }
+            }
+        }
+        let tiny = WindingNumber::new(&cube(1.0).scaled(1e-38));
+        assert!((tiny.winding_number(Vec3::ZERO) - 1.0).abs() < 1e-5);
+        for p in [Vec3::X, Vec3::new(-3e38, 1.0, 0.0)] {
+            assert_eq!((tiny.winding_number(p), tiny.exact_winding_number(p)), (0.0, 0.0), "{p}");
+        }
+        let huge = WindingNumber::new(&cube(1.0).scaled(3e38));
+        assert!((huge.winding_number(Vec3::new(1e38, -2e38, 0.0)) - 1.0).abs() < 1e-5);
+        assert!(huge.winding_number(Vec3::new(1e38, -2e38, f32::MAX)).abs() < 1e-5);
     }
 
     #[test]
@@ -511,5 +598,6 @@ mod tests {
         let wn = WindingNumber::new(&cube(1.0));
         assert_eq!(wn.len(), 12);
         assert!(wn.winding_number(Vec3::NAN).is_nan());
+        assert!(wn.exact_winding_number(Vec3::INFINITY).is_nan());
     }
 }

@@ -1,7 +1,7 @@
 //! PLY (ASCII, binary little- and big-endian) through `ply-rs-bw`, with the
 //! element loop, the count checks and the error locations done here.
 
-use super::{MeshFormat, MeshIoError};
+use super::{MeshFormat, MeshIoError, MeshRead, ReadWarning};
 use glam::Vec3;
 use isomorph_common::TriMesh;
 use ply_rs_bw::parser::{Parser, Reader};
@@ -10,6 +10,7 @@ use ply_rs_bw::ply::{
     ScalarType,
 };
 use ply_rs_bw::writer::Writer;
+use std::collections::HashSet;
 use std::io::{self, Read, Write};
 
 const FORMAT: &str = "PLY";
@@ -26,23 +27,39 @@ const FACE_LISTS: [&str; 2] = ["vertex_indices", "vertex_index"];
 /// elements and properties are skipped. Faces with more than three vertices
 /// are fan-triangulated. The whole input is read into memory first.
 ///
+/// An element or a property of one element declared twice is refused (the
+/// columns after it would shift), and so is an ASCII record line with more
+/// values than its element's properties take. Data after the last declared
+/// element (more records than the header counts, or junk) is ignored with
+/// [`ReadWarning::PlyTrailingData`], blank lines after an ASCII payload
+/// excepted; warnings are dropped here, [`read_mesh_from_with_warnings`]
+/// returns them.
+///
+/// [`read_mesh_from_with_warnings`]: super::read_mesh_from_with_warnings
+///
 /// # Errors
-/// [`MeshIoError::Parse`] for a malformed header (with its line), a malformed
-/// or truncated record (with its line for ASCII, its byte offset for binary),
+/// [`MeshIoError::Parse`] for a malformed header (with its line) or one that
+/// declares an element or property twice, a malformed (in ASCII also an
+/// overlong) or truncated record (with its line for ASCII, its byte offset for binary),
 /// a face with fewer than three vertices or a negative index;
 /// [`MeshIoError::TooLarge`] when an element count cannot fit in the data;
 /// [`MeshIoError::Unsupported`] without `vertex` `x y z`, for a face list of
 /// non-integers or an element without properties;
 /// [`MeshIoError::Mesh`] for an index out of range or a non-finite
 /// coordinate; [`MeshIoError::Io`] when reading fails.
-pub fn read_ply(mut reader: impl Read) -> Result<TriMesh, MeshIoError> {
+pub fn read_ply(reader: impl Read) -> Result<TriMesh, MeshIoError> {
+    read(reader).map(|read| read.mesh)
+}
+
+/// [`read_ply`] with its warnings.
+pub(super) fn read(mut reader: impl Read) -> Result<MeshRead, MeshIoError> {
     let mut bytes = Vec::new();
     reader.read_to_end(&mut bytes)?;
     parse(&bytes)
 }
 
 /// Parses a complete PLY file held in memory.
-fn parse(bytes: &[u8]) -> Result<TriMesh, MeshIoError> {
+fn parse(bytes: &[u8]) -> Result<MeshRead, MeshIoError> {
     if !bytes.starts_with(b"ply") {
         return Err(MeshIoError::parse(FORMAT, Some(1), None, "not a PLY file (no 'ply' on the first line)"));
     }
@@ -55,6 +72,7 @@ fn parse(bytes: &[u8]) -> Result<TriMesh, MeshIoError> {
         MeshIoError::parse(FORMAT, line, None, message)
     })?;
     let payload_start = bytes.len() - reader.get_ref().len();
+    check_unique_names(&bytes[..payload_start])?;
     check_counts(&header, bytes.len() - payload_start)?;
     let layout = Layout::of(&header)?;
 
@@ -100,7 +118,52 @@ fn parse(bytes: &[u8]) -> Result<TriMesh, MeshIoError> {
     let normals = (layout.normals && normals.iter().all(|n| n.is_finite())).then_some(normals);
     let mesh = TriMesh { positions, triangles, normals };
     mesh.validate()?;
-    Ok(mesh)
+    let rest = &bytes[payload.pos..];
+    let ascii = header.encoding == Encoding::Ascii;
+    let warnings = if rest.is_empty() || (ascii && rest.trim_ascii().is_empty()) {
+        Vec::new()
+    } else {
+        // Blank lines before ASCII junk count as part of it.
+        vec![ReadWarning::PlyTrailingData {
+            bytes: rest.len() as u64,
+            offset: payload.pos as u64,
+            line: ascii.then_some(payload.line + 1),
+        }]
+    };
+    Ok(MeshRead { mesh, warnings })
+}
+
+/// Refuses a header that declares an element twice, or a property twice in
+/// one element: `ply-rs-bw` keeps only one of them, so every column after it
+/// would be read into the wrong property.
+fn check_unique_names(header: &[u8]) -> Result<(), MeshIoError> {
+    let mut elements = HashSet::new();
+    let mut properties = HashSet::new();
+    let mut element: &[u8] = b"";
+    for (number, line) in header.split(|&b| b == b'\n').enumerate() {
+        let mut tokens = line.split(|b| b.is_ascii_whitespace()).filter(|t| !t.is_empty());
+        let lossy = String::from_utf8_lossy;
+        let message = match tokens.next() {
+            Some(b"element") => {
+                properties.clear();
+                element = tokens.next().unwrap_or_default();
+                if elements.insert(element) {
+                    continue;
+                }
+                format!("element '{}' is declared twice", lossy(element))
+            }
+            Some(b"property") => {
+                let name = tokens.next_back().unwrap_or_default();
+                if properties.insert(name) {
+                    continue;
+                }
+                format!("property '{}' is declared twice in element '{}'", lossy(name), lossy(element))
+            }
+            _ => continue,
+        };
+        return Err(MeshIoError::parse(FORMAT, Some(number + 1), None, &message));
+    }
+    Ok(())
 }
 
 /// What the header offers.
@@ -262,7 +325,11 @@ impl Payload<'_> {
                 rest = &rest[end..];
                 match std::str::from_utf8(text) {
                     _ if text.is_empty() => Err("the data ends before this record".to_owned()),
-                    Ok(text) => self.parser.read_ascii_element(text, def).map_err(|e| e.to_string()),
+                    Ok(text) => self
+                        .parser
+                        .read_ascii_element(text, def)
+                        .map_err(|e| e.to_string())
+                        .and_then(|record| extra_values(text, def).map(|()| record)),
                     Err(_) => Err("the line is not valid UTF-8".to_owned()),
                 }
             }
@@ -281,6 +348,35 @@ impl Payload<'_> {
                 &format!("'{}' record {index}: {message}", def.name),
             )),
         }
+    }
+}
+
+/// Refuses an ASCII record line holding more values than the properties of
+/// `def` take (`ply-rs-bw` ignores them): the header and the data disagree,
+/// so the values read may be the wrong columns. Called once the record
+/// parsed, so every list count is a valid integer.
+fn extra_values(line: &str, def: &ElementDef) -> Result<(), String> {
+    let mut tokens = line.split_ascii_whitespace();
+    let mut taken = 0usize;
+    for property in def.properties.values() {
+        let values = match property.data_type {
+            PropertyType::Scalar(_) => 1,
+            PropertyType::List(..) => {
+                taken += 1;
+                match tokens.next().map(str::parse::<usize>) {
+                    Some(Ok(count)) => count,
+                    _ => return Ok(()),
+                }
+            }
+        };
+        taken = taken.saturating_add(values);
+        if tokens.by_ref().take(values).count() < values {
+            return Ok(());
+        }
+    }
+    match tokens.count() {
+        0 => Ok(()),
+        extra => Err(format!("{} values where the header's properties take {taken}", taken + extra)),
     }
 }
 
@@ -554,6 +650,68 @@ mod tests {
         assert_eq!(read(&normals).unwrap().normals, Some(vec![Vec3::X]));
         let big = normals.replace("0 0 0 1 0 0", "0 0 0 1e39 0 0");
         assert_eq!(read(&big).unwrap().normals, None, "1e39 overflows f32");
+    }
+
+    #[test]
+    fn names_declared_twice_are_refused() {
+        // Old behaviour: the second 'x' replaced the first, so 'y' and 'z'
+        // were read from the wrong columns.
+        let text = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n\
+                    property float x\nproperty float z\nend_header\n1 2 3 4\n";
+        match read(text) {
+            Err(MeshIoError::Parse { line: Some(6), message, .. }) => {
+                assert_eq!(message, "property 'x' is declared twice in element 'vertex'")
+            }
+            other => panic!("{other:?}"),
+        }
+        let elements = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n\
+                        property float z\nelement vertex 1\nproperty float x\nend_header\n1 2 3\n4\n";
+        assert!(matches!(read(elements), Err(MeshIoError::Parse { line: Some(7), .. })));
+        // The same name in two elements is fine.
+        let ok = QUAD_CUBE
+            .replace("element face 6\n", "element face 6\nproperty uchar x\n")
+            .replace("\n4 ", "\n7 4 ");
+        assert_eq!(read(&ok).unwrap().triangles.len(), 12);
+    }
+
+    #[test]
+    fn ascii_records_with_extra_values_are_refused() {
+        // A property missing from the header: 4 values per vertex line.
+        let text = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n\
+                    property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
+                    0 0 0\n1 0 0 0.5\n3 0 1 1\n";
+        match read(text) {
+            Err(MeshIoError::Parse { line: Some(11), message, .. }) => {
+                assert_eq!(message, "'vertex' record 1: 4 values where the header's properties take 3")
+            }
+            other => panic!("{other:?}"),
+        }
+        let face = text.replace("1 0 0 0.5", "1 0 0").replace("3 0 1 1", "3 0 1 1 7");
+        assert!(matches!(read(&face), Err(MeshIoError::Parse { line: Some(12), .. })), "{:?}", read(&face));
+        assert_eq!(read(&face.replace("3 0 1 1 7", "3 0 1 1")).unwrap().triangles, vec![[0, 1, 1]]);
+    }
+
+    #[test]
+    fn data_after_the_declared_elements_is_reported() {
+        let warned = |bytes: &[u8]| super::read(bytes).unwrap();
+        assert_eq!(warned(QUAD_CUBE.as_bytes()).warnings, vec![]);
+        assert_eq!(warned(format!("{QUAD_CUBE}\n \r\n").as_bytes()).warnings, vec![], "blank lines");
+        // A seventh face the header does not count.
+        let extra = format!("{QUAD_CUBE}4 0 1 2 3\n");
+        let read = warned(extra.as_bytes());
+        assert_eq!(read.mesh.triangles.len(), 12);
+        let offset = QUAD_CUBE.len() as u64;
+        assert_eq!(read.warnings, vec![ReadWarning::PlyTrailingData { bytes: 10, offset, line: Some(25) }]);
+        assert!(read.warnings[0].to_string().contains("at line 25"), "{}", read.warnings[0]);
+        // Binary: any byte after the last record.
+        let mesh = TriMesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]]).unwrap();
+        let mut bytes = Vec::new();
+        write_ply(&mesh, &mut bytes, MeshFormat::PlyBinaryLittleEndian).unwrap();
+        let end = bytes.len() as u64;
+        bytes.extend_from_slice(&[0, 0, 7]);
+        let read = warned(&bytes);
+        assert_eq!(read.mesh, mesh);
+        assert_eq!(read.warnings, vec![ReadWarning::PlyTrailingData { bytes: 3, offset: end, line: None }]);
     }
 
     #[test]

@@ -66,6 +66,34 @@ fn bunny_matches_the_data_readme() {
 }
 
 #[test]
+fn real_and_written_files_read_without_warnings() {
+    for name in ["bunny.ply", "bunny.obj", "teapot.ply", "teapot.obj"] {
+        let read = read_mesh_with_warnings(data(name)).unwrap();
+        assert_eq!(read.warnings, vec![], "{name}");
+        assert_eq!(read.mesh, read_mesh(data(name)).unwrap(), "{name}");
+    }
+    let mut mesh = bunny();
+    mesh.compute_normals();
+    for format in ALL {
+        let read = read_mesh_from_with_warnings(&to_bytes(&mesh, format)[..], format).unwrap();
+        assert_eq!(read.warnings, vec![], "{format}");
+    }
+}
+
+#[test]
+fn warnings_reach_the_path_reader() {
+    let dir = std::env::temp_dir().join(format!("isomorph-io-warn-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("dangling.obj");
+    std::fs::write(&path, "v 0 0 0\rv 1 0 0\rv 0 1 0\rf 1//1 2//1 3//1\r").unwrap();
+    let read = read_mesh_with_warnings(&path).unwrap();
+    assert_eq!(read.mesh.triangles, vec![[0, 1, 2]]);
+    assert_eq!(read.warnings, vec![ReadWarning::ObjNormalsDropped { corners: 3, first_line: 4 }]);
+    assert_eq!(read_mesh(&path).unwrap(), read.mesh);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
 fn teapot_reads_in_both_formats() {
     let ply = read_mesh(data("teapot.ply")).unwrap();
     let obj = read_mesh(data("teapot.obj")).unwrap();
@@ -265,6 +293,12 @@ proptest! {
     #[test]
     fn random_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..600)) {
         read_everything(&bytes);
+    }
+
+    #[test]
+    fn binary_data_is_never_an_obj(bytes in proptest::collection::vec(any::<u8>(), 0..600)) {
+        let control = bytes.iter().any(|&b| is_control(b));
+        prop_assert!(!control || read_obj(&bytes[..]).is_err());
     }
 
     #[test]

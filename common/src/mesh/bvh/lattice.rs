@@ -488,6 +488,19 @@ mod tests {
         check(&t, &Lattice::spanning(&t.bounds().padded(0.1), UVec3::new(26, 26, 9)));
     }
 
+    /// Far from the origin, node positions round to f32 by up to a few steps
+    /// (steps of 0.01 and 0.3 at 10⁶, where positions are sixteenths); the
+    /// block search still finds each node's nearest triangle.
+    #[test]
+    fn rounded_node_positions() {
+        let offset = Vec3::new(1e6, -1e6, 1e6);
+        let mesh = torus(1.0, 0.4, 24, 12).transformed(&glam::Affine3A::from_translation(offset));
+        for step in [0.01, 0.3] {
+            let origin = offset - Vec3::new(1.5, 0.5, 0.2);
+            check(&mesh, &Lattice { dims: UVec3::new(20, 19, 17), origin, step: Vec3::splat(step) });
+        }
+    }
+
     #[test]
     fn degenerate_lattices() {
         let mesh = bunny();

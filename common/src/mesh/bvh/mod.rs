@@ -20,6 +20,14 @@
 //! handled as their edges). Ericson's region test (*Real-Time Collision
 //! Detection* §5.1.5) in `f32` was measured to err by up to 4·10⁻³ on
 //! unit-size slivers and so is not used.
+//!
+//! # Scale
+//! The tree works in world units with `f32` squared distances, which
+//! overflow for distances beyond about 10¹⁹ and underflow below about
+//! 10⁻¹⁹. Callers that must handle any mesh scale build it over a copy
+//! multiplied by a power of two (exact) that brings the coordinates near 1,
+//! as [`MeshSdf`](crate::sdf::MeshSdf) and
+//! [`surface_distance`](crate::mesh::distance::surface_distance) do.
 
 pub mod lattice;
 
