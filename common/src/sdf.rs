@@ -816,30 +816,6 @@ mod tests {
         assert!(inside > 500, "{inside} nodes inside");
     }
 
-    /// Times the exact volumes of the bunny (closed: propagated signs) at
-    /// 128³ and the teapot (open: one winding number per node) at 96³, tree
-    /// builds included. Run with
-    /// `cargo test --release -p isomorph-common sdf_timing -- --ignored --nocapture`.
-    #[test]
-    #[ignore = "timing helper"]
-    fn sdf_timing() {
-        let teapot = read_obj(concat!(env!("CARGO_MANIFEST_DIR"), "/../data/teapot.obj"));
-        for (name, mesh, n) in [("bunny", bunny(), 128), ("teapot", teapot, 96)] {
-            let lattice = Lattice::spanning(&mesh.bounds().padded(0.1), UVec3::splat(n));
-            let mut times = Vec::new();
-            let mut inside = 0;
-            for _ in 0..5 {
-                let start = std::time::Instant::now();
-                let d = MeshSdf::new(&mesh).unwrap().sample_lattice(&lattice);
-                times.push(start.elapsed().as_secs_f64() * 1e3);
-                inside = d.iter().filter(|&&x| x > 0.0).count();
-            }
-            times.sort_by(f64::total_cmp);
-            println!("{name} {n}³: median {:.1} ms, min {:.1} ms, {inside} nodes inside", times[2], times[0]);
-            assert!(inside > 0);
-        }
-    }
-
     /// A mesh at scale `factor`, sampled on the lattice scaled likewise,
     /// gives the unit mesh's signs and `factor` times its distances, in both
     /// sign modes, on closed and open meshes, on lattices and single points.

@@ -196,8 +196,8 @@ impl Solid {
         let mut warnings = Vec::new();
         match &*self.0 {
             Repr::Mesh { mesh, sdf } => {
-                let diagonal = f64::from(mesh.bounds().size().length());
-                if !(diagonal > 0.0) {
+                let diagonal = mesh.bounds().size().as_dvec3().length();
+                if diagonal <= 0.0 {
                     return Err(empty("all its vertices coincide".into()));
                 }
                 let edges = mesh.edge_stats();
