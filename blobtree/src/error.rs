@@ -208,6 +208,21 @@ pub enum BlobMorphError {
         /// Target node.
         b: NodePath,
     },
+    /// The decomposition would need more than `limit` node pairs
+    /// ([`crate::correspond::MAX_PAIRS`]): typically the all-children
+    /// heuristic on wide nodes (`n_A × n_B` pairs) or many links.
+    #[error(
+        "matching the trees needs more than {limit} node pairs (exceeded under {a} ↔ {b}); use the \
+         nearest_centre heuristic or fewer links"
+    )]
+    TooManyPairs {
+        /// Source node under which the limit was exceeded.
+        a: NodePath,
+        /// Target node under which the limit was exceeded.
+        b: NodePath,
+        /// The limit.
+        limit: usize,
+    },
     /// Two matched affine nodes or frames cannot be interpolated (mirror).
     #[error("affine maps at {a} ↔ {b} cannot be interpolated: {source}")]
     Transform {

@@ -35,6 +35,7 @@ use glam::{Affine3A, Vec3};
 use isomorph_common::{Aabb, AffineParts};
 use isomorph_common::{Control, Frame, Morph, MorphReport, Outcome, Side, Solid, Stages};
 use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
 
 /// A speed curve `s(t)`: 0 before `start`, 1 after `end`, in between linear
 /// or smooth (`3u² − 2u³`, zero speed at both ends).
@@ -228,17 +229,21 @@ fn build(pair: &Pair) -> Result<GNode, BlobMorphError> {
     Ok(GNode { kind, speed: Speed::default(), origin, children })
 }
 
-/// Applies `f` to every node whose origin is `(a, b)`; returns how many matched.
-fn for_matching(node: &mut GNode, a: &NodePath, b: &NodePath, f: &mut dyn FnMut(&mut GNode)) -> usize {
-    let mut n = 0;
-    if node.origin.a.as_ref() == Some(a) && node.origin.b.as_ref() == Some(b) {
-        f(node);
-        n += 1;
+/// Applies `f` to every node whose origin `(a, b)` is a key of `wanted`,
+/// with that key's index; one traversal for all keys.
+fn for_matching(
+    node: &mut GNode,
+    wanted: &HashMap<(&NodePath, &NodePath), usize>,
+    f: &mut dyn FnMut(usize, &mut GNode),
+) {
+    if let (Some(a), Some(b)) = (&node.origin.a, &node.origin.b)
+        && let Some(&k) = wanted.get(&(a, b))
+    {
+        f(k, node);
     }
     for c in &mut node.children {
-        n += for_matching(c, a, b, f);
+        for_matching(c, wanted, f);
     }
-    n
 }
 
 /// `1/n` of a member of the super-elliptic family (blend 1, union 0).
@@ -339,7 +344,9 @@ impl GenericTree {
         let corr = Correspondence { links: spec.links.clone(), heuristic: spec.heuristic };
         let pair = decompose(a.root(), a.threshold(), b.root(), b.threshold(), &corr)?;
         let mut root = build(&pair)?;
-        for sc in &spec.speeds {
+        // Later curves for the same pair override earlier ones.
+        let mut speeds = HashMap::new();
+        for (k, sc) in spec.speeds.iter().enumerate() {
             if !sc.speed.valid() {
                 return Err(BlobMorphError::InvalidSpeed {
                     a: sc.a.clone(),
@@ -348,34 +355,41 @@ impl GenericTree {
                     end: sc.speed.end,
                 });
             }
-            let speed = sc.speed;
-            if for_matching(&mut root, &sc.a, &sc.b, &mut |n| n.speed = speed) == 0 {
-                return Err(BlobMorphError::UnmatchedPair {
-                    what: "speed curve",
-                    a: sc.a.clone(),
-                    b: sc.b.clone(),
-                });
-            }
+            speeds.insert((&sc.a, &sc.b), k);
         }
-        for tr in &spec.trajectories {
+        let mut matched = vec![false; spec.speeds.len()];
+        for_matching(&mut root, &speeds, &mut |k, n| {
+            n.speed = spec.speeds[k].speed;
+            matched[k] = true;
+        });
+        if let Some(sc) = spec.speeds.iter().find(|sc| !matched[speeds[&(&sc.a, &sc.b)]]) {
+            return Err(BlobMorphError::UnmatchedPair {
+                what: "speed curve",
+                a: sc.a.clone(),
+                b: sc.b.clone(),
+            });
+        }
+        let mut trajectories = HashMap::new();
+        for (k, tr) in spec.trajectories.iter().enumerate() {
             let h = tr.handles.map(Vec3::from_array);
             if !h.iter().all(|v| v.is_finite()) {
                 return Err(BlobMorphError::InvalidTrajectory { a: tr.a.clone(), b: tr.b.clone() });
             }
-            let mut leaves = 0;
-            for_matching(&mut root, &tr.a, &tr.b, &mut |n| {
-                if let GKind::Leaf(l) = &mut n.kind {
-                    l.handles = h;
-                    leaves += 1;
-                }
-            });
-            if leaves == 0 {
-                return Err(BlobMorphError::UnmatchedPair {
-                    what: "trajectory",
-                    a: tr.a.clone(),
-                    b: tr.b.clone(),
-                });
+            trajectories.insert((&tr.a, &tr.b), k);
+        }
+        let mut matched = vec![false; spec.trajectories.len()];
+        for_matching(&mut root, &trajectories, &mut |k, n| {
+            if let GKind::Leaf(l) = &mut n.kind {
+                l.handles = spec.trajectories[k].handles.map(Vec3::from_array);
+                matched[k] = true;
             }
+        });
+        if let Some(tr) = spec.trajectories.iter().find(|tr| !matched[trajectories[&(&tr.a, &tr.b)]]) {
+            return Err(BlobMorphError::UnmatchedPair {
+                what: "trajectory",
+                a: tr.a.clone(),
+                b: tr.b.clone(),
+            });
         }
         Ok(Self { root, thresholds: (a.threshold(), b.threshold()), pair })
     }
