@@ -101,6 +101,21 @@ pub enum NodeProblem {
     /// A difference level must be ≥ 0.
     #[error("difference level must be ≥ 0, got {0}")]
     NegativeLevel(f32),
+    /// A finite parameter is too large (or a radius too small) to be
+    /// resolved in `f32` ([`crate::node::MAX_MAGNITUDE`]).
+    #[error("`{field}` = {value:?} is out of range: expected {expected}")]
+    OutOfRange {
+        /// The field as written in a scene (`"radius"`, `"vertices"`, `"frame"`, …).
+        field: &'static str,
+        /// The offending value.
+        value: f32,
+        /// What is accepted.
+        expected: &'static str,
+    },
+    /// The node's support box is not finite or reaches beyond
+    /// [`crate::node::MAX_SUPPORT`] (nested frames or warps scale it too far).
+    #[error("its support box reaches {0:?}, beyond ±1e9 (nested frames or warps scale it too far)")]
+    SupportTooLarge(f32),
 }
 
 /// Errors of building, loading or saving a BlobTree.
@@ -115,9 +130,22 @@ pub enum BlobError {
         /// What is wrong.
         problem: NodeProblem,
     },
-    /// The iso threshold `T` must be finite and positive.
-    #[error("threshold must be finite and > 0, got {0}")]
+    /// The iso threshold `T` must be positive and at most
+    /// [`crate::node::MAX_MAGNITUDE`].
+    #[error("threshold must be in (0, 1e6], got {0:?}")]
     InvalidThreshold(f32),
+    /// The scene has no inside: its potential is at most `peak` (an upper
+    /// bound from the intensities) everywhere, not above the threshold.
+    #[error(
+        "the scene is empty: its potential never exceeds {peak:?} (intensities, blended), not above the \
+         threshold {threshold:?}"
+    )]
+    EmptyScene {
+        /// Upper bound of the potential.
+        peak: f32,
+        /// The threshold.
+        threshold: f32,
+    },
     /// The file is not valid RON / JSON for a scene.
     #[error("cannot parse the {format} scene: {message}")]
     Parse {
@@ -200,13 +228,18 @@ pub enum BlobMorphError {
         /// Target node.
         b: NodePath,
     },
-    /// A trajectory handle is NaN or infinite.
-    #[error("trajectory for {a} ↔ {b} has a non-finite handle")]
+    /// A trajectory handle coordinate is NaN, infinite or beyond
+    /// [`crate::node::MAX_MAGNITUDE`].
+    #[error(
+        "trajectory for {a} ↔ {b}: handle coordinate {value:?} is out of range: expected a magnitude ≤ 1e6"
+    )]
     InvalidTrajectory {
         /// Source node.
         a: NodePath,
         /// Target node.
         b: NodePath,
+        /// The offending coordinate.
+        value: f32,
     },
     /// The decomposition would need more than `limit` node pairs
     /// ([`crate::correspond::MAX_PAIRS`]): typically the all-children

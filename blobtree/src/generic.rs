@@ -27,7 +27,7 @@
 use crate::correspond::{Correspondence, Heuristic, Link, Origin, Pair, decompose};
 use crate::error::{BlobMorphError, NodePath};
 use crate::minkowski::MinkowskiPath;
-use crate::node::{NaryOp, Node, Primitive};
+use crate::node::{MAX_MAGNITUDE, NaryOp, Node, Primitive};
 use crate::skeleton::Skeleton;
 use crate::tree::BlobTree;
 use crate::warp::Warp;
@@ -339,7 +339,8 @@ impl GenericTree {
     /// # Errors
     /// Link errors of [`decompose`]; [`BlobMorphError::InvalidSpeed`],
     /// [`BlobMorphError::InvalidTrajectory`], [`BlobMorphError::UnmatchedPair`] for
-    /// bad speed curves and trajectories.
+    /// bad speed curves and trajectories (handles must be finite with
+    /// magnitudes ≤ [`MAX_MAGNITUDE`]).
     pub fn new(a: &BlobTree, b: &BlobTree, spec: &MorphSpec) -> Result<Self, BlobMorphError> {
         let corr = Correspondence { links: spec.links.clone(), heuristic: spec.heuristic };
         let pair = decompose(a.root(), a.threshold(), b.root(), b.threshold(), &corr)?;
@@ -371,9 +372,10 @@ impl GenericTree {
         }
         let mut trajectories = HashMap::new();
         for (k, tr) in spec.trajectories.iter().enumerate() {
-            let h = tr.handles.map(Vec3::from_array);
-            if !h.iter().all(|v| v.is_finite()) {
-                return Err(BlobMorphError::InvalidTrajectory { a: tr.a.clone(), b: tr.b.clone() });
+            if let Some(&value) =
+                tr.handles.as_flattened().iter().find(|v| !v.is_finite() || v.abs() > MAX_MAGNITUDE)
+            {
+                return Err(BlobMorphError::InvalidTrajectory { a: tr.a.clone(), b: tr.b.clone(), value });
             }
             trajectories.insert((&tr.a, &tr.b), k);
         }
@@ -652,6 +654,14 @@ mod tests {
         assert!(matches!(
             GenericTree::new(&a, &b, &bad),
             Err(BlobMorphError::UnmatchedPair { what: "trajectory", .. })
+        ));
+        let far = MorphSpec::from_json(
+            r#"{"trajectories": [{"a": [], "b": [], "handles": [[0, 1e38, 0], [1, 1, 0]]}]}"#,
+        )
+        .unwrap();
+        assert!(matches!(
+            GenericTree::new(&a, &b, &far),
+            Err(BlobMorphError::InvalidTrajectory { value: 1e38, .. })
         ));
     }
 

@@ -165,13 +165,19 @@ impl BlobTree {
     /// # Errors
     /// [`BlobError::InvalidNode`] with the offending node's path (unknown
     /// kinds, missing fields, negative radii, NaN, `p < 1`, empty nodes, …),
-    /// [`BlobError::InvalidThreshold`].
+    /// [`BlobError::InvalidThreshold`], [`BlobError::EmptyScene`] when the
+    /// potential can nowhere exceed the threshold.
     pub fn from_scene(file: &SceneFile) -> Result<Self, BlobError> {
-        if !(file.threshold.is_finite() && file.threshold > 0.0) {
+        if !(file.threshold > 0.0 && file.threshold <= crate::node::MAX_MAGNITUDE) {
             return Err(BlobError::InvalidThreshold(file.threshold));
         }
         let root = from_raw(&file.root, &NodePath::root(), file.threshold)?;
-        BlobTree::new(root, file.threshold)
+        let tree = BlobTree::new(root, file.threshold)?;
+        let peak = tree.root().peak_bound();
+        if peak <= file.threshold {
+            return Err(BlobError::EmptyScene { peak, threshold: file.threshold });
+        }
+        Ok(tree)
     }
 
     /// The tree as a scene description.
@@ -470,5 +476,69 @@ mod tests {
             assert!((tree.value(p) - json.value(p)).abs() < 1e-5);
         }
         assert_eq!(again.threshold(), 0.4);
+    }
+
+    /// Finite but absurd magnitudes (which used to polygonize to nothing, or
+    /// to a NaN grid) are refused up front, naming the node and the field.
+    #[test]
+    fn huge_and_tiny_magnitudes_are_refused_by_name() {
+        let ball = |extra: &str| format!(r#"(kind: "point", vertices: [(0,0,0)], radius: 1{extra})"#);
+        let scene = |node: String| format!(r#"(root: (kind: "blend", children: [{}, {node}]))"#, ball(""));
+        let (p, e) = problem(&scene(r#"(kind: "point", vertices: [(0,0,0)], radius: 1e30)"#.into()));
+        assert_eq!(p, vec![1]);
+        assert_eq!(
+            e,
+            NodeProblem::OutOfRange { field: "radius", value: 1e30, expected: "1e-6 ≤ radius ≤ 1e6" }
+        );
+        let (_, e) = problem(&scene(r#"(kind: "point", vertices: [(0,0,0)], radius: 1e-9)"#.into()));
+        assert!(matches!(e, NodeProblem::OutOfRange { field: "radius", .. }));
+        let (p, e) = problem(&scene(r#"(kind: "point", vertices: [(1e38,0,0)], radius: 1)"#.into()));
+        assert_eq!(
+            (p, e),
+            (
+                vec![1],
+                NodeProblem::OutOfRange { field: "vertices", value: 1e38, expected: "a magnitude ≤ 1e6" }
+            )
+        );
+        let (_, e) = problem(&scene(ball(", frame: (translate: (0, 1e38, 0))")));
+        assert!(matches!(e, NodeProblem::OutOfRange { field: "frame", value: 1e38, .. }));
+        let (_, e) = problem(&scene(ball(", intensity: 1e20")));
+        assert!(matches!(e, NodeProblem::OutOfRange { field: "intensity", .. }));
+        let (_, e) = problem(&scene(format!(r#"(kind: "twist", rate: 1e9, children: [{}])"#, ball(""))));
+        assert!(matches!(e, NodeProblem::OutOfRange { field: "rate", .. }));
+        let err = BlobTree::from_ron(&scene(ball(", half: (0,0,0)").replace("radius: 1", "radius: 1e30")))
+            .unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "node root/1: `radius` = 1e30 is out of range: expected 1e-6 ≤ radius ≤ 1e6"
+        );
+        // Each frame within range, but nested under a twist they scale the leaf to 1e10.
+        let nested = format!(
+            r#"(root: (kind: "affine", frame: (scale: (1e5, 1e5, 1e5)), children: [(kind: "twist", rate: 1,
+                children: [(kind: "affine", frame: (scale: (1e5, 1e5, 1e5)), children: [{}])])]))"#,
+            ball("")
+        );
+        let (p, e) = problem(&nested);
+        assert_eq!(p, Vec::<usize>::new());
+        assert!(matches!(e, NodeProblem::SupportTooLarge(r) if r > 1e9), "{e:?}");
+        assert!(matches!(
+            BlobTree::from_ron(&format!("(threshold: 1e30, root: {})", ball(""))),
+            Err(BlobError::InvalidThreshold(_))
+        ));
+    }
+
+    /// A scene whose potential cannot reach the threshold has no surface.
+    #[test]
+    fn scenes_without_inside_are_refused() {
+        let faint = r#"(root: (kind: "union", children: [
+            (kind: "point", vertices: [(0,0,0)], radius: 1, intensity: 0.3),
+            (kind: "point", vertices: [(0.2,0,0)], radius: 1, intensity: 0.5)]))"#;
+        assert_eq!(
+            BlobTree::from_ron(faint).unwrap_err(),
+            BlobError::EmptyScene { peak: 0.5, threshold: 0.5 }
+        );
+        // Blended, the same two reach 0.8 > 0.5 (where they overlap).
+        let tree = BlobTree::from_ron(&faint.replace("union", "blend")).unwrap();
+        assert!(tree.value(Vec3::new(0.1, 0.0, 0.0)) > 0.0);
     }
 }
