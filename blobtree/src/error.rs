@@ -112,6 +112,9 @@ pub enum NodeProblem {
         /// What is accepted.
         expected: &'static str,
     },
+    /// The node lies deeper than [`crate::scene::MAX_DEPTH`] levels in a scene file.
+    #[error("the scene nests deeper than {0} levels of nodes")]
+    TooDeep(usize),
     /// The node's support box is not finite or reaches beyond
     /// [`crate::node::MAX_SUPPORT`] (nested frames or warps scale it too far).
     #[error("its support box reaches {0:?}, beyond ±1e9 (nested frames or warps scale it too far)")]
@@ -146,11 +149,13 @@ pub enum BlobError {
         /// The threshold.
         threshold: f32,
     },
-    /// The file is not valid RON / JSON for a scene.
-    #[error("cannot parse the {format} scene: {message}")]
+    /// The text is not valid RON / JSON for a scene or a links spec.
+    #[error("cannot parse the {format} {what}: {message}")]
     Parse {
         /// `"RON"` or `"JSON"`.
         format: &'static str,
+        /// `"scene"` or `"links spec"` (a [`crate::MorphSpec`]).
+        what: &'static str,
         /// The parser's message (with line and column).
         message: String,
     },
@@ -257,13 +262,13 @@ pub enum BlobMorphError {
         limit: usize,
     },
     /// Two matched affine nodes or frames cannot be interpolated (mirror).
-    #[error("affine maps at {a} ↔ {b} cannot be interpolated: {source}")]
+    #[error("affine maps at {a} ↔ {b} cannot be interpolated")]
     Transform {
         /// Source node.
         a: NodePath,
         /// Target node.
         b: NodePath,
-        /// Why.
+        /// Why (printed as the error's source, not in its message).
         source: TransformError,
     },
 }

@@ -114,10 +114,9 @@ impl MorphSpec {
     /// # Errors
     /// [`crate::BlobError::Parse`] (wrapped) for malformed text.
     pub fn from_ron(text: &str) -> Result<Self, BlobMorphError> {
-        ron::Options::default()
-            .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+        crate::scene::ron_options()
             .from_str(text)
-            .map_err(|e| crate::BlobError::Parse { format: "RON", message: e.to_string() }.into())
+            .map_err(|e| crate::scene::ron_error(&e, "links spec").into())
     }
 
     /// Reads a JSON spec.
@@ -125,8 +124,7 @@ impl MorphSpec {
     /// # Errors
     /// [`crate::BlobError::Parse`] (wrapped) for malformed text.
     pub fn from_json(text: &str) -> Result<Self, BlobMorphError> {
-        serde_json::from_str(text)
-            .map_err(|e| crate::BlobError::Parse { format: "JSON", message: e.to_string() }.into())
+        serde_json::from_str(text).map_err(|e| crate::scene::json_error(&e, "links spec").into())
     }
 
     /// Reads a spec file: JSON for a `.json` extension, RON otherwise.
@@ -611,6 +609,47 @@ mod tests {
             Err(BlobMorphError::Morph(isomorph_common::MorphError::InvalidTime(_)))
         ));
         assert!(MorphSpec::from_ron("(links: 3)").is_err());
+    }
+
+    /// A bad links spec says it is the links spec (not a scene), and a bad
+    /// links file names the file.
+    #[test]
+    fn bad_links_files_say_what_they_are() {
+        let e = MorphSpec::from_ron("(links: 3)").unwrap_err().to_string();
+        assert!(e.starts_with("cannot parse the RON links spec: "), "{e}");
+        let e = MorphSpec::from_json("{\"links\": 3}").unwrap_err().to_string();
+        assert!(e.starts_with("cannot parse the JSON links spec: "), "{e}");
+        let path = std::env::temp_dir().join(format!("isomorph-blobtree-missing-{}.ron", std::process::id()));
+        let e = MorphSpec::load(&path).unwrap_err().to_string();
+        assert!(e.starts_with(&format!("cannot read {}", path.display())), "{e}");
+    }
+
+    /// No error prints its cause twice when its source chain is printed too
+    /// (the CLI prints `error: message: source: …`).
+    #[test]
+    fn causes_are_printed_once() {
+        use std::error::Error;
+        let errors: Vec<BlobMorphError> = vec![
+            BlobMorphError::Transform {
+                a: NodePath::root(),
+                b: NodePath::root(),
+                source: isomorph_common::TransformError::Reflection,
+            },
+            MorphSpec::from_ron("(links: 3)").unwrap_err(),
+            BlobMorphError::from(isomorph_common::MorphError::InvalidTime(2.0)),
+            BlobMorphError::Blob(BlobTree::from_ron("(root: (kind: 3))").unwrap_err()),
+        ];
+        for e in errors {
+            let mut chain = vec![e.to_string()];
+            let mut next = e.source();
+            while let Some(s) = next {
+                chain.push(s.to_string());
+                next = s.source();
+            }
+            for w in chain.windows(2) {
+                assert!(!w[0].contains(&w[1]), "{w:?} prints its cause twice");
+            }
+        }
     }
 
     #[test]

@@ -5,7 +5,7 @@
 //!
 //! | kind | fields |
 //! |---|---|
-//! | `point`, `segment`, `polygon`, `polyhedron` | `vertices` (1, 2, ≥ 3 coplanar, ≥ 4), `radius`, optional `intensity` (1), `stiffness` (1), `p` (2; a number ≥ 1 or `"inf"`), `frame` |
+//! | `point`, `segment`, `polygon`, `polyhedron` | `vertices` (1, 2, 3 to 32 coplanar, 4 to 32), `radius`, optional `intensity` (1), `stiffness` (1), `p` (2; a number ≥ 1 or `"inf"`), `frame` |
 //! | `box` | `half` (half extents) instead of `vertices`; a polyhedron skeleton |
 //! | `blend`, `union`, `intersection` | `children` (≥ 1) |
 //! | `superblend` | `n` (≥ 1), `children` |
@@ -134,8 +134,49 @@ pub struct RawNode {
     pub max: Option<f32>,
 }
 
-fn ron_options() -> ron::Options {
-    ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+/// The deepest node level a scene file may have (the root is level 0).
+/// The readers' own nesting limits lie beyond it (RON: four levels per
+/// node and a few for a leaf's fields; JSON: a fixed 128), so a file is
+/// refused for its depth before it can exhaust the stack.
+pub const MAX_DEPTH: usize = 48;
+
+/// Nesting levels the RON reader accepts.
+const RON_NESTING: usize = 4 * MAX_DEPTH + 16;
+
+pub(crate) fn ron_options() -> ron::Options {
+    ron::Options::default()
+        .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+        .with_recursion_limit(RON_NESTING)
+}
+
+/// What a reader's nesting limit means for a `what` ("scene", "links spec").
+fn too_deep(what: &'static str, at: String) -> String {
+    if what == "scene" {
+        format!("the scene nests deeper than {MAX_DEPTH} levels of nodes ({at})")
+    } else {
+        format!("the {what} nests too deeply ({at})")
+    }
+}
+
+/// A RON parse error of a `what` ("scene", "links spec") in the user's terms.
+pub(crate) fn ron_error(e: &ron::error::SpannedError, what: &'static str) -> BlobError {
+    let message = match e.code {
+        ron::Error::ExceededRecursionLimit => {
+            too_deep(what, format!("line {}, column {}", e.span.start.line, e.span.start.col))
+        }
+        _ => e.to_string(),
+    };
+    BlobError::Parse { format: "RON", what, message }
+}
+
+/// A JSON parse error of a `what` ("scene", "links spec") in the user's terms.
+pub(crate) fn json_error(e: &serde_json::Error, what: &'static str) -> BlobError {
+    let message = if e.to_string().starts_with("recursion limit exceeded") {
+        too_deep(what, format!("line {}, column {}", e.line(), e.column()))
+    } else {
+        e.to_string()
+    };
+    BlobError::Parse { format: "JSON", what, message }
 }
 
 impl BlobTree {
@@ -144,9 +185,7 @@ impl BlobTree {
     /// # Errors
     /// [`BlobError::Parse`] for malformed RON; otherwise as [`BlobTree::from_scene`].
     pub fn from_ron(text: &str) -> Result<Self, BlobError> {
-        let file: SceneFile = ron_options()
-            .from_str(text)
-            .map_err(|e| BlobError::Parse { format: "RON", message: e.to_string() })?;
+        let file: SceneFile = ron_options().from_str(text).map_err(|e| ron_error(&e, "scene"))?;
         Self::from_scene(&file)
     }
 
@@ -155,8 +194,7 @@ impl BlobTree {
     /// # Errors
     /// [`BlobError::Parse`] for malformed JSON; otherwise as [`BlobTree::from_scene`].
     pub fn from_json(text: &str) -> Result<Self, BlobError> {
-        let file: SceneFile = serde_json::from_str(text)
-            .map_err(|e| BlobError::Parse { format: "JSON", message: e.to_string() })?;
+        let file: SceneFile = serde_json::from_str(text).map_err(|e| json_error(&e, "scene"))?;
         Self::from_scene(&file)
     }
 
@@ -206,6 +244,9 @@ impl BlobTree {
 
 fn from_raw(raw: &RawNode, path: &NodePath, threshold: f32) -> Result<Node, BlobError> {
     let err = |p: NodeProblem| BlobError::node(path, p);
+    if path.0.len() > MAX_DEPTH {
+        return Err(err(NodeProblem::TooDeep(MAX_DEPTH)));
+    }
     let need = |v: Option<f32>, name: &'static str| v.ok_or(err(NodeProblem::MissingField(name)));
     let children = |expected: &'static str, ok: &dyn Fn(usize) -> bool| -> Result<Vec<Node>, BlobError> {
         if !ok(raw.children.len()) {
@@ -540,5 +581,57 @@ mod tests {
         // Blended, the same two reach 0.8 > 0.5 (where they overlap).
         let tree = BlobTree::from_ron(&faint.replace("union", "blend")).unwrap();
         assert!(tree.value(Vec3::new(0.1, 0.0, 0.0)) > 0.0);
+    }
+
+    /// A scene nested `depth` operator levels deep around one ball.
+    fn nested(depth: usize, json: bool) -> String {
+        let ball = if json {
+            r#"{"kind": "point", "vertices": [[0,0,0]], "radius": 1}"#
+        } else {
+            r#"(kind: "point", vertices: [(0,0,0)], radius: 1)"#
+        };
+        let (open, close) = if json {
+            (r#"{"kind": "blend", "children": ["#, "]}")
+        } else {
+            (r#"(kind: "blend", children: ["#, "])")
+        };
+        let body = format!("{}{ball}{}", open.repeat(depth), close.repeat(depth));
+        if json { format!(r#"{{"root": {body}}}"#) } else { format!("(root: {body})") }
+    }
+
+    /// Too deep a file is refused with a message a user can act on (no
+    /// parser options or library names), shallower ones load.
+    #[test]
+    fn deep_nesting_is_refused_in_plain_words() {
+        assert!(BlobTree::from_ron(&nested(MAX_DEPTH, false)).is_ok());
+        assert!(BlobTree::from_json(&nested(MAX_DEPTH, true)).is_ok());
+        for depth in [MAX_DEPTH + 1, MAX_DEPTH + 3, 100, 10_000] {
+            for err in [BlobTree::from_ron(&nested(depth, false)), BlobTree::from_json(&nested(depth, true))]
+            {
+                let text = err.unwrap_err().to_string();
+                assert!(text.contains("the scene nests deeper than 48 levels of nodes"), "{depth}: {text}");
+                assert!(!text.contains("serde_stacker") && !text.contains("recursion_limit"), "{text}");
+            }
+        }
+    }
+
+    /// Skeletons with more vertices than [`crate::skeleton::MAX_VERTICES`]
+    /// are refused before their hull is built.
+    #[test]
+    fn oversized_skeletons_are_refused() {
+        let ring = |n: usize| {
+            (0..n)
+                .map(|i| {
+                    let a = std::f32::consts::TAU * i as f32 / n as f32;
+                    format!("({}, {}, 0)", a.cos(), a.sin())
+                })
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let scene = |n: usize| format!(r#"(root: (kind: "polygon", vertices: [{}], radius: 0.5))"#, ring(n));
+        assert!(BlobTree::from_ron(&scene(32)).is_ok());
+        let (p, e) = problem(&scene(5000));
+        assert_eq!(p, Vec::<usize>::new());
+        assert_eq!(e, NodeProblem::WrongVertexCount { kind: "polygon", expected: "≤ 32", got: 5000 });
     }
 }
