@@ -247,13 +247,16 @@ pub enum BlobMorphError {
         value: f32,
     },
     /// The decomposition would need more than `limit` node pairs
-    /// ([`crate::correspond::MAX_PAIRS`]): typically the all-children
-    /// heuristic on wide nodes (`n_A × n_B` pairs) or many links.
+    /// ([`crate::correspond::MAX_PAIRS`]) or skeleton vertex pairs
+    /// ([`crate::correspond::MAX_VERTEX_PAIRS`]): typically the
+    /// all-children heuristic on wide nodes (`n_A × n_B` pairs) or many links.
     #[error(
-        "matching the trees needs more than {limit} node pairs (exceeded under {a} ↔ {b}); use the \
+        "matching the trees needs more than {limit} {what} (exceeded under {a} ↔ {b}); use the \
          nearest_centre heuristic or fewer links"
     )]
     TooManyPairs {
+        /// `"node pairs"` or `"skeleton vertex pairs"`.
+        what: &'static str,
         /// Source node under which the limit was exceeded.
         a: NodePath,
         /// Target node under which the limit was exceeded.

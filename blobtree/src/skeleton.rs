@@ -123,6 +123,16 @@ impl Skeleton {
         }
     }
 
+    /// The number of vertices (as [`Skeleton::vertices`], without copying them).
+    pub fn vertex_count(&self) -> usize {
+        match self {
+            Skeleton::Point(_) => 1,
+            Skeleton::Segment(..) => 2,
+            Skeleton::Polygon(v) | Skeleton::Polyhedron(v) => v.len(),
+            Skeleton::Generic(p) => p.vertices().len(),
+        }
+    }
+
     /// The vertices as given.
     pub fn vertices(&self) -> Vec<Vec3> {
         match self {
