@@ -130,13 +130,11 @@ impl MorphSpec {
     /// Reads a spec file: JSON for a `.json` extension, RON otherwise.
     ///
     /// # Errors
-    /// [`crate::BlobError::Read`] (wrapped) for an unreadable file, and as
+    /// [`crate::BlobError::Read`] (wrapped) for an unreadable file or one
+    /// larger than [`crate::scene::MAX_FILE_BYTES`], and as
     /// [`MorphSpec::from_ron`] / [`MorphSpec::from_json`].
     pub fn load(path: &std::path::Path) -> Result<Self, BlobMorphError> {
-        let text = std::fs::read_to_string(path).map_err(|e| crate::BlobError::Read {
-            path: path.display().to_string(),
-            message: e.to_string(),
-        })?;
+        let text = crate::scene::read_text(path, "")?;
         if path.extension().is_some_and(|e| e == "json") {
             Self::from_json(&text)
         } else {

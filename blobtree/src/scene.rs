@@ -134,6 +134,25 @@ pub struct RawNode {
     pub max: Option<f32>,
 }
 
+/// The largest scene or links file read, in bytes (64 MiB): a file is read
+/// whole, so larger ones (or endless streams) are refused before they fill
+/// the memory.
+pub const MAX_FILE_BYTES: u64 = 64 << 20;
+
+/// Reads the file at `path` (at most [`MAX_FILE_BYTES`]); `hint` is added
+/// to the message of a file that cannot be opened.
+pub(crate) fn read_text(path: &std::path::Path, hint: &str) -> Result<String, BlobError> {
+    use std::io::Read;
+    let fail = |message: String| BlobError::Read { path: path.display().to_string(), message };
+    let file = std::fs::File::open(path).map_err(|e| fail(format!("{e}{hint}")))?;
+    let mut text = String::new();
+    file.take(MAX_FILE_BYTES + 1).read_to_string(&mut text).map_err(|e| fail(e.to_string()))?;
+    if text.len() as u64 > MAX_FILE_BYTES {
+        return Err(fail(format!("the file is larger than {} MiB", MAX_FILE_BYTES >> 20)));
+    }
+    Ok(text)
+}
+
 /// The deepest node level a scene file may have (the root is level 0).
 /// The readers' own nesting limits lie beyond it (RON: four levels per
 /// node and a few for a leaf's fields; JSON: a fixed 128), so a file is
