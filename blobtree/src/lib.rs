@@ -64,7 +64,8 @@
 //!   reach the threshold, and correspondences needing more than
 //!   [`correspond::MAX_PAIRS`] node pairs or [`correspond::MAX_VERTEX_PAIRS`]
 //!   skeleton vertex pairs (the all-children heuristic on wide nodes).
-//!   Matching is otherwise near-linear (k-d tree for nearest centres).
+//!   Matching is otherwise near-linear (k-d tree for nearest centres);
+//!   scene and links files are read up to [`scene::MAX_FILE_BYTES`].
 //!
 //! Not guaranteed: intermediate shapes keep the topology of either end
 //! (they do for the built-in rook → queen, which is tested); gradients under
