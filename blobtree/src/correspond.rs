@@ -36,7 +36,23 @@
 use crate::error::{BlobMorphError, NodePath, Side};
 use crate::node::{NaryOp, Node, Primitive};
 use crate::warp::Warp;
+use glam::Vec3;
 use serde::{Deserialize, Serialize};
+use std::collections::{HashMap, HashSet};
+
+/// The most node pairs a decomposition may create. The all-children
+/// heuristic makes `n_A × n_B` pairs per matched node pair (and splitting
+/// multiplies subtrees), so wide or deep trees could otherwise need
+/// unbounded time and memory; [`decompose`] refuses them with
+/// [`BlobMorphError::TooManyPairs`] before building them.
+pub const MAX_PAIRS: usize = 1 << 18;
+
+/// The most skeleton vertex pairs a decomposition may create: the sum over
+/// its leaf pairs of `n_A · n_B`, the candidate vertices of their Minkowski
+/// interpolations (§3.4.1), whose generic topology costs up to about 0.06 s
+/// for two 32-vertex polyhedra. [`decompose`] refuses more with
+/// [`BlobMorphError::TooManyPairs`].
+pub const MAX_VERTEX_PAIRS: usize = 1 << 19;
 
 /// An animator's link between a node of the source and a node of the target.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
@@ -176,17 +192,77 @@ pub struct Correspondence {
 struct Ctx<'a> {
     links: &'a [Link],
     used: Vec<bool>,
+    /// Links by their pair of paths (for [`consume`]).
+    by_pair: HashMap<(&'a NodePath, &'a NodePath), Vec<usize>>,
+    /// Links by their source path (for the links between two nodes' children).
+    by_source: HashMap<&'a NodePath, Vec<usize>>,
     heuristic: Heuristic,
     /// Threshold of each side (level of inserted difference nodes).
     thresholds: (f32, f32),
+    /// Node pairs created so far (at most [`MAX_PAIRS`]).
+    pairs: usize,
+    /// Skeleton vertex pairs of the leaf pairs so far (at most [`MAX_VERTEX_PAIRS`]).
+    vertex_pairs: usize,
+}
+
+impl Ctx<'_> {
+    /// Whether `n` more node pairs fit in [`MAX_PAIRS`] (under the matched
+    /// nodes `pa ↔ pb`, named in the error).
+    fn room(&self, n: usize, pa: Option<&NodePath>, pb: Option<&NodePath>) -> Result<(), BlobMorphError> {
+        if self.pairs.checked_add(n).is_some_and(|total| total <= MAX_PAIRS) {
+            Ok(())
+        } else {
+            Err(BlobMorphError::TooManyPairs {
+                what: "node pairs",
+                a: pa.cloned().unwrap_or_default(),
+                b: pb.cloned().unwrap_or_default(),
+                limit: MAX_PAIRS,
+            })
+        }
+    }
+
+    /// Accounts for the leaf pair `x ↔ y` (with `pa ↔ pb`, named in the error).
+    fn reserve_leaf(
+        &mut self,
+        x: &Primitive,
+        y: &Primitive,
+        pa: Option<&NodePath>,
+        pb: Option<&NodePath>,
+    ) -> Result<(), BlobMorphError> {
+        let n = x.skeleton.vertex_count().saturating_mul(y.skeleton.vertex_count());
+        match self.vertex_pairs.checked_add(n) {
+            Some(total) if total <= MAX_VERTEX_PAIRS => {
+                self.vertex_pairs = total;
+                Ok(())
+            }
+            _ => Err(BlobMorphError::TooManyPairs {
+                what: "skeleton vertex pairs",
+                a: pa.cloned().unwrap_or_default(),
+                b: pb.cloned().unwrap_or_default(),
+                limit: MAX_VERTEX_PAIRS,
+            }),
+        }
+    }
+
+    /// Accounts for one more node pair.
+    fn reserve(&mut self, pa: Option<&NodePath>, pb: Option<&NodePath>) -> Result<(), BlobMorphError> {
+        self.room(1, pa, pb)?;
+        self.pairs += 1;
+        Ok(())
+    }
 }
 
 /// Matches and decomposes `a` (threshold `ta`) and `b` (threshold `tb`) into
 /// a pair tree whose two sides overlap.
 ///
+/// Near-linear in the sizes of the trees and of the result (nearest
+/// centres through a k-d tree, links and degrees through hash maps).
+///
 /// # Errors
 /// [`BlobMorphError::NoSuchNode`] for links to missing nodes,
-/// [`BlobMorphError::LinkBreaksHierarchy`] for links whose parents are never matched.
+/// [`BlobMorphError::LinkBreaksHierarchy`] for links whose parents are never matched,
+/// [`BlobMorphError::TooManyPairs`] when the result would have more than
+/// [`MAX_PAIRS`] node pairs.
 pub fn decompose(
     a: &Node,
     ta: f32,
@@ -202,15 +278,25 @@ pub fn decompose(
             return Err(BlobMorphError::NoSuchNode { side: Side::Target, path: l.b.clone() });
         }
     }
+    let mut by_pair: HashMap<_, Vec<usize>> = HashMap::new();
+    let mut by_source: HashMap<_, Vec<usize>> = HashMap::new();
+    for (i, l) in corr.links.iter().enumerate() {
+        by_pair.entry((&l.a, &l.b)).or_default().push(i);
+        by_source.entry(&l.a).or_default().push(i);
+    }
     let mut ctx = Ctx {
         links: &corr.links,
         used: vec![false; corr.links.len()],
+        by_pair,
+        by_source,
         heuristic: corr.heuristic,
         thresholds: (ta, tb),
+        pairs: 0,
+        vertex_pairs: 0,
     };
     let root = NodePath::root();
     consume(&mut ctx, &root, &root);
-    let pair = pair(a, Some(&root), b, Some(&root), &mut ctx);
+    let pair = pair(a, Some(&root), b, Some(&root), &mut ctx)?;
     if let Some(i) = ctx.used.iter().position(|u| !u) {
         let l = &corr.links[i];
         return Err(BlobMorphError::LinkBreaksHierarchy { a: l.a.clone(), b: l.b.clone() });
@@ -219,9 +305,9 @@ pub fn decompose(
 }
 
 fn consume(ctx: &mut Ctx<'_>, pa: &NodePath, pb: &NodePath) {
-    for (l, u) in ctx.links.iter().zip(ctx.used.iter_mut()) {
-        if &l.a == pa && &l.b == pb {
-            *u = true;
+    if let Some(ids) = ctx.by_pair.get(&(pa, pb)) {
+        for &i in ids {
+            ctx.used[i] = true;
         }
     }
 }
@@ -230,18 +316,25 @@ fn child(p: Option<&NodePath>, i: usize) -> Option<NodePath> {
     p.map(|p| p.child(i))
 }
 
-fn pair(a: &Node, pa: Option<&NodePath>, b: &Node, pb: Option<&NodePath>, ctx: &mut Ctx<'_>) -> Pair {
+fn pair(
+    a: &Node,
+    pa: Option<&NodePath>,
+    b: &Node,
+    pb: Option<&NodePath>,
+    ctx: &mut Ctx<'_>,
+) -> Result<Pair, BlobMorphError> {
+    ctx.reserve(pa, pb)?;
     let origin = Origin { a: pa.cloned(), b: pb.cloned() };
     let structural = |ctx: &mut Ctx<'_>, ca: &Option<NodePath>, cb: &Option<NodePath>| {
         if let (Some(x), Some(y)) = (ca, cb) {
             consume(ctx, x, y);
         }
     };
-    match (a, b) {
+    Ok(match (a, b) {
         (Node::Warp { warp: wa, child: ca }, Node::Warp { warp: wb, child: cb }) => {
             let (qa, qb) = (child(pa, 0), child(pb, 0));
             structural(ctx, &qa, &qb);
-            let inner = pair(ca, qa.as_ref(), cb, qb.as_ref(), ctx);
+            let inner = pair(ca, qa.as_ref(), cb, qb.as_ref(), ctx)?;
             if wa.kind() == wb.kind() {
                 Pair::Warp { a: *wa, b: *wb, child: Box::new(inner), origin }
             } else {
@@ -256,11 +349,11 @@ fn pair(a: &Node, pa: Option<&NodePath>, b: &Node, pb: Option<&NodePath>, ctx: &
             }
         }
         (Node::Warp { warp: wa, child: ca }, _) => {
-            let inner = pair(ca, child(pa, 0).as_ref(), b, pb, ctx);
+            let inner = pair(ca, child(pa, 0).as_ref(), b, pb, ctx)?;
             Pair::Warp { a: *wa, b: wa.identity_like(), child: Box::new(inner), origin }
         }
         (_, Node::Warp { warp: wb, child: cb }) => {
-            let inner = pair(a, pa, cb, child(pb, 0).as_ref(), ctx);
+            let inner = pair(a, pa, cb, child(pb, 0).as_ref(), ctx)?;
             Pair::Warp { a: wb.identity_like(), b: *wb, child: Box::new(inner), origin }
         }
         (
@@ -270,31 +363,32 @@ fn pair(a: &Node, pa: Option<&NodePath>, b: &Node, pb: Option<&NodePath>, ctx: &
             let (la_p, lb_p, ra_p, rb_p) = (child(pa, 0), child(pb, 0), child(pa, 1), child(pb, 1));
             structural(ctx, &la_p, &lb_p);
             structural(ctx, &ra_p, &rb_p);
-            let left = pair(la, la_p.as_ref(), lb, lb_p.as_ref(), ctx);
-            let right = pair(ra, ra_p.as_ref(), rb, rb_p.as_ref(), ctx);
+            let left = pair(la, la_p.as_ref(), lb, lb_p.as_ref(), ctx)?;
+            let right = pair(ra, ra_p.as_ref(), rb, rb_p.as_ref(), ctx)?;
             Pair::Difference { a: *ca, b: *cb, left: Box::new(left), right: Box::new(right), origin }
         }
         (Node::Difference { left, right, level }, _) => {
             // Fig. 14: B becomes difference(B, phantom of A's right child).
-            let l = pair(left, child(pa, 0).as_ref(), b, pb, ctx);
-            let r = with_phantom(right, child(pa, 1), Side::Source);
+            let l = pair(left, child(pa, 0).as_ref(), b, pb, ctx)?;
+            let r = with_phantom(right, child(pa, 1), Side::Source, ctx)?;
             Pair::Difference { a: *level, b: ctx.thresholds.1, left: Box::new(l), right: Box::new(r), origin }
         }
         (_, Node::Difference { left, right, level }) => {
-            let l = pair(a, pa, left, child(pb, 0).as_ref(), ctx);
-            let r = with_phantom(right, child(pb, 1), Side::Target);
+            let l = pair(a, pa, left, child(pb, 0).as_ref(), ctx)?;
+            let r = with_phantom(right, child(pb, 1), Side::Target, ctx)?;
             Pair::Difference { a: ctx.thresholds.0, b: *level, left: Box::new(l), right: Box::new(r), origin }
         }
         (Node::Primitive(x), Node::Primitive(y)) => {
+            ctx.reserve_leaf(x, y, pa, pb)?;
             Pair::Leaf { a: Box::new(x.clone()), b: Box::new(y.clone()), origin }
         }
         _ => {
             let (op_a, kids_a) = commutative(a, pa);
             let (op_b, kids_b) = commutative(b, pb);
-            let (op_a, op_b, children) = match_children(op_a, &kids_a, op_b, &kids_b, pa, pb, ctx);
+            let (op_a, op_b, children) = match_children(op_a, &kids_a, op_b, &kids_b, pa, pb, ctx)?;
             Pair::Nary { a: op_a, b: op_b, children, origin }
         }
-    }
+    })
 }
 
 type Kid<'a> = (&'a Node, Option<NodePath>);
@@ -324,7 +418,7 @@ fn match_children(
     pa: Option<&NodePath>,
     pb: Option<&NodePath>,
     ctx: &mut Ctx<'_>,
-) -> (NaryOp, NaryOp, Vec<Pair>) {
+) -> Result<(NaryOp, NaryOp, Vec<Pair>), BlobMorphError> {
     // A wrapped primitive takes the partner's operator (a one-child node of
     // any commutative kind equals its child).
     let (op_a, op_b) = match (
@@ -335,30 +429,35 @@ fn match_children(
         (false, true) => (op_a, op_a),
         _ => (op_a, op_b),
     };
-    let centres_a: Vec<_> = kids_a.iter().map(|(n, _)| n.centre()).collect();
-    let centres_b: Vec<_> = kids_b.iter().map(|(n, _)| n.centre()).collect();
-    let nearest = |c: glam::Vec3, others: &[glam::Vec3]| {
-        others
-            .iter()
-            .enumerate()
-            .min_by(|x, y| (*x.1 - c).length().total_cmp(&(*y.1 - c).length()))
-            .map(|(i, _)| i)
-    };
-    // User links at this level.
-    let mut edges: Vec<(Option<usize>, Option<usize>)> = Vec::new();
-    for (li, l) in ctx.links.iter().enumerate() {
-        let i = kids_a.iter().position(|(_, p)| p.as_ref() == Some(&l.a));
-        let j = kids_b.iter().position(|(_, p)| p.as_ref() == Some(&l.b));
-        if let (Some(i), Some(j)) = (i, j) {
-            ctx.used[li] = true;
-            if !edges.contains(&(Some(i), Some(j))) {
-                edges.push((Some(i), Some(j)));
+    let centres_a: Vec<Vec3> = kids_a.iter().map(|(n, _)| n.centre()).collect();
+    let centres_b: Vec<Vec3> = kids_b.iter().map(|(n, _)| n.centre()).collect();
+    // User links at this level, in the order they were given.
+    let index_b: HashMap<&NodePath, usize> =
+        kids_b.iter().enumerate().filter_map(|(j, (_, p))| Some((p.as_ref()?, j))).collect();
+    let mut linked: Vec<(usize, usize, usize)> = Vec::new();
+    for (i, (_, p)) in kids_a.iter().enumerate() {
+        let Some(ids) = p.as_ref().and_then(|p| ctx.by_source.get(p)) else { continue };
+        for &li in ids {
+            if let Some(&j) = index_b.get(&ctx.links[li].b) {
+                linked.push((li, i, j));
             }
+        }
+    }
+    linked.sort_unstable();
+    let mut edges: Vec<(Option<usize>, Option<usize>)> = Vec::new();
+    let mut seen: HashSet<(usize, usize)> = HashSet::new();
+    for &(li, i, j) in &linked {
+        ctx.used[li] = true;
+        if seen.insert((i, j)) {
+            edges.push((Some(i), Some(j)));
         }
     }
     if edges.is_empty() {
         match ctx.heuristic {
             Heuristic::AllChildren => {
+                // Refuse before enumerating: n_A × n_B pairs.
+                let n = kids_a.len().saturating_mul(kids_b.len());
+                ctx.room(n, pa, pb)?;
                 for i in 0..kids_a.len() {
                     for j in 0..kids_b.len() {
                         edges.push((Some(i), Some(j)));
@@ -366,14 +465,16 @@ fn match_children(
                 }
             }
             Heuristic::NearestCentre => {
+                let (near_a, near_b) = (KdTree::new(&centres_a), KdTree::new(&centres_b));
                 for (i, c) in centres_a.iter().enumerate() {
-                    if let Some(j) = nearest(*c, &centres_b) {
+                    if let Some(j) = near_b.nearest(*c) {
+                        seen.insert((i, j));
                         edges.push((Some(i), Some(j)));
                     }
                 }
                 for (j, c) in centres_b.iter().enumerate() {
-                    if let Some(i) = nearest(*c, &centres_a)
-                        && !edges.contains(&(Some(i), Some(j)))
+                    if let Some(i) = near_a.nearest(*c)
+                        && seen.insert((i, j))
                     {
                         edges.push((Some(i), Some(j)));
                     }
@@ -382,43 +483,112 @@ fn match_children(
         }
     } else {
         // Unlinked children: phantoms, or the nearest child under an intersection.
+        let mut has_a = vec![false; kids_a.len()];
+        let mut has_b = vec![false; kids_b.len()];
+        for &(i, j) in &seen {
+            (has_a[i], has_b[j]) = (true, true);
+        }
+        let near_b = (op_b == NaryOp::Intersection).then(|| KdTree::new(&centres_b));
         for (i, c) in centres_a.iter().enumerate() {
-            if !edges.iter().any(|e| e.0 == Some(i)) {
-                let j = if op_b == NaryOp::Intersection { nearest(*c, &centres_b) } else { None };
-                edges.push((Some(i), j));
+            if !has_a[i] {
+                edges.push((Some(i), near_b.as_ref().and_then(|t| t.nearest(*c))));
             }
         }
+        let near_a = (op_a == NaryOp::Intersection).then(|| KdTree::new(&centres_a));
         for (j, c) in centres_b.iter().enumerate() {
-            if !edges.iter().any(|e| e.1 == Some(j)) {
-                let i = if op_a == NaryOp::Intersection { nearest(*c, &centres_a) } else { None };
-                edges.push((i, Some(j)));
+            if !has_b[j] {
+                edges.push((near_a.as_ref().and_then(|t| t.nearest(*c)), Some(j)));
             }
         }
     }
-    let deg_a = |i: usize| edges.iter().filter(|e| e.0 == Some(i)).count();
-    let deg_b = |j: usize| edges.iter().filter(|e| e.1 == Some(j)).count();
+    let mut deg_a = vec![0usize; kids_a.len()];
+    let mut deg_b = vec![0usize; kids_b.len()];
+    for &(i, j) in &edges {
+        if let Some(i) = i {
+            deg_a[i] += 1;
+        }
+        if let Some(j) = j {
+            deg_b[j] += 1;
+        }
+    }
     let mut out = Vec::with_capacity(edges.len());
     for &(i, j) in &edges {
         let pair = match (i, j) {
             (Some(i), Some(j)) => {
-                let x = split(kids_a[i].0, op_a, deg_a(i));
-                let y = split(kids_b[j].0, op_b, deg_b(j));
+                let x = split(kids_a[i].0, op_a, deg_a[i]);
+                let y = split(kids_b[j].0, op_b, deg_b[j]);
                 if let (Some(p), Some(q)) = (&kids_a[i].1, &kids_b[j].1) {
                     consume(ctx, p, q);
                 }
-                pair(&x, kids_a[i].1.as_ref(), &y, kids_b[j].1.as_ref(), ctx)
+                pair(&x, kids_a[i].1.as_ref(), &y, kids_b[j].1.as_ref(), ctx)?
             }
             (Some(i), None) => {
-                with_phantom(&split(kids_a[i].0, op_a, deg_a(i)), kids_a[i].1.clone(), Side::Source)
+                with_phantom(&split(kids_a[i].0, op_a, deg_a[i]), kids_a[i].1.clone(), Side::Source, ctx)?
             }
             (None, Some(j)) => {
-                with_phantom(&split(kids_b[j].0, op_b, deg_b(j)), kids_b[j].1.clone(), Side::Target)
+                with_phantom(&split(kids_b[j].0, op_b, deg_b[j]), kids_b[j].1.clone(), Side::Target, ctx)?
             }
             (None, None) => continue,
         };
         out.push(pair);
     }
-    (op_a, op_b, out)
+    Ok((op_a, op_b, out))
+}
+
+/// A static k-d tree over skeleton centres answering "which is nearest to
+/// `q`" exactly as a linear scan would: the least Euclidean length, ties
+/// to the lowest index.
+struct KdTree {
+    /// Points with their indices, each range's median at its middle, split
+    /// along x, y, z by depth.
+    points: Vec<(Vec3, usize)>,
+}
+
+impl KdTree {
+    fn new(points: &[Vec3]) -> Self {
+        fn arrange(pts: &mut [(Vec3, usize)], axis: usize) {
+            if pts.len() <= 1 {
+                return;
+            }
+            let mid = pts.len() / 2;
+            pts.select_nth_unstable_by(mid, |x, y| x.0[axis].total_cmp(&y.0[axis]));
+            let (left, right) = pts.split_at_mut(mid);
+            arrange(left, (axis + 1) % 3);
+            arrange(&mut right[1..], (axis + 1) % 3);
+        }
+        let mut points: Vec<(Vec3, usize)> = points.iter().copied().zip(0..).collect();
+        arrange(&mut points, 0);
+        Self { points }
+    }
+
+    fn nearest(&self, q: Vec3) -> Option<usize> {
+        fn search(pts: &[(Vec3, usize)], axis: usize, q: Vec3, best: &mut Option<(f32, usize)>) {
+            if pts.is_empty() {
+                return;
+            }
+            let mid = pts.len() / 2;
+            let (p, i) = pts[mid];
+            let d = (p - q).length();
+            let better = match *best {
+                None => true,
+                Some((bd, bi)) => d.total_cmp(&bd).then(i.cmp(&bi)).is_lt(),
+            };
+            if better {
+                *best = Some((d, i));
+            }
+            let diff = q[axis] - p[axis];
+            let (near, far) =
+                if diff < 0.0 { (&pts[..mid], &pts[mid + 1..]) } else { (&pts[mid + 1..], &pts[..mid]) };
+            search(near, (axis + 1) % 3, q, best);
+            // Points beyond the splitting plane are at least |diff| away.
+            if best.is_none_or(|(bd, _)| diff.abs() <= bd || bd.is_nan()) {
+                search(far, (axis + 1) % 3, q, best);
+            }
+        }
+        let mut best = None;
+        search(&self.points, 0, q, &mut best);
+        best.map(|(_, i)| i)
+    }
 }
 
 /// One of `m` copies of `node` under `op` whose copies add up to `node`
@@ -438,27 +608,40 @@ pub fn split(node: &Node, op: NaryOp, m: usize) -> Node {
 }
 
 /// Pairs `node` (on `side`) with its own phantom on the other side, node by node.
-fn with_phantom(node: &Node, path: Option<NodePath>, side: Side) -> Pair {
+fn with_phantom(
+    node: &Node,
+    path: Option<NodePath>,
+    side: Side,
+    ctx: &mut Ctx<'_>,
+) -> Result<Pair, BlobMorphError> {
+    let (pa, pb) = if side == Side::Source { (path.as_ref(), None) } else { (None, path.as_ref()) };
+    ctx.reserve(pa, pb)?;
+    if let Node::Primitive(p) = node {
+        ctx.reserve_leaf(p, p, pa, pb)?;
+    }
     let phantom = node.phantom();
     let origin = match side {
         Side::Source => Origin { a: path.clone(), b: None },
         Side::Target => Origin { a: None, b: path.clone() },
     };
     let (x, y) = if side == Side::Source { (node, &phantom) } else { (&phantom, node) };
-    let kids = |i: usize| with_phantom(node.children()[i], child(path.as_ref(), i), side);
-    match (x, y) {
+    let mut kids = |i: usize| with_phantom(node.children()[i], child(path.as_ref(), i), side, ctx);
+    Ok(match (x, y) {
         (Node::Primitive(a), Node::Primitive(b)) => {
             Pair::Leaf { a: Box::new(a.clone()), b: Box::new(b.clone()), origin }
         }
-        (Node::Nary { op, children }, _) | (Node::Mix { from: op, children, .. }, _) => {
-            Pair::Nary { a: *op, b: *op, children: (0..children.len()).map(kids).collect(), origin }
-        }
+        (Node::Nary { op, children }, _) | (Node::Mix { from: op, children, .. }, _) => Pair::Nary {
+            a: *op,
+            b: *op,
+            children: (0..children.len()).map(kids).collect::<Result<_, _>>()?,
+            origin,
+        },
         (Node::Difference { level: la, .. }, Node::Difference { level: lb, .. }) => {
-            Pair::Difference { a: *la, b: *lb, left: Box::new(kids(0)), right: Box::new(kids(1)), origin }
+            Pair::Difference { a: *la, b: *lb, left: Box::new(kids(0)?), right: Box::new(kids(1)?), origin }
         }
-        (Node::Warp { warp, .. }, _) => Pair::Warp { a: *warp, b: *warp, child: Box::new(kids(0)), origin },
+        (Node::Warp { warp, .. }, _) => Pair::Warp { a: *warp, b: *warp, child: Box::new(kids(0)?), origin },
         _ => unreachable!("a phantom has the structure of its node"),
-    }
+    })
 }
 
 #[cfg(test)]
@@ -584,5 +767,100 @@ mod tests {
             Err(BlobMorphError::LinkBreaksHierarchy { .. })
         ));
         assert!(decompose(&a, 0.5, &b, 0.5, &corr(vec![0], vec![1])).is_ok());
+    }
+
+    /// A blend of `n` balls on a 16 × 16 × … lattice.
+    fn wide(n: usize) -> Node {
+        Node::blend(
+            (0..n)
+                .map(|i| ball(Vec3::new((i % 16) as f32, ((i / 16) % 16) as f32, (i / 256) as f32) * 0.3))
+                .collect(),
+        )
+    }
+
+    /// 1500 × 1500 children under the all-children heuristic would be 2.25 M
+    /// pairs: refused (before they are enumerated) with the node named.
+    #[test]
+    fn all_children_on_wide_nodes_is_refused() {
+        let a = wide(1500);
+        let corr = Correspondence { links: vec![], heuristic: Heuristic::AllChildren };
+        match decompose(&a, 0.5, &a, 0.5, &corr) {
+            Err(BlobMorphError::TooManyPairs { what, a, b, limit }) => {
+                assert_eq!(
+                    (what, a, b, limit),
+                    ("node pairs", NodePath::root(), NodePath::root(), MAX_PAIRS)
+                );
+            }
+            other => panic!("expected TooManyPairs, got {other:?}"),
+        }
+        // Within the limit it still pairs every child with every child.
+        let small = wide(40);
+        assert_eq!(decompose(&small, 0.5, &small, 0.5, &corr).unwrap().leaf_count(), 1600);
+    }
+
+    /// 100 × 100 boxes are only 10⁴ node pairs, but 64 vertex pairs each
+    /// (the Minkowski candidates): refused by the vertex-pair limit.
+    #[test]
+    fn many_polyhedron_pairs_are_refused() {
+        let boxes = |n: usize| {
+            let b = |i: usize| {
+                let p = crate::Primitive::new(Skeleton::cuboid(Vec3::splat(0.1)), Kernel::new(1.0, 0.3, 1.0));
+                Node::Primitive(p.with_frame(glam::Affine3A::from_translation(Vec3::X * i as f32)))
+            };
+            Node::blend((0..n).map(b).collect())
+        };
+        let corr = Correspondence { links: vec![], heuristic: Heuristic::AllChildren };
+        assert!(matches!(
+            decompose(&boxes(100), 0.5, &boxes(100), 0.5, &corr),
+            Err(BlobMorphError::TooManyPairs { what: "skeleton vertex pairs", limit: MAX_VERTEX_PAIRS, .. })
+        ));
+        assert_eq!(decompose(&boxes(60), 0.5, &boxes(60), 0.5, &corr).unwrap().leaf_count(), 3600);
+        assert!(matches!(
+            decompose(&wide(100), 0.5, &wide(100), 0.5, &corr),
+            Ok(pair) if pair.leaf_count() == 10_000
+        ));
+    }
+
+    /// The same wide scene under nearest centres: one pair per child, and
+    /// splitting one child 1500 ways stays within the limit.
+    #[test]
+    fn nearest_centre_on_wide_nodes_pairs_each_child() {
+        let a = wide(1500);
+        let corr = Correspondence::default();
+        let pair = decompose(&a, 0.5, &a, 0.5, &corr).unwrap();
+        assert_eq!(pair.leaf_count(), 1500);
+        let one = ball(Vec3::ZERO);
+        let pair = decompose(&one, 0.5, &a, 0.5, &corr).unwrap();
+        assert_eq!(pair.leaf_count(), 1500);
+        // 1500 copies of intensity 1/1500 add up to the ball (to rounding).
+        let (t0, t1) =
+            (BlobTree::new(one, 0.5).unwrap(), BlobTree::new(pair.side(Side::Source), 0.5).unwrap());
+        for p in testutil::points() {
+            assert!((t0.potential(p) - t1.potential(p)).abs() < 1e-4, "at {p}");
+        }
+    }
+
+    /// The k-d tree answers exactly as a linear scan (least length, first index).
+    #[test]
+    fn kd_tree_nearest_matches_a_linear_scan() {
+        let mut points: Vec<Vec3> = (0..300)
+            .map(|k| {
+                let k = k as f32;
+                Vec3::new((k * 1.7).sin(), (k * 2.3).cos(), (k * 0.9).sin()).round() * 0.5
+            })
+            .collect();
+        points.extend_from_slice(&points.clone()[..50]);
+        let tree = KdTree::new(&points);
+        for k in 0..500 {
+            let k = k as f32;
+            let q = Vec3::new((k * 0.37).sin(), (k * 0.61).cos(), (k * 0.23).sin()) * 0.9;
+            let brute = points
+                .iter()
+                .enumerate()
+                .min_by(|x, y| (*x.1 - q).length().total_cmp(&(*y.1 - q).length()))
+                .map(|(i, _)| i);
+            assert_eq!(tree.nearest(q), brute, "at {q}");
+        }
+        assert_eq!(KdTree::new(&[]).nearest(Vec3::ZERO), None);
     }
 }

@@ -101,6 +101,24 @@ pub enum NodeProblem {
     /// A difference level must be ≥ 0.
     #[error("difference level must be ≥ 0, got {0}")]
     NegativeLevel(f32),
+    /// A finite parameter is too large (or a radius too small) to be
+    /// resolved in `f32` ([`crate::node::MAX_MAGNITUDE`]).
+    #[error("`{field}` = {value:?} is out of range: expected {expected}")]
+    OutOfRange {
+        /// The field as written in a scene (`"radius"`, `"vertices"`, `"frame"`, …).
+        field: &'static str,
+        /// The offending value.
+        value: f32,
+        /// What is accepted.
+        expected: &'static str,
+    },
+    /// The node lies deeper than [`crate::scene::MAX_DEPTH`] levels in a scene file.
+    #[error("the scene nests deeper than {0} levels of nodes")]
+    TooDeep(usize),
+    /// The node's support box is not finite or reaches beyond
+    /// [`crate::node::MAX_SUPPORT`] (nested frames or warps scale it too far).
+    #[error("its support box reaches {0:?}, beyond ±1e9 (nested frames or warps scale it too far)")]
+    SupportTooLarge(f32),
 }
 
 /// Errors of building, loading or saving a BlobTree.
@@ -115,14 +133,29 @@ pub enum BlobError {
         /// What is wrong.
         problem: NodeProblem,
     },
-    /// The iso threshold `T` must be finite and positive.
-    #[error("threshold must be finite and > 0, got {0}")]
+    /// The iso threshold `T` must be positive and at most
+    /// [`crate::node::MAX_MAGNITUDE`].
+    #[error("threshold must be in (0, 1e6], got {0:?}")]
     InvalidThreshold(f32),
-    /// The file is not valid RON / JSON for a scene.
-    #[error("cannot parse the {format} scene: {message}")]
+    /// The scene has no inside: its potential is at most `peak` (an upper
+    /// bound from the intensities) everywhere, not above the threshold.
+    #[error(
+        "the scene is empty: its potential never exceeds {peak:?} (intensities, blended), not above the \
+         threshold {threshold:?}"
+    )]
+    EmptyScene {
+        /// Upper bound of the potential.
+        peak: f32,
+        /// The threshold.
+        threshold: f32,
+    },
+    /// The text is not valid RON / JSON for a scene or a links spec.
+    #[error("cannot parse the {format} {what}: {message}")]
     Parse {
         /// `"RON"` or `"JSON"`.
         format: &'static str,
+        /// `"scene"` or `"links spec"` (a [`crate::MorphSpec`]).
+        what: &'static str,
         /// The parser's message (with line and column).
         message: String,
     },
@@ -200,22 +233,45 @@ pub enum BlobMorphError {
         /// Target node.
         b: NodePath,
     },
-    /// A trajectory handle is NaN or infinite.
-    #[error("trajectory for {a} ↔ {b} has a non-finite handle")]
+    /// A trajectory handle coordinate is NaN, infinite or beyond
+    /// [`crate::node::MAX_MAGNITUDE`].
+    #[error(
+        "trajectory for {a} ↔ {b}: handle coordinate {value:?} is out of range: expected a magnitude ≤ 1e6"
+    )]
     InvalidTrajectory {
         /// Source node.
         a: NodePath,
         /// Target node.
         b: NodePath,
+        /// The offending coordinate.
+        value: f32,
+    },
+    /// The decomposition would need more than `limit` node pairs
+    /// ([`crate::correspond::MAX_PAIRS`]) or skeleton vertex pairs
+    /// ([`crate::correspond::MAX_VERTEX_PAIRS`]): typically the
+    /// all-children heuristic on wide nodes (`n_A × n_B` pairs) or many links.
+    #[error(
+        "matching the trees needs more than {limit} {what} (exceeded under {a} ↔ {b}); use the \
+         nearest_centre heuristic or fewer links"
+    )]
+    TooManyPairs {
+        /// `"node pairs"` or `"skeleton vertex pairs"`.
+        what: &'static str,
+        /// Source node under which the limit was exceeded.
+        a: NodePath,
+        /// Target node under which the limit was exceeded.
+        b: NodePath,
+        /// The limit.
+        limit: usize,
     },
     /// Two matched affine nodes or frames cannot be interpolated (mirror).
-    #[error("affine maps at {a} ↔ {b} cannot be interpolated: {source}")]
+    #[error("affine maps at {a} ↔ {b} cannot be interpolated")]
     Transform {
         /// Source node.
         a: NodePath,
         /// Target node.
         b: NodePath,
-        /// Why.
+        /// Why (printed as the error's source, not in its message).
         source: TransformError,
     },
 }

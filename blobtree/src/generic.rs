@@ -27,7 +27,7 @@
 use crate::correspond::{Correspondence, Heuristic, Link, Origin, Pair, decompose};
 use crate::error::{BlobMorphError, NodePath};
 use crate::minkowski::MinkowskiPath;
-use crate::node::{NaryOp, Node, Primitive};
+use crate::node::{MAX_MAGNITUDE, NaryOp, Node, Primitive};
 use crate::skeleton::Skeleton;
 use crate::tree::BlobTree;
 use crate::warp::Warp;
@@ -35,6 +35,7 @@ use glam::{Affine3A, Vec3};
 use isomorph_common::{Aabb, AffineParts};
 use isomorph_common::{Control, Frame, Morph, MorphReport, Outcome, Side, Solid, Stages};
 use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
 
 /// A speed curve `s(t)`: 0 before `start`, 1 after `end`, in between linear
 /// or smooth (`3u² − 2u³`, zero speed at both ends).
@@ -113,10 +114,9 @@ impl MorphSpec {
     /// # Errors
     /// [`crate::BlobError::Parse`] (wrapped) for malformed text.
     pub fn from_ron(text: &str) -> Result<Self, BlobMorphError> {
-        ron::Options::default()
-            .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+        crate::scene::ron_options()
             .from_str(text)
-            .map_err(|e| crate::BlobError::Parse { format: "RON", message: e.to_string() }.into())
+            .map_err(|e| crate::scene::ron_error(&e, "links spec").into())
     }
 
     /// Reads a JSON spec.
@@ -124,20 +124,17 @@ impl MorphSpec {
     /// # Errors
     /// [`crate::BlobError::Parse`] (wrapped) for malformed text.
     pub fn from_json(text: &str) -> Result<Self, BlobMorphError> {
-        serde_json::from_str(text)
-            .map_err(|e| crate::BlobError::Parse { format: "JSON", message: e.to_string() }.into())
+        serde_json::from_str(text).map_err(|e| crate::scene::json_error(&e, "links spec").into())
     }
 
     /// Reads a spec file: JSON for a `.json` extension, RON otherwise.
     ///
     /// # Errors
-    /// [`crate::BlobError::Read`] (wrapped) for an unreadable file, and as
+    /// [`crate::BlobError::Read`] (wrapped) for an unreadable file or one
+    /// larger than [`crate::scene::MAX_FILE_BYTES`], and as
     /// [`MorphSpec::from_ron`] / [`MorphSpec::from_json`].
     pub fn load(path: &std::path::Path) -> Result<Self, BlobMorphError> {
-        let text = std::fs::read_to_string(path).map_err(|e| crate::BlobError::Read {
-            path: path.display().to_string(),
-            message: e.to_string(),
-        })?;
+        let text = crate::scene::read_text(path, "")?;
         if path.extension().is_some_and(|e| e == "json") {
             Self::from_json(&text)
         } else {
@@ -228,17 +225,21 @@ fn build(pair: &Pair) -> Result<GNode, BlobMorphError> {
     Ok(GNode { kind, speed: Speed::default(), origin, children })
 }
 
-/// Applies `f` to every node whose origin is `(a, b)`; returns how many matched.
-fn for_matching(node: &mut GNode, a: &NodePath, b: &NodePath, f: &mut dyn FnMut(&mut GNode)) -> usize {
-    let mut n = 0;
-    if node.origin.a.as_ref() == Some(a) && node.origin.b.as_ref() == Some(b) {
-        f(node);
-        n += 1;
+/// Applies `f` to every node whose origin `(a, b)` is a key of `wanted`,
+/// with that key's index; one traversal for all keys.
+fn for_matching(
+    node: &mut GNode,
+    wanted: &HashMap<(&NodePath, &NodePath), usize>,
+    f: &mut dyn FnMut(usize, &mut GNode),
+) {
+    if let (Some(a), Some(b)) = (&node.origin.a, &node.origin.b)
+        && let Some(&k) = wanted.get(&(a, b))
+    {
+        f(k, node);
     }
     for c in &mut node.children {
-        n += for_matching(c, a, b, f);
+        for_matching(c, wanted, f);
     }
-    n
 }
 
 /// `1/n` of a member of the super-elliptic family (blend 1, union 0).
@@ -334,12 +335,15 @@ impl GenericTree {
     /// # Errors
     /// Link errors of [`decompose`]; [`BlobMorphError::InvalidSpeed`],
     /// [`BlobMorphError::InvalidTrajectory`], [`BlobMorphError::UnmatchedPair`] for
-    /// bad speed curves and trajectories.
+    /// bad speed curves and trajectories (handles must be finite with
+    /// magnitudes ≤ [`MAX_MAGNITUDE`]).
     pub fn new(a: &BlobTree, b: &BlobTree, spec: &MorphSpec) -> Result<Self, BlobMorphError> {
         let corr = Correspondence { links: spec.links.clone(), heuristic: spec.heuristic };
         let pair = decompose(a.root(), a.threshold(), b.root(), b.threshold(), &corr)?;
         let mut root = build(&pair)?;
-        for sc in &spec.speeds {
+        // Later curves for the same pair override earlier ones.
+        let mut speeds = HashMap::new();
+        for (k, sc) in spec.speeds.iter().enumerate() {
             if !sc.speed.valid() {
                 return Err(BlobMorphError::InvalidSpeed {
                     a: sc.a.clone(),
@@ -348,34 +352,42 @@ impl GenericTree {
                     end: sc.speed.end,
                 });
             }
-            let speed = sc.speed;
-            if for_matching(&mut root, &sc.a, &sc.b, &mut |n| n.speed = speed) == 0 {
-                return Err(BlobMorphError::UnmatchedPair {
-                    what: "speed curve",
-                    a: sc.a.clone(),
-                    b: sc.b.clone(),
-                });
-            }
+            speeds.insert((&sc.a, &sc.b), k);
         }
-        for tr in &spec.trajectories {
-            let h = tr.handles.map(Vec3::from_array);
-            if !h.iter().all(|v| v.is_finite()) {
-                return Err(BlobMorphError::InvalidTrajectory { a: tr.a.clone(), b: tr.b.clone() });
-            }
-            let mut leaves = 0;
-            for_matching(&mut root, &tr.a, &tr.b, &mut |n| {
-                if let GKind::Leaf(l) = &mut n.kind {
-                    l.handles = h;
-                    leaves += 1;
-                }
+        let mut matched = vec![false; spec.speeds.len()];
+        for_matching(&mut root, &speeds, &mut |k, n| {
+            n.speed = spec.speeds[k].speed;
+            matched[k] = true;
+        });
+        if let Some(sc) = spec.speeds.iter().find(|sc| !matched[speeds[&(&sc.a, &sc.b)]]) {
+            return Err(BlobMorphError::UnmatchedPair {
+                what: "speed curve",
+                a: sc.a.clone(),
+                b: sc.b.clone(),
             });
-            if leaves == 0 {
-                return Err(BlobMorphError::UnmatchedPair {
-                    what: "trajectory",
-                    a: tr.a.clone(),
-                    b: tr.b.clone(),
-                });
+        }
+        let mut trajectories = HashMap::new();
+        for (k, tr) in spec.trajectories.iter().enumerate() {
+            if let Some(&value) =
+                tr.handles.as_flattened().iter().find(|v| !v.is_finite() || v.abs() > MAX_MAGNITUDE)
+            {
+                return Err(BlobMorphError::InvalidTrajectory { a: tr.a.clone(), b: tr.b.clone(), value });
             }
+            trajectories.insert((&tr.a, &tr.b), k);
+        }
+        let mut matched = vec![false; spec.trajectories.len()];
+        for_matching(&mut root, &trajectories, &mut |k, n| {
+            if let GKind::Leaf(l) = &mut n.kind {
+                l.handles = spec.trajectories[k].handles.map(Vec3::from_array);
+                matched[k] = true;
+            }
+        });
+        if let Some(tr) = spec.trajectories.iter().find(|tr| !matched[trajectories[&(&tr.a, &tr.b)]]) {
+            return Err(BlobMorphError::UnmatchedPair {
+                what: "trajectory",
+                a: tr.a.clone(),
+                b: tr.b.clone(),
+            });
         }
         Ok(Self { root, thresholds: (a.threshold(), b.threshold()), pair })
     }
@@ -598,6 +610,47 @@ mod tests {
         assert!(MorphSpec::from_ron("(links: 3)").is_err());
     }
 
+    /// A bad links spec says it is the links spec (not a scene), and a bad
+    /// links file names the file.
+    #[test]
+    fn bad_links_files_say_what_they_are() {
+        let e = MorphSpec::from_ron("(links: 3)").unwrap_err().to_string();
+        assert!(e.starts_with("cannot parse the RON links spec: "), "{e}");
+        let e = MorphSpec::from_json("{\"links\": 3}").unwrap_err().to_string();
+        assert!(e.starts_with("cannot parse the JSON links spec: "), "{e}");
+        let path = std::env::temp_dir().join(format!("isomorph-blobtree-missing-{}.ron", std::process::id()));
+        let e = MorphSpec::load(&path).unwrap_err().to_string();
+        assert!(e.starts_with(&format!("cannot read {}", path.display())), "{e}");
+    }
+
+    /// No error prints its cause twice when its source chain is printed too
+    /// (the CLI prints `error: message: source: …`).
+    #[test]
+    fn causes_are_printed_once() {
+        use std::error::Error;
+        let errors: Vec<BlobMorphError> = vec![
+            BlobMorphError::Transform {
+                a: NodePath::root(),
+                b: NodePath::root(),
+                source: isomorph_common::TransformError::Reflection,
+            },
+            MorphSpec::from_ron("(links: 3)").unwrap_err(),
+            BlobMorphError::from(isomorph_common::MorphError::InvalidTime(2.0)),
+            BlobMorphError::Blob(BlobTree::from_ron("(root: (kind: 3))").unwrap_err()),
+        ];
+        for e in errors {
+            let mut chain = vec![e.to_string()];
+            let mut next = e.source();
+            while let Some(s) = next {
+                chain.push(s.to_string());
+                next = s.source();
+            }
+            for w in chain.windows(2) {
+                assert!(!w[0].contains(&w[1]), "{w:?} prints its cause twice");
+            }
+        }
+    }
+
     #[test]
     fn speed_curves_delay_a_node() {
         let a = BlobTree::from_ron(r#"(root: (kind: "point", vertices: [(0,0,0)], radius: 1))"#).unwrap();
@@ -639,6 +692,14 @@ mod tests {
         assert!(matches!(
             GenericTree::new(&a, &b, &bad),
             Err(BlobMorphError::UnmatchedPair { what: "trajectory", .. })
+        ));
+        let far = MorphSpec::from_json(
+            r#"{"trajectories": [{"a": [], "b": [], "handles": [[0, 1e38, 0], [1, 1, 0]]}]}"#,
+        )
+        .unwrap();
+        assert!(matches!(
+            GenericTree::new(&a, &b, &far),
+            Err(BlobMorphError::InvalidTrajectory { value: 1e38, .. })
         ));
     }
 

@@ -56,6 +56,16 @@
 //!   on random trees), and `C(0)`, `C(1)` reproduce the inputs.
 //! - Invalid input — bad scene files, NaN, negative radii, `p < 1`, links
 //!   breaking the hierarchy, bad speed curves — is a typed error, never a panic.
+//! - Hostile sizes are refused up front with a typed error naming the node
+//!   and field: magnitudes beyond [`node::MAX_MAGNITUDE`] (`1e6`; radii also
+//!   below `1e-6`), support boxes beyond [`node::MAX_SUPPORT`], skeletons
+//!   with more than [`skeleton::MAX_VERTICES`] vertices, scene files nested
+//!   deeper than [`scene::MAX_DEPTH`] nodes, scenes whose potential cannot
+//!   reach the threshold, and correspondences needing more than
+//!   [`correspond::MAX_PAIRS`] node pairs or [`correspond::MAX_VERTEX_PAIRS`]
+//!   skeleton vertex pairs (the all-children heuristic on wide nodes).
+//!   Matching is otherwise near-linear (k-d tree for nearest centres);
+//!   scene and links files are read up to [`scene::MAX_FILE_BYTES`].
 //!
 //! Not guaranteed: intermediate shapes keep the topology of either end
 //! (they do for the built-in rook → queen, which is tested); gradients under

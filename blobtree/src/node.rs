@@ -7,6 +7,24 @@ use crate::skeleton::Skeleton;
 use crate::warp::Warp;
 use glam::{Affine3A, Vec3};
 
+/// The largest magnitude accepted for a length, position, intensity,
+/// stiffness or warp parameter (and for the threshold): `f32` geometry
+/// beyond it cannot be resolved next to unit-sized features, and squared
+/// distances would overflow. Radii must also be at least `1 / MAX_MAGNITUDE`.
+pub const MAX_MAGNITUDE: f32 = 1e6;
+
+/// The largest coordinate any node's support box may reach (nested frames
+/// and warps can multiply parameters below [`MAX_MAGNITUDE`]).
+pub const MAX_SUPPORT: f32 = 1e9;
+
+/// `Err(OutOfRange)` unless every value in `values` has magnitude ≤ [`MAX_MAGNITUDE`].
+pub(crate) fn check_magnitude(field: &'static str, values: &[f32]) -> Result<(), NodeProblem> {
+    match values.iter().find(|v| v.abs() > MAX_MAGNITUDE) {
+        Some(&value) => Err(NodeProblem::OutOfRange { field, value, expected: "a magnitude ≤ 1e6" }),
+        None => Ok(()),
+    }
+}
+
 /// A skeletal primitive `{R, S, d, g}` (§3.5): a local frame, a convex
 /// skeleton, an L^p distance and a Blanc–Schlick field function.
 #[derive(Debug, Clone, PartialEq)]
@@ -64,6 +82,17 @@ impl Primitive {
         if k.stiffness < 0.0 {
             return Err(NodeProblem::NegativeStiffness(k.stiffness));
         }
+        if !(1.0 / MAX_MAGNITUDE..=MAX_MAGNITUDE).contains(&k.radius) {
+            return Err(NodeProblem::OutOfRange {
+                field: "radius",
+                value: k.radius,
+                expected: "1e-6 ≤ radius ≤ 1e6",
+            });
+        }
+        check_magnitude("intensity", &[k.intensity])?;
+        check_magnitude("stiffness", &[k.stiffness])?;
+        let vertices = self.skeleton.vertices();
+        check_magnitude("vertices", &vertices.iter().flat_map(|v| v.to_array()).collect::<Vec<f32>>())?;
         if p_invalid(self.p) {
             return Err(if self.p.is_nan() {
                 NodeProblem::NotFinite("p")
@@ -72,6 +101,7 @@ impl Primitive {
             });
         }
         isomorph_common::AffineParts::from_affine(&self.frame).map_err(NodeProblem::Transform)?;
+        check_magnitude("frame", &self.frame.to_cols_array())?;
         Ok(())
     }
 }
@@ -321,6 +351,23 @@ impl Node {
         self.scaled(0.0)
     }
 
+    /// An upper bound of this node's potential anywhere: the intensity of a
+    /// primitive, the sum over a blend (and a super-elliptic blend, whose
+    /// value is at most the sum), the maximum over a union, the minimum over
+    /// an intersection, the left child's for a difference, the child's for
+    /// a warp. A tree whose bound is at most its threshold has no inside.
+    pub fn peak_bound(&self) -> f32 {
+        let kids = || self.children().into_iter().map(Node::peak_bound);
+        match self {
+            Node::Primitive(p) => p.kernel.intensity,
+            Node::Nary { op: NaryOp::Union, .. } => kids().fold(0.0, f32::max),
+            Node::Nary { op: NaryOp::Intersection, .. } => kids().fold(f32::INFINITY, f32::min),
+            Node::Nary { .. } | Node::Mix { .. } => kids().sum(),
+            Node::Difference { left, .. } => left.peak_bound(),
+            Node::Warp { child, .. } => child.peak_bound(),
+        }
+    }
+
     /// The centre of the skeletons below (world space; warps applied forward),
     /// used by the nearest-centre matching heuristic.
     pub fn centre(&self) -> Vec3 {
@@ -398,6 +445,7 @@ impl Node {
                 if *level < 0.0 {
                     return Err(err(NodeProblem::NegativeLevel(*level)));
                 }
+                check_magnitude("level", &[*level]).map_err(err)?;
             }
             Node::Warp { warp, .. } => warp.validate().map_err(err)?,
         }

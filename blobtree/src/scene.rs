@@ -5,7 +5,7 @@
 //!
 //! | kind | fields |
 //! |---|---|
-//! | `point`, `segment`, `polygon`, `polyhedron` | `vertices` (1, 2, ≥ 3 coplanar, ≥ 4), `radius`, optional `intensity` (1), `stiffness` (1), `p` (2; a number ≥ 1 or `"inf"`), `frame` |
+//! | `point`, `segment`, `polygon`, `polyhedron` | `vertices` (1, 2, 3 to 32 coplanar, 4 to 32), `radius`, optional `intensity` (1), `stiffness` (1), `p` (2; a number ≥ 1 or `"inf"`), `frame` |
 //! | `box` | `half` (half extents) instead of `vertices`; a polyhedron skeleton |
 //! | `blend`, `union`, `intersection` | `children` (≥ 1) |
 //! | `superblend` | `n` (≥ 1), `children` |
@@ -134,8 +134,68 @@ pub struct RawNode {
     pub max: Option<f32>,
 }
 
-fn ron_options() -> ron::Options {
-    ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+/// The largest scene or links file read, in bytes (64 MiB): a file is read
+/// whole, so larger ones (or endless streams) are refused before they fill
+/// the memory.
+pub const MAX_FILE_BYTES: u64 = 64 << 20;
+
+/// Reads the file at `path` (at most [`MAX_FILE_BYTES`]); `hint` is added
+/// to the message of a file that cannot be opened.
+pub(crate) fn read_text(path: &std::path::Path, hint: &str) -> Result<String, BlobError> {
+    use std::io::Read;
+    let fail = |message: String| BlobError::Read { path: path.display().to_string(), message };
+    let file = std::fs::File::open(path).map_err(|e| fail(format!("{e}{hint}")))?;
+    let mut text = String::new();
+    file.take(MAX_FILE_BYTES + 1).read_to_string(&mut text).map_err(|e| fail(e.to_string()))?;
+    if text.len() as u64 > MAX_FILE_BYTES {
+        return Err(fail(format!("the file is larger than {} MiB", MAX_FILE_BYTES >> 20)));
+    }
+    Ok(text)
+}
+
+/// The deepest node level a scene file may have (the root is level 0).
+/// The readers' own nesting limits lie beyond it (RON: four levels per
+/// node and a few for a leaf's fields; JSON: a fixed 128), so a file is
+/// refused for its depth before it can exhaust the stack.
+pub const MAX_DEPTH: usize = 48;
+
+/// Nesting levels the RON reader accepts.
+const RON_NESTING: usize = 4 * MAX_DEPTH + 16;
+
+pub(crate) fn ron_options() -> ron::Options {
+    ron::Options::default()
+        .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+        .with_recursion_limit(RON_NESTING)
+}
+
+/// What a reader's nesting limit means for a `what` ("scene", "links spec").
+fn too_deep(what: &'static str, at: String) -> String {
+    if what == "scene" {
+        format!("the scene nests deeper than {MAX_DEPTH} levels of nodes ({at})")
+    } else {
+        format!("the {what} nests too deeply ({at})")
+    }
+}
+
+/// A RON parse error of a `what` ("scene", "links spec") in the user's terms.
+pub(crate) fn ron_error(e: &ron::error::SpannedError, what: &'static str) -> BlobError {
+    let message = match e.code {
+        ron::Error::ExceededRecursionLimit => {
+            too_deep(what, format!("line {}, column {}", e.span.start.line, e.span.start.col))
+        }
+        _ => e.to_string(),
+    };
+    BlobError::Parse { format: "RON", what, message }
+}
+
+/// A JSON parse error of a `what` ("scene", "links spec") in the user's terms.
+pub(crate) fn json_error(e: &serde_json::Error, what: &'static str) -> BlobError {
+    let message = if e.to_string().starts_with("recursion limit exceeded") {
+        too_deep(what, format!("line {}, column {}", e.line(), e.column()))
+    } else {
+        e.to_string()
+    };
+    BlobError::Parse { format: "JSON", what, message }
 }
 
 impl BlobTree {
@@ -144,9 +204,7 @@ impl BlobTree {
     /// # Errors
     /// [`BlobError::Parse`] for malformed RON; otherwise as [`BlobTree::from_scene`].
     pub fn from_ron(text: &str) -> Result<Self, BlobError> {
-        let file: SceneFile = ron_options()
-            .from_str(text)
-            .map_err(|e| BlobError::Parse { format: "RON", message: e.to_string() })?;
+        let file: SceneFile = ron_options().from_str(text).map_err(|e| ron_error(&e, "scene"))?;
         Self::from_scene(&file)
     }
 
@@ -155,8 +213,7 @@ impl BlobTree {
     /// # Errors
     /// [`BlobError::Parse`] for malformed JSON; otherwise as [`BlobTree::from_scene`].
     pub fn from_json(text: &str) -> Result<Self, BlobError> {
-        let file: SceneFile = serde_json::from_str(text)
-            .map_err(|e| BlobError::Parse { format: "JSON", message: e.to_string() })?;
+        let file: SceneFile = serde_json::from_str(text).map_err(|e| json_error(&e, "scene"))?;
         Self::from_scene(&file)
     }
 
@@ -165,13 +222,19 @@ impl BlobTree {
     /// # Errors
     /// [`BlobError::InvalidNode`] with the offending node's path (unknown
     /// kinds, missing fields, negative radii, NaN, `p < 1`, empty nodes, …),
-    /// [`BlobError::InvalidThreshold`].
+    /// [`BlobError::InvalidThreshold`], [`BlobError::EmptyScene`] when the
+    /// potential can nowhere exceed the threshold.
     pub fn from_scene(file: &SceneFile) -> Result<Self, BlobError> {
-        if !(file.threshold.is_finite() && file.threshold > 0.0) {
+        if !(file.threshold > 0.0 && file.threshold <= crate::node::MAX_MAGNITUDE) {
             return Err(BlobError::InvalidThreshold(file.threshold));
         }
         let root = from_raw(&file.root, &NodePath::root(), file.threshold)?;
-        BlobTree::new(root, file.threshold)
+        let tree = BlobTree::new(root, file.threshold)?;
+        let peak = tree.root().peak_bound();
+        if peak <= file.threshold {
+            return Err(BlobError::EmptyScene { peak, threshold: file.threshold });
+        }
+        Ok(tree)
     }
 
     /// The tree as a scene description.
@@ -200,6 +263,9 @@ impl BlobTree {
 
 fn from_raw(raw: &RawNode, path: &NodePath, threshold: f32) -> Result<Node, BlobError> {
     let err = |p: NodeProblem| BlobError::node(path, p);
+    if path.0.len() > MAX_DEPTH {
+        return Err(err(NodeProblem::TooDeep(MAX_DEPTH)));
+    }
     let need = |v: Option<f32>, name: &'static str| v.ok_or(err(NodeProblem::MissingField(name)));
     let children = |expected: &'static str, ok: &dyn Fn(usize) -> bool| -> Result<Vec<Node>, BlobError> {
         if !ok(raw.children.len()) {
@@ -470,5 +536,121 @@ mod tests {
             assert!((tree.value(p) - json.value(p)).abs() < 1e-5);
         }
         assert_eq!(again.threshold(), 0.4);
+    }
+
+    /// Finite but absurd magnitudes (which used to polygonize to nothing, or
+    /// to a NaN grid) are refused up front, naming the node and the field.
+    #[test]
+    fn huge_and_tiny_magnitudes_are_refused_by_name() {
+        let ball = |extra: &str| format!(r#"(kind: "point", vertices: [(0,0,0)], radius: 1{extra})"#);
+        let scene = |node: String| format!(r#"(root: (kind: "blend", children: [{}, {node}]))"#, ball(""));
+        let (p, e) = problem(&scene(r#"(kind: "point", vertices: [(0,0,0)], radius: 1e30)"#.into()));
+        assert_eq!(p, vec![1]);
+        assert_eq!(
+            e,
+            NodeProblem::OutOfRange { field: "radius", value: 1e30, expected: "1e-6 ≤ radius ≤ 1e6" }
+        );
+        let (_, e) = problem(&scene(r#"(kind: "point", vertices: [(0,0,0)], radius: 1e-9)"#.into()));
+        assert!(matches!(e, NodeProblem::OutOfRange { field: "radius", .. }));
+        let (p, e) = problem(&scene(r#"(kind: "point", vertices: [(1e38,0,0)], radius: 1)"#.into()));
+        assert_eq!(
+            (p, e),
+            (
+                vec![1],
+                NodeProblem::OutOfRange { field: "vertices", value: 1e38, expected: "a magnitude ≤ 1e6" }
+            )
+        );
+        let (_, e) = problem(&scene(ball(", frame: (translate: (0, 1e38, 0))")));
+        assert!(matches!(e, NodeProblem::OutOfRange { field: "frame", value: 1e38, .. }));
+        let (_, e) = problem(&scene(ball(", intensity: 1e20")));
+        assert!(matches!(e, NodeProblem::OutOfRange { field: "intensity", .. }));
+        let (_, e) = problem(&scene(format!(r#"(kind: "twist", rate: 1e9, children: [{}])"#, ball(""))));
+        assert!(matches!(e, NodeProblem::OutOfRange { field: "rate", .. }));
+        let err = BlobTree::from_ron(&scene(ball(", half: (0,0,0)").replace("radius: 1", "radius: 1e30")))
+            .unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "node root/1: `radius` = 1e30 is out of range: expected 1e-6 ≤ radius ≤ 1e6"
+        );
+        // Each frame within range, but nested under a twist they scale the leaf to 1e10.
+        let nested = format!(
+            r#"(root: (kind: "affine", frame: (scale: (1e5, 1e5, 1e5)), children: [(kind: "twist", rate: 1,
+                children: [(kind: "affine", frame: (scale: (1e5, 1e5, 1e5)), children: [{}])])]))"#,
+            ball("")
+        );
+        let (p, e) = problem(&nested);
+        assert_eq!(p, Vec::<usize>::new());
+        assert!(matches!(e, NodeProblem::SupportTooLarge(r) if r > 1e9), "{e:?}");
+        assert!(matches!(
+            BlobTree::from_ron(&format!("(threshold: 1e30, root: {})", ball(""))),
+            Err(BlobError::InvalidThreshold(_))
+        ));
+    }
+
+    /// A scene whose potential cannot reach the threshold has no surface.
+    #[test]
+    fn scenes_without_inside_are_refused() {
+        let faint = r#"(root: (kind: "union", children: [
+            (kind: "point", vertices: [(0,0,0)], radius: 1, intensity: 0.3),
+            (kind: "point", vertices: [(0.2,0,0)], radius: 1, intensity: 0.5)]))"#;
+        assert_eq!(
+            BlobTree::from_ron(faint).unwrap_err(),
+            BlobError::EmptyScene { peak: 0.5, threshold: 0.5 }
+        );
+        // Blended, the same two reach 0.8 > 0.5 (where they overlap).
+        let tree = BlobTree::from_ron(&faint.replace("union", "blend")).unwrap();
+        assert!(tree.value(Vec3::new(0.1, 0.0, 0.0)) > 0.0);
+    }
+
+    /// A scene nested `depth` operator levels deep around one ball.
+    fn nested(depth: usize, json: bool) -> String {
+        let ball = if json {
+            r#"{"kind": "point", "vertices": [[0,0,0]], "radius": 1}"#
+        } else {
+            r#"(kind: "point", vertices: [(0,0,0)], radius: 1)"#
+        };
+        let (open, close) = if json {
+            (r#"{"kind": "blend", "children": ["#, "]}")
+        } else {
+            (r#"(kind: "blend", children: ["#, "])")
+        };
+        let body = format!("{}{ball}{}", open.repeat(depth), close.repeat(depth));
+        if json { format!(r#"{{"root": {body}}}"#) } else { format!("(root: {body})") }
+    }
+
+    /// Too deep a file is refused with a message a user can act on (no
+    /// parser options or library names), shallower ones load.
+    #[test]
+    fn deep_nesting_is_refused_in_plain_words() {
+        assert!(BlobTree::from_ron(&nested(MAX_DEPTH, false)).is_ok());
+        assert!(BlobTree::from_json(&nested(MAX_DEPTH, true)).is_ok());
+        for depth in [MAX_DEPTH + 1, MAX_DEPTH + 3, 100, 10_000] {
+            for err in [BlobTree::from_ron(&nested(depth, false)), BlobTree::from_json(&nested(depth, true))]
+            {
+                let text = err.unwrap_err().to_string();
+                assert!(text.contains("the scene nests deeper than 48 levels of nodes"), "{depth}: {text}");
+                assert!(!text.contains("serde_stacker") && !text.contains("recursion_limit"), "{text}");
+            }
+        }
+    }
+
+    /// Skeletons with more vertices than [`crate::skeleton::MAX_VERTICES`]
+    /// are refused before their hull is built.
+    #[test]
+    fn oversized_skeletons_are_refused() {
+        let ring = |n: usize| {
+            (0..n)
+                .map(|i| {
+                    let a = std::f32::consts::TAU * i as f32 / n as f32;
+                    format!("({}, {}, 0)", a.cos(), a.sin())
+                })
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let scene = |n: usize| format!(r#"(root: (kind: "polygon", vertices: [{}], radius: 0.5))"#, ring(n));
+        assert!(BlobTree::from_ron(&scene(32)).is_ok());
+        let (p, e) = problem(&scene(5000));
+        assert_eq!(p, Vec::<usize>::new());
+        assert_eq!(e, NodeProblem::WrongVertexCount { kind: "polygon", expected: "≤ 32", got: 5000 });
     }
 }

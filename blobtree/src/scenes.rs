@@ -35,7 +35,8 @@ pub const NAMES: [&str; 9] =
 /// JSON, anything else as RON).
 ///
 /// # Errors
-/// [`BlobError::Read`] for an unknown name or unreadable file, and the
+/// [`BlobError::Read`] for an unknown name, an unreadable file or one
+/// larger than [`crate::scene::MAX_FILE_BYTES`], and the
 /// parse and validation errors of the file.
 pub fn load(spec: &str) -> Result<BlobTree, BlobError> {
     let built_in = match spec {
@@ -54,10 +55,7 @@ pub fn load(spec: &str) -> Result<BlobTree, BlobError> {
         return Ok(tree);
     }
     let path = std::path::Path::new(spec);
-    let text = std::fs::read_to_string(path).map_err(|e| BlobError::Read {
-        path: spec.to_string(),
-        message: format!("{e} (built-in scenes: {})", NAMES.join(", ")),
-    })?;
+    let text = crate::scene::read_text(path, &format!(" (built-in scenes: {})", NAMES.join(", ")))?;
     if path.extension().is_some_and(|e| e == "json") {
         BlobTree::from_json(&text)
     } else {
@@ -299,5 +297,21 @@ mod tests {
             let t = k as f32 / 40.0;
             assert_eq!(components(&m, t, 40), 1, "frame t = {t}");
         }
+    }
+
+    /// An endless stream is refused after MAX_FILE_BYTES instead of filling
+    /// the memory.
+    #[cfg(unix)]
+    #[test]
+    fn endless_files_are_refused() {
+        match load("/dev/zero") {
+            Err(BlobError::Read { path, message }) => {
+                assert_eq!(path, "/dev/zero");
+                assert_eq!(message, "the file is larger than 64 MiB");
+            }
+            other => panic!("expected a read error, got {other:?}"),
+        }
+        let e = MorphSpec::load(std::path::Path::new("/dev/zero")).unwrap_err().to_string();
+        assert_eq!(e, "cannot read /dev/zero: the file is larger than 64 MiB");
     }
 }

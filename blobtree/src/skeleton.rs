@@ -76,6 +76,12 @@
 use crate::hull::{HullShape, convex_hull};
 use glam::{DVec3, Vec3};
 
+/// The most vertices a polygon or polyhedron skeleton may list. Hulls are
+/// built incrementally (quadratic in the vertices) and a Minkowski
+/// interpolation pairs every vertex of one end with every vertex of the
+/// other, so larger skeletons would cost unbounded time and memory.
+pub const MAX_VERTICES: usize = 32;
+
 /// A convex skeleton in its primitive's local frame.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Skeleton {
@@ -114,6 +120,16 @@ impl Skeleton {
             Skeleton::Polygon(_) => "polygon",
             Skeleton::Polyhedron(_) => "polyhedron",
             Skeleton::Generic(p) => ["point", "segment", "polygon", "polyhedron"][p.dimension()],
+        }
+    }
+
+    /// The number of vertices (as [`Skeleton::vertices`], without copying them).
+    pub fn vertex_count(&self) -> usize {
+        match self {
+            Skeleton::Point(_) => 1,
+            Skeleton::Segment(..) => 2,
+            Skeleton::Polygon(v) | Skeleton::Polyhedron(v) => v.len(),
+            Skeleton::Generic(p) => p.vertices().len(),
         }
     }
 
@@ -160,6 +176,9 @@ impl Skeleton {
         if v.len() < min {
             let expected = if min == 3 { "≥ 3" } else { "≥ 4" };
             return Err(P::WrongVertexCount { kind: self.kind(), expected, got: v.len() });
+        }
+        if v.len() > MAX_VERTICES {
+            return Err(P::WrongVertexCount { kind: self.kind(), expected: "≤ 32", got: v.len() });
         }
         let poly = Polytope::hull(&v);
         if poly.dimension() != need {

@@ -9,9 +9,9 @@
 //! Boxes: union/blend of children, intersection of children for `∩`, the
 //! left child's for a difference, the image box for a warp.
 
-use crate::error::BlobError;
+use crate::error::{BlobError, NodePath, NodeProblem};
 use crate::kernel::Kernel;
-use crate::node::{NaryOp, Node};
+use crate::node::{MAX_SUPPORT, NaryOp, Node};
 use crate::skeleton::Polytope;
 use crate::warp::Warp;
 use glam::{Affine3A, Mat3, Vec3};
@@ -61,14 +61,15 @@ impl BlobTree {
     /// Validates and compiles `root` with iso threshold `threshold`.
     ///
     /// # Errors
-    /// [`BlobError::InvalidThreshold`] unless `threshold` is finite and > 0;
-    /// [`BlobError::InvalidNode`] (with the node's path) for any invalid node.
+    /// [`BlobError::InvalidThreshold`] unless `0 < threshold ≤ MAX_MAGNITUDE`;
+    /// [`BlobError::InvalidNode`] (with the node's path) for any invalid node,
+    /// including a support box beyond [`crate::node::MAX_SUPPORT`].
     pub fn new(root: Node, threshold: f32) -> Result<Self, BlobError> {
-        if !(threshold.is_finite() && threshold > 0.0) {
+        if !(threshold > 0.0 && threshold <= crate::node::MAX_MAGNITUDE) {
             return Err(BlobError::InvalidThreshold(threshold));
         }
         root.validate()?;
-        let compiled = compile(&root);
+        let compiled = compile(&root, &NodePath::root())?;
         Ok(Self { root, threshold, compiled, pruning: true })
     }
 
@@ -221,8 +222,13 @@ fn difference<const G: bool>(fl: f32, gl: Vec3, fr: f32, gr: Vec3, c: f32) -> (f
     if v <= 0.0 { (0.0, Vec3::ZERO) } else { (v, if G { g } else { Vec3::ZERO }) }
 }
 
-fn compile(node: &Node) -> Compiled {
-    match node {
+/// Compiles `node` (at `path`, validated), refusing support boxes that are
+/// not finite or reach beyond [`MAX_SUPPORT`].
+fn compile(node: &Node, path: &NodePath) -> Result<Compiled, BlobError> {
+    let kids = |children: &[Node]| -> Result<Vec<Compiled>, BlobError> {
+        children.iter().enumerate().map(|(i, c)| compile(c, &path.child(i))).collect()
+    };
+    let compiled = match node {
         Node::Primitive(prim) => {
             // Validated by the caller.
             let poly = prim.skeleton.polytope().expect("validated skeleton");
@@ -239,12 +245,12 @@ fn compile(node: &Node) -> Compiled {
             Compiled { bounds, op: Op::Leaf(Box::new(leaf)), children: Vec::new() }
         }
         Node::Nary { op, children } => {
-            let children: Vec<Compiled> = children.iter().map(compile).collect();
+            let children = kids(children)?;
             let bounds = nary_bounds(*op, &children);
             Compiled { bounds, op: Op::Nary(*op), children }
         }
         Node::Mix { from, to, s, children } => {
-            let children: Vec<Compiled> = children.iter().map(compile).collect();
+            let children = kids(children)?;
             let a = nary_bounds(*from, &children);
             let b = nary_bounds(*to, &children);
             let bounds = if *s == 0.0 {
@@ -257,14 +263,22 @@ fn compile(node: &Node) -> Compiled {
             Compiled { bounds, op: Op::Mix(*from, *to, *s), children }
         }
         Node::Difference { left, right, level } => {
-            let children = vec![compile(left), compile(right)];
+            let children = vec![compile(left, &path.child(0))?, compile(right, &path.child(1))?];
             Compiled { bounds: children[0].bounds, op: Op::Difference(*level), children }
         }
         Node::Warp { warp, child } => {
-            let c = compile(child);
+            let c = compile(child, &path.child(0))?;
             Compiled { bounds: warp.image_bounds(&c.bounds), op: Op::Warp(*warp), children: vec![c] }
         }
+    };
+    let b = compiled.bounds;
+    if !b.is_empty() {
+        let reach = b.min.abs().max(b.max.abs()).max_element();
+        if !b.min.is_finite() || !b.max.is_finite() || reach > MAX_SUPPORT {
+            return Err(BlobError::node(path, NodeProblem::SupportTooLarge(reach)));
+        }
     }
+    Ok(compiled)
 }
 
 fn nary_bounds(op: NaryOp, children: &[Compiled]) -> Aabb {

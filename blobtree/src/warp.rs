@@ -73,9 +73,12 @@ impl Warp {
     /// `min > max` or more than half a turn, or a singular/mirrored affine map.
     pub fn validate(&self) -> Result<(), crate::NodeProblem> {
         use crate::NodeProblem as P;
+        use crate::node::check_magnitude;
         match *self {
             Warp::Twist { rate } if !rate.is_finite() => Err(P::NotFinite("rate")),
+            Warp::Twist { rate } => check_magnitude("rate", &[rate]),
             Warp::Taper { slope } if !slope.is_finite() => Err(P::NotFinite("slope")),
+            Warp::Taper { slope } => check_magnitude("slope", &[slope]),
             Warp::Bend { rate, centre, min, max } => {
                 if ![rate, centre, min, max].iter().all(|v| v.is_finite()) {
                     Err(P::NotFinite("bend"))
@@ -84,13 +87,16 @@ impl Warp {
                 } else if rate.abs() * (max - min) > std::f32::consts::PI + 1e-6 {
                     Err(P::Warp("bend angle |rate|·(max − min) exceeds π"))
                 } else {
-                    Ok(())
+                    check_magnitude("rate", &[rate])?;
+                    check_magnitude("centre", &[centre])?;
+                    check_magnitude("min", &[min])?;
+                    check_magnitude("max", &[max])
                 }
             }
             Warp::Affine(m) => {
-                isomorph_common::AffineParts::from_affine(&m).map(|_| ()).map_err(P::Transform)
+                isomorph_common::AffineParts::from_affine(&m).map_err(P::Transform)?;
+                check_magnitude("frame", &m.to_cols_array())
             }
-            _ => Ok(()),
         }
     }
 

@@ -2,7 +2,7 @@
 
 use anyhow::Context;
 use clap::Args;
-use isomorph_blobtree::scenes;
+use isomorph_blobtree::{BlobError, scenes};
 use isomorph_common::Field3;
 use isomorph_io::mesh::{MeshFormat, write_mesh};
 use isomorph_io::render::{RenderSettings, render};
@@ -25,10 +25,22 @@ pub struct BlobArgs {
 
 /// Runs `isomorph blob`.
 pub fn run(args: &BlobArgs) -> anyhow::Result<()> {
-    let tree = scenes::load(&args.scene)?;
+    // Name the scene in its errors (a read error names it already).
+    let tree = scenes::load(&args.scene).map_err(|e| match e {
+        e @ BlobError::Read { .. } => anyhow::Error::new(e),
+        e => anyhow::Error::new(e).context(format!("scene {}", args.scene)),
+    })?;
     let start = Instant::now();
-    let mesh = tree.mesh(args.res)?;
+    let mesh = tree.mesh(args.res).with_context(|| format!("cannot polygonize scene {}", args.scene))?;
     let seconds = start.elapsed().as_secs_f64();
+    if mesh.is_empty() {
+        anyhow::bail!(
+            "scene {}: no surface at {}³ samples (its features are smaller than a sample); raise --res or \
+             enlarge the small primitives",
+            args.scene,
+            args.res
+        );
+    }
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
     let path = args.out.join("surface.ply");
     write_mesh(&mesh, &path, MeshFormat::PlyBinaryLittleEndian)
