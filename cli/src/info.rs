@@ -2,7 +2,7 @@
 
 use anyhow::Context;
 use clap::Args;
-use isomorph_io::mesh::read_mesh;
+use isomorph_io::mesh::{MeshRead, read_mesh_with_warnings};
 use std::path::PathBuf;
 
 /// Arguments of `isomorph info`.
@@ -18,7 +18,11 @@ pub struct InfoArgs {
 
 /// Runs `isomorph info`.
 pub fn run(args: &InfoArgs) -> anyhow::Result<()> {
-    let mesh = read_mesh(&args.mesh).with_context(|| format!("cannot read {}", args.mesh.display()))?;
+    let MeshRead { mesh, warnings } = read_mesh_with_warnings(&args.mesh)
+        .with_context(|| format!("cannot read {}", args.mesh.display()))?;
+    for warning in &warnings {
+        eprintln!("warning: {}: {warning}", args.mesh.display());
+    }
     let m = mesh.metrics();
     if args.json {
         println!("{}", serde_json::to_string_pretty(&m)?);

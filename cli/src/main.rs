@@ -23,8 +23,35 @@ use std::process::ExitCode;
 #[derive(Debug, Parser)]
 #[command(name = "isomorph", version, about, long_about = None)]
 struct Cli {
+    /// Largest allocation sized by the input (a grid, a dense system, a
+    /// decoded image), e.g. `512M`, `16G` or a byte count; larger requests
+    /// are refused with an error instead of exhausting the machine.
+    #[arg(long, global = true, value_parser = parse_bytes, default_value = "8G")]
+    max_memory: usize,
     #[command(subcommand)]
     command: Command,
+}
+
+/// Parses a byte count with an optional binary unit (`K`, `M`, `G`, `T`,
+/// optionally followed by `iB` or `B`).
+fn parse_bytes(s: &str) -> Result<usize, String> {
+    let t = s.trim();
+    let split = t.find(|c: char| c.is_ascii_alphabetic()).unwrap_or(t.len());
+    let (number, unit) = t.split_at(split);
+    let shift = match unit.to_ascii_uppercase().trim_end_matches("IB").trim_end_matches('B') {
+        "" => 0,
+        "K" => 10,
+        "M" => 20,
+        "G" => 30,
+        "T" => 40,
+        _ => return Err(format!("'{s}' is not a size such as 512M or 16G (units K, M, G, T)")),
+    };
+    let value: f64 = number.trim().parse().map_err(|_| format!("'{s}' is not a size such as 512M or 16G"))?;
+    let bytes = value * (1u64 << shift) as f64;
+    if bytes.is_nan() || bytes < 1.0 || bytes >= usize::MAX as f64 {
+        return Err(format!("'{s}' is not a size between 1 byte and 16 EiB"));
+    }
+    Ok(bytes as usize)
 }
 
 #[derive(Debug, Subcommand)]
@@ -58,6 +85,7 @@ enum Command {
 fn main() -> ExitCode {
     let matches = Cli::command().get_matches();
     let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
+    isomorph_common::set_memory_limit(cli.max_memory);
     let sub = |name: &str| matches.subcommand_matches(name).expect("the parsed subcommand");
     let result = match cli.command {
         Command::Demo(args) => demo::run(&args),
@@ -73,8 +101,26 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", message(&e));
             ExitCode::FAILURE
         }
     }
+}
+
+/// The error and its causes on one line, each cause once: library errors
+/// often include their cause in their own message, which `{:#}` would then
+/// print twice. The libraries' "raise the memory limit" becomes the option
+/// that does it.
+fn message(e: &anyhow::Error) -> String {
+    let mut out = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if !out.contains(&text) {
+            if !out.is_empty() {
+                out.push_str(": ");
+            }
+            out.push_str(&text);
+        }
+    }
+    out.replace("raise the memory limit", "raise --max-memory")
 }

@@ -5,7 +5,7 @@
 
 use isomorph_blobtree::{BlobMorph, BlobSettings, BlobTree, scenes};
 use isomorph_common::{BlendSettings, BoxedError, BoxedMorph, Control, DistanceBlend, MorphExt, Solid};
-use isomorph_io::inputs::{InputError, LoadOptions, load_solid};
+use isomorph_io::inputs::{InputError, LoadOptions, load_solid_with_warnings};
 use isomorph_levelset::{LevelSetMorph, LevelSetSettings};
 use isomorph_rbf::{RbfMorph, RbfSettings};
 use isomorph_tspline::{TsplineMorph, TsplineSettings};
@@ -103,20 +103,33 @@ pub enum LoadError {
 
 /// The input `spec` for `method`: a `.ron`/`.json` BlobTree scene file, or
 /// for the BlobTree method a built-in scene name; otherwise a built-in
-/// shape, `bunny`, a mesh file or a `.npy` volume ([`load_solid`]), else a
+/// shape, `bunny`, a mesh file or a `.npy` volume ([`isomorph_io::inputs::load_solid`]), else a
 /// built-in BlobTree scene, which every method can sample as an implicit
 /// (the BlobTree method refuses non-BlobTree solids when it is built).
 ///
 /// # Errors
 /// [`LoadError`] naming the input and what is wrong with it.
 pub fn load_input(method: Method, spec: &str, options: &LoadOptions) -> Result<Solid, LoadError> {
+    load_input_with_warnings(method, spec, options).map(|(solid, _)| solid)
+}
+
+/// [`load_input`], with the file readers' warnings
+/// ([`isomorph_io::inputs::load_solid_with_warnings`]).
+///
+/// # Errors
+/// As [`load_input`].
+pub fn load_input_with_warnings(
+    method: Method,
+    spec: &str,
+    options: &LoadOptions,
+) -> Result<(Solid, Vec<String>), LoadError> {
     let is_scene_file = spec.ends_with(".ron") || spec.ends_with(".json");
     if is_scene_file || (method == Method::Blobtree && scenes::NAMES.contains(&spec)) {
-        return Ok(scene_solid(scenes::load(spec)?)?);
+        return Ok((scene_solid(scenes::load(spec)?)?, Vec::new()));
     }
-    match load_solid(spec, options) {
+    match load_solid_with_warnings(spec, options) {
         Err(InputError::Unknown { .. }) if scenes::NAMES.contains(&spec) => {
-            Ok(scene_solid(scenes::load(spec)?)?)
+            Ok((scene_solid(scenes::load(spec)?)?, Vec::new()))
         }
         other => Ok(other?),
     }

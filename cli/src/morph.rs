@@ -4,7 +4,7 @@ use crate::options::{MethodArgs, refuse_foreign};
 use crate::progress;
 use anyhow::Context;
 use clap::{ArgMatches, Args, ValueEnum};
-use isomorph_cli::methods::{Method, Settings, build, load_input};
+use isomorph_cli::methods::{Method, Settings, build, load_input_with_warnings};
 use isomorph_common::{Control, Solid};
 use isomorph_io::export::{ExportSettings, Report, export_sequence};
 use isomorph_io::inputs::LoadOptions;
@@ -73,13 +73,20 @@ impl Io {
         self.res.unwrap_or(64)
     }
 
-    /// Loads the inputs for `method`.
+    /// Loads the inputs for `method`, printing what the readers noticed.
     ///
     /// # Errors
     /// Unreadable or unknown inputs.
     pub fn inputs(&self, method: Method) -> anyhow::Result<(Solid, Solid)> {
         let options = LoadOptions { fit: !self.keep_scale, iso: self.iso };
-        let load = |spec: &str| load_input(method, spec, &options).with_context(|| format!("input {spec}"));
+        let load = |spec: &str| -> anyhow::Result<Solid> {
+            let (solid, warnings) =
+                load_input_with_warnings(method, spec, &options).with_context(|| format!("input {spec}"))?;
+            for warning in warnings {
+                eprintln!("warning: {spec}: {warning}");
+            }
+            Ok(solid)
+        };
         Ok((load(&self.source)?, load(&self.target)?))
     }
 
@@ -172,7 +179,11 @@ pub fn morph(method: Method, io: &Io, settings: &Settings, out: &Path) -> anyhow
     let export = io.export(out.to_path_buf(), &inputs, &control)?;
     let exported = export_sequence(&*morph, &export, &control);
     bar.finish_and_clear();
-    Ok(exported.with_context(|| format!("cannot export the frames to {}", out.display()))?.report)
+    let report = exported.with_context(|| format!("cannot export the frames to {}", out.display()))?.report;
+    for warning in &report.warnings {
+        eprintln!("warning: {warning}");
+    }
+    Ok(report)
 }
 
 /// Prints where the files went and the per-frame metrics.

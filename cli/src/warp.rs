@@ -41,7 +41,7 @@ pub struct WarpArgs {
     pub moves: Vec<(Vec3, Vec3)>,
     /// Region of influence of the drags (world units): only control points
     /// resting within this distance of a dragged point move.
-    #[arg(long)]
+    #[arg(long, value_parser = parse_radius)]
     pub radius: Option<f32>,
     /// Control points per axis (the thesis' CSIZE, at least 4).
     #[arg(long, default_value_t = 9, value_parser = clap::value_parser!(u32).range(4..=256))]
@@ -54,7 +54,7 @@ pub struct WarpArgs {
     pub res: u32,
     /// Empty voxels added on every side of the warped volume (default: 4
     /// plus the longest drag or move, so the warped shape stays inside).
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=i64::from(isomorph_warp::MAX_PAD)))]
     pub pad: Option<u32>,
     /// Output folder: warped.npy (+ .json sidecar), source.obj, warped.obj,
     /// before_after.png.
@@ -80,6 +80,14 @@ pub enum RawType {
     U8,
     /// Little-endian f32: a field, positive inside, surface at 0.
     F32,
+}
+
+/// Parses a positive finite radius.
+fn parse_radius(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(r) if r.is_finite() && r > 0.0 => Ok(r),
+        _ => Err(format!("'{s}' is not a positive radius (world units)")),
+    }
 }
 
 /// Parses `NX,NY,NZ`.
@@ -136,20 +144,23 @@ fn read_raw(args: &WarpArgs) -> anyhow::Result<Volume> {
         bail!("{}: a .raw volume needs --raw-dims NX,NY,NZ", args.input);
     };
     let dims = UVec3::new(x, y, z);
-    let bytes = std::fs::read(&args.input).with_context(|| format!("cannot read {}", args.input))?;
-    let count = dims.as_u64vec3().element_product();
-    let size = match args.raw_type {
+    let size: u64 = match args.raw_type {
         RawType::U8 => 1,
         RawType::F32 => 4,
     };
-    if bytes.len() as u64 != count * size {
-        bail!(
-            "{}: {} bytes, but {x}×{y}×{z} {:?} values need {}",
-            args.input,
-            bytes.len(),
-            args.raw_type,
-            count * size
-        );
+    // Checked: three u32 sizes can overflow u64.
+    let needed = [y, z]
+        .into_iter()
+        .try_fold(u64::from(x), |n, d| n.checked_mul(u64::from(d)))
+        .and_then(|n| n.checked_mul(size));
+    let length = std::fs::metadata(&args.input).with_context(|| format!("cannot read {}", args.input))?.len();
+    if needed != Some(length) {
+        let needed = needed.map_or("more than 2^64".to_string(), |n| n.to_string());
+        bail!("{}: {length} bytes, but {x}×{y}×{z} {:?} values need {needed}", args.input, args.raw_type);
+    }
+    let bytes = std::fs::read(&args.input).with_context(|| format!("cannot read {}", args.input))?;
+    if bytes.len() as u64 != length {
+        bail!("{}: the file changed while it was read", args.input);
     }
     Ok(match args.raw_type {
         RawType::U8 => Volume::U8(Grid3::from_vec(dims, Vec3::ZERO, 1.0, bytes)?),

@@ -17,7 +17,8 @@
 //!                              "mean_voxels": 0.06, "hausdorff_voxels": 0.25 },
 //!                  "target": { ... } },
 //!   "largest_step": 0.03, "largest_step_voxels": 1.9,
-//!   "morph": { "method": "baseline", "outcome": "direct", "converged": true, "stages": [ ... ], ... }
+//!   "morph": { "method": "baseline", "outcome": "direct", "converged": true, "stages": [ ... ], ... },
+//!   "warnings": [ "1 in-between frame(s) have no surface (t = 0.5): ..." ]
 //! }
 //! ```
 //! `genus` is `null` for frames that are not closed 2-manifolds; an endpoint is
@@ -204,6 +205,8 @@ pub struct Report {
     pub largest_step_voxels: Option<f32>,
     /// The method's own report.
     pub morph: MorphReport,
+    /// What the export noticed (e.g. in-between frames with no surface).
+    pub warnings: Vec<String>,
 }
 
 impl Report {
@@ -303,6 +306,21 @@ fn export_on_pool<M: Morph + ?Sized>(
         }
     }
 
+    let empty: Vec<String> = frames[1..total - 1]
+        .iter()
+        .zip(&meshes[1..total - 1])
+        .filter(|(_, mesh)| mesh.triangles.is_empty())
+        .map(|(frame, _)| format!("{}", frame.t))
+        .collect();
+    let mut warnings = Vec::new();
+    if !empty.is_empty() {
+        warnings.push(format!(
+            "{} in-between frame(s) have no surface (t = {}): the shape vanishes at this resolution",
+            empty.len(),
+            empty.join(", ")
+        ));
+    }
+
     if settings.contact_sheet {
         control.check()?;
         control.progress("contact sheet", None, String::new);
@@ -341,6 +359,7 @@ fn export_on_pool<M: Morph + ?Sized>(
         largest_step,
         largest_step_voxels: largest_step.map(|s| s / voxel),
         morph: morph.report().clone(),
+        warnings,
     };
     let path = dir.join("report.json");
     let json = serde_json::to_string_pretty(&report).expect("report serializes");

@@ -13,7 +13,7 @@
 //! # Ok::<(), isomorph_io::inputs::InputError>(())
 //! ```
 
-use crate::mesh::{MeshFormat, MeshIoError, read_mesh, read_mesh_from};
+use crate::mesh::{MeshFormat, MeshIoError, MeshRead, read_mesh_from, read_mesh_with_warnings};
 use crate::npy::{NpyError, Volume, load_npy};
 use isomorph_common::glam::{Affine3A, Quat, Vec3};
 use isomorph_common::{Aabb, Grid3, MorphError, Solid, TriMesh, models};
@@ -105,21 +105,36 @@ pub fn bunny() -> TriMesh {
 /// # Errors
 /// [`InputError`] naming the input and what is wrong with it.
 pub fn load_solid(spec: &str, options: &LoadOptions) -> Result<Solid, InputError> {
+    load_solid_with_warnings(spec, options).map(|(solid, _)| solid)
+}
+
+/// [`load_solid`], with what the file readers noticed and read leniently
+/// (e.g. dropped normal references, tolerance welding; see
+/// [`crate::mesh::ReadWarning`]), for the caller to show.
+///
+/// # Errors
+/// As [`load_solid`].
+pub fn load_solid_with_warnings(
+    spec: &str,
+    options: &LoadOptions,
+) -> Result<(Solid, Vec<String>), InputError> {
     if let Some(shape) = models::by_name(spec) {
-        return Ok(Solid::shape(shape));
+        return Ok((Solid::shape(shape), Vec::new()));
     }
     let solid_error = |source| InputError::Solid { spec: spec.to_string(), source };
     let path = Path::new(spec);
     if spec == BUNNY || (path.is_file() && !is_npy(path)) {
-        let mut mesh = if spec == BUNNY {
-            bunny()
+        let MeshRead { mut mesh, warnings } = if spec == BUNNY {
+            MeshRead { mesh: bunny(), warnings: Vec::new() }
         } else {
-            read_mesh(path).map_err(|source| InputError::Mesh { path: spec.to_string(), source })?
+            read_mesh_with_warnings(path)
+                .map_err(|source| InputError::Mesh { path: spec.to_string(), source })?
         };
         if options.fit {
             mesh.transform(&fit_map(&mesh.bounds()));
         }
-        return Solid::mesh(mesh).map_err(solid_error);
+        let warnings = warnings.iter().map(ToString::to_string).collect();
+        return Ok((Solid::mesh(mesh).map_err(solid_error)?, warnings));
     }
     if path.is_file() {
         let (values, iso) = match load_npy(path)? {
@@ -134,7 +149,7 @@ pub fn load_solid(spec: &str, options: &LoadOptions) -> Result<Solid, InputError
             Some(iso) => Solid::level_volume(&values, iso),
             None => Solid::volume(values),
         };
-        return solid.map_err(solid_error);
+        return Ok((solid.map_err(solid_error)?, Vec::new()));
     }
     Err(InputError::Unknown { spec: spec.to_string(), names: builtin_names().join(", ") })
 }

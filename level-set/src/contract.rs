@@ -120,6 +120,13 @@ impl LevelSetMorph {
         }
         let bounds =
             source.bounds().union(&target.bounds().transformed(&map.inverse())).padded(settings.padding);
+        if !(bounds.min.is_finite() && bounds.max.is_finite()) {
+            return Err(MorphError::InvalidInput(format!(
+                "the alignment map carries the target's box to {:?} .. {:?}, which is not finite; check the map",
+                bounds.min, bounds.max
+            ))
+            .into());
+        }
         control.progress("distance volumes", Some(0.0), String::new);
         let embedding = source.distance_volume(&bounds, res, control)?;
         control.progress("distance volumes", Some(0.5), String::new);

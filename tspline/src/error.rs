@@ -62,6 +62,6 @@ pub(crate) fn check_range(
     if value.is_finite() && value >= lo && value <= hi {
         Ok(())
     } else {
-        Err(MorphError::bad_setting(name, value, expected).into())
+        Err(MorphError::bad_setting(name, isomorph_common::check::number(value), expected).into())
     }
 }

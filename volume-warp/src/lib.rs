@@ -118,4 +118,4 @@ pub use map::BSplineMap;
 pub use morph::{WarpAnimation, WorldMap};
 pub use pushforward::{Density, Filter};
 pub use table::{CoefficientTable, DeformationArray, Evaluation, Evaluator};
-pub use warp::{VolumeWarp, WarpSettings};
+pub use warp::{MAX_PAD, VolumeWarp, WarpSettings};

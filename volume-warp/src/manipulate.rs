@@ -50,8 +50,9 @@ pub struct Drag {
 /// it of some handle's point may move.
 ///
 /// # Errors
-/// [`WarpError::NonFinite`] for a NaN or infinite handle or a non-positive
-/// radius, [`WarpError::Unreachable`] when the region of influence leaves a
+/// [`WarpError::NonFinite`] for a NaN or infinite handle,
+/// [`MorphError::BadSetting`](isomorph_common::MorphError::BadSetting) for a
+/// radius that is not positive and finite, [`WarpError::Unreachable`] when the region of influence leaves a
 /// handle without any control point that moves it.
 pub fn solve_drag(map: &BSplineMap, handles: &[Handle], influence: Option<f32>) -> Result<Drag, WarpError> {
     for h in handles {
@@ -61,8 +62,8 @@ pub fn solve_drag(map: &BSplineMap, handles: &[Handle], influence: Option<f32>) 
             }
         }
     }
-    if let Some(r) = influence.filter(|r| !(r.is_finite() && *r > 0.0)) {
-        return Err(WarpError::NonFinite { what: "region of influence radius", value: Vec3::splat(r) });
+    if let Some(r) = influence {
+        isomorph_common::check::positive("influence radius", f64::from(r))?;
     }
     let free = |c: UVec3| {
         influence.is_none_or(|r| handles.iter().any(|h| map.rest_position(c).distance(h.point) <= r))
@@ -197,5 +198,7 @@ mod tests {
         assert!(matches!(solve_drag(&map, &[h], Some(0.5)), Err(WarpError::Unreachable(0))));
         let bad = Handle { point: Vec3::NAN, goal: Vec3::ZERO };
         assert!(matches!(solve_drag(&map, &[bad], None), Err(WarpError::NonFinite { .. })));
+        let negative = solve_drag(&map, &[h], Some(-19.2)).unwrap_err().to_string();
+        assert!(negative.contains("influence radius = -19.2") && negative.contains("> 0"), "{negative}");
     }
 }

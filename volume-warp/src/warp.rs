@@ -31,6 +31,9 @@ impl Default for WarpSettings {
     }
 }
 
+/// The largest [`WarpSettings::pad`]: 4096 voxels per side.
+pub const MAX_PAD: u32 = 4096;
+
 /// Newton tolerance of the backward filter, in source voxels.
 const NEWTON_TOLERANCE: f32 = 1e-3;
 /// Newton iteration limit of the backward filter.
@@ -60,7 +63,8 @@ impl<T: Density> VolumeWarp<T> {
     /// Lattice errors of [`BSplineMap::identity`], [`WarpError::NonFiniteDensity`]
     /// for a NaN in an `f32` source, [`WarpError::NotTableable`] for
     /// [`Evaluation::Table`] on a size the table cannot serve, and
-    /// [`MorphError::Grid`](isomorph_common::MorphError::Grid) when the target does not fit the memory limit.
+    /// [`MorphError::Grid`](isomorph_common::MorphError::Grid) when the target does not fit the memory limit,
+    /// [`MorphError::BadSetting`](isomorph_common::MorphError::BadSetting) for a `pad` above [`MAX_PAD`].
     pub fn new(source: Grid3<T>, settings: WarpSettings) -> Result<Self, WarpError> {
         let map = BSplineMap::identity(source.dims(), settings.csize)?;
         Self::with_map(source, map, settings)
@@ -89,7 +93,8 @@ impl<T: Density> VolumeWarp<T> {
         };
         let deformation = DeformationArray::identity(source.dims())?;
         let pad = settings.pad;
-        let dims = source.dims() + UVec3::splat(2 * pad);
+        isomorph_common::check::count("pad", u64::from(pad), 0, u64::from(MAX_PAD))?;
+        let dims = source.dims().saturating_add(UVec3::splat(2 * pad));
         let origin = source.origin() - Vec3::splat(pad as f32 * source.spacing());
         let target = Grid3::new(dims, origin, source.spacing(), T::ZERO)?;
         let accum = if settings.filter == Filter::Backward {
@@ -361,6 +366,16 @@ mod tests {
             })
             .collect();
         Grid3::from_vec(dims, Vec3::ZERO, 1.0, data).unwrap()
+    }
+
+    #[test]
+    fn a_pad_that_would_wrap_is_a_bad_setting() {
+        let source = Grid3::new(UVec3::splat(8), Vec3::ZERO, 1.0, 0u8).unwrap();
+        let err = VolumeWarp::new(source, settings(4, u32::MAX, Filter::Box)).err().unwrap();
+        assert!(
+            matches!(err, WarpError::Morph(isomorph_common::MorphError::BadSetting { name: "pad", .. })),
+            "{err}"
+        );
     }
 
     fn settings(csize: u32, pad: u32, filter: Filter) -> WarpSettings {

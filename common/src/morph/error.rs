@@ -190,6 +190,29 @@ pub fn check_time(t: f32) -> Result<f32, MorphError> {
 pub mod check {
     use super::MorphError;
 
+    /// `value` as a short, readable number: the shortest form of the `f32`
+    /// it came from when it is one (`-19.2`, not `-19.200000762939453`),
+    /// scientific notation when very small or large (`1e-300`, not 300
+    /// digits).
+    ///
+    /// ```
+    /// use isomorph_common::check::number;
+    /// assert_eq!(number(f64::from(-19.2f32)), "-19.2");
+    /// assert_eq!(number(1e-300), "1e-300");
+    /// assert_eq!(number(0.25), "0.25");
+    /// ```
+    pub fn number(value: f64) -> String {
+        let magnitude = value.abs();
+        let scientific = value != 0.0 && !(1e-4..1e9).contains(&magnitude);
+        let narrow = value as f32;
+        match (scientific, f64::from(narrow) == value) {
+            (false, true) => narrow.to_string(),
+            (false, false) => value.to_string(),
+            (true, true) => format!("{narrow:e}"),
+            (true, false) => format!("{value:e}"),
+        }
+    }
+
     /// `lo ≤ value ≤ hi` and finite.
     ///
     /// # Errors
@@ -198,7 +221,11 @@ pub mod check {
         if value.is_finite() && value >= lo && value <= hi {
             Ok(())
         } else {
-            Err(MorphError::bad_setting(name, value, format!("a number in [{lo}, {hi}]")))
+            Err(MorphError::bad_setting(
+                name,
+                number(value),
+                format!("a number in [{}, {}]", number(lo), number(hi)),
+            ))
         }
     }
 
@@ -210,7 +237,7 @@ pub mod check {
         if value.is_finite() && value > 0.0 {
             Ok(())
         } else {
-            Err(MorphError::bad_setting(name, value, "a finite number > 0"))
+            Err(MorphError::bad_setting(name, number(value), "a finite number > 0"))
         }
     }
 
