@@ -4,10 +4,11 @@
 //! [`isomorph_common::Morph`]).
 
 use isomorph_blobtree::{BlobMorph, BlobSettings, BlobTree, scenes};
+use isomorph_common::glam::Vec3;
 use isomorph_common::{BlendSettings, BoxedError, BoxedMorph, Control, DistanceBlend, MorphExt, Solid};
 use isomorph_io::inputs::{InputError, LoadOptions, load_solid_with_warnings};
 use isomorph_levelset::{LevelSetMorph, LevelSetSettings};
-use isomorph_rbf::{RbfMorph, RbfSettings};
+use isomorph_rbf::{RbfMorph, RbfSettings, WarpedMorph, WarpedSettings};
 use isomorph_tspline::{TsplineMorph, TsplineSettings};
 use isomorph_warp::{WarpMorph, WarpMorphSettings};
 use std::sync::Arc;
@@ -68,6 +69,10 @@ pub struct Settings {
     pub level_set: LevelSetSettings,
     /// Turk & O'Brien's variational implicit.
     pub rbf: RbfSettings,
+    /// Corresponding points (source, target) for the variational implicit:
+    /// when given, the shapes are warped half-way to each other first (the
+    /// paper's appendix, [`WarpedMorph`]).
+    pub rbf_correspondences: Vec<(Vec3, Vec3)>,
     /// True's B-spline warp with a cross-dissolve.
     pub warp: WarpMorphSettings,
     /// Yang & Jüttler's T-spline level sets.
@@ -158,6 +163,13 @@ pub fn build(
         }
         Method::LevelSet => {
             LevelSetMorph::new(source, target, &settings.level_set, control).map_err(BoxedError::new)?.boxed()
+        }
+        Method::Rbf if !settings.rbf_correspondences.is_empty() => {
+            let warped = WarpedSettings {
+                rbf: settings.rbf.clone(),
+                correspondences: settings.rbf_correspondences.clone(),
+            };
+            WarpedMorph::new(source, target, &warped, control).map_err(BoxedError::new)?.boxed()
         }
         Method::Rbf => {
             RbfMorph::new(source, target, &settings.rbf, control).map_err(BoxedError::new)?.boxed()

@@ -183,6 +183,15 @@ pub fn morph(method: Method, io: &Io, settings: &Settings, out: &Path) -> anyhow
     for warning in &report.warnings {
         eprintln!("warning: {warning}");
     }
+    if !report.morph.converged {
+        let off = report.endpoints.target.map_or(String::new(), |e| {
+            format!(" (its last frame is {:.2} voxels off the target, Hausdorff)", e.hausdorff_voxels)
+        });
+        eprintln!(
+            "warning: the {} morph did not reach its goal ({:?}){off}; see report.json",
+            report.method, report.morph.outcome
+        );
+    }
     Ok(report)
 }
 

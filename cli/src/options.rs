@@ -48,8 +48,10 @@ pub struct MethodArgs {
     #[arg(long, help_heading = "Volume warp (True)", value_enum, default_value_t = WarpSpecArg::Align)]
     pub warp_spec: WarpSpecArg,
     /// A correspondence `X,Y,Z:X,Y,Z` (source point : target point, world
-    /// units); repeat for several.
-    #[arg(long = "landmark", help_heading = "Volume warp (True)", value_parser = parse_pair)]
+    /// units); repeat for several. The volume warp carries the source by
+    /// them; the RBF method warps both shapes half-way by them (at least 4,
+    /// not all on one plane).
+    #[arg(long = "landmark", help_heading = "Volume warp (True)", value_parser = parse_pair, allow_hyphen_values = true)]
     pub landmarks: Vec<(Vec3, Vec3)>,
     /// Voxels between B-spline control points.
     #[arg(long, help_heading = "Volume warp (True)", default_value_t = WarpMorphSettings::default().control_spacing)]
@@ -89,35 +91,40 @@ pub struct MethodArgs {
 }
 
 /// Which options belong to which method (by their argument ids).
-const OWNERS: [(&str, Method); 16] = [
-    ("align", Method::LevelSet),
-    ("solver", Method::LevelSet),
-    ("curvature", Method::LevelSet),
-    ("max_iterations", Method::LevelSet),
-    ("points", Method::Rbf),
-    ("separation", Method::Rbf),
-    ("kernel", Method::Rbf),
-    ("warp_spec", Method::Warp),
-    ("landmarks", Method::Warp),
-    ("control_spacing", Method::Warp),
-    ("speed", Method::Tspline),
-    ("nt", Method::Tspline),
-    ("depth", Method::Tspline),
-    ("step", Method::Tspline),
-    ("margin", Method::Tspline),
-    ("refine", Method::Tspline),
+const OWNERS: [(&str, &[Method]); 18] = [
+    ("align", &[Method::LevelSet]),
+    ("solver", &[Method::LevelSet]),
+    ("curvature", &[Method::LevelSet]),
+    ("max_iterations", &[Method::LevelSet]),
+    ("points", &[Method::Rbf]),
+    ("separation", &[Method::Rbf]),
+    ("kernel", &[Method::Rbf]),
+    ("warp_spec", &[Method::Warp]),
+    ("landmarks", &[Method::Warp, Method::Rbf]),
+    ("control_spacing", &[Method::Warp]),
+    ("speed", &[Method::Tspline]),
+    ("nt", &[Method::Tspline]),
+    ("depth", &[Method::Tspline]),
+    ("step", &[Method::Tspline]),
+    ("margin", &[Method::Tspline]),
+    ("refine", &[Method::Tspline]),
+    ("refine_rounds", &[Method::Tspline]),
+    ("links", &[Method::Blobtree]),
 ];
 
-/// The options given on the command line that belong to a method not in
-/// `methods` (as `--name (method)`); `refine_rounds` and `links` count too.
+/// The options given on the command line that belong to no method in
+/// `methods` (as `--name (method)`).
 pub fn foreign_options(matches: &ArgMatches, methods: &[Method]) -> Vec<String> {
-    let owners =
-        OWNERS.iter().copied().chain([("refine_rounds", Method::Tspline), ("links", Method::Blobtree)]);
-    owners
-        .filter(|(id, owner)| {
-            !methods.contains(owner) && matches.value_source(id) == Some(ValueSource::CommandLine)
+    OWNERS
+        .iter()
+        .filter(|(id, owners)| {
+            !owners.iter().any(|o| methods.contains(o))
+                && matches.value_source(id) == Some(ValueSource::CommandLine)
         })
-        .map(|(id, owner)| format!("--{} ({})", id.replace('_', "-"), owner.name()))
+        .map(|(id, owners)| {
+            let names: Vec<&str> = owners.iter().map(|o| o.name()).collect();
+            format!("--{} ({})", id.replace('_', "-"), names.join(", "))
+        })
         .collect()
 }
 
@@ -158,6 +165,7 @@ impl MethodArgs {
         r.points = self.points;
         r.separation = self.separation;
         r.kernel = self.kernel.into();
+        settings.rbf_correspondences.clone_from(&self.landmarks);
 
         let w = &mut settings.warp;
         w.spec = match self.warp_spec {

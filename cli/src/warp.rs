@@ -33,11 +33,11 @@ pub struct WarpArgs {
     /// Drag the surface point X,Y,Z by DX,DY,DZ (world units), e.g.
     /// `--drag 0.3,0,0:0.2,0,0`. Repeat for several points; all land exactly
     /// where asked unless they conflict (then least squares).
-    #[arg(long = "drag", value_parser = parse_pair)]
+    #[arg(long = "drag", value_parser = parse_pair, allow_hyphen_values = true)]
     pub drags: Vec<(Vec3, Vec3)>,
     /// Move control point I,J,K by DX,DY,DZ (world units), e.g.
     /// `--move 4,4,4:0,0.1,0`. Applied after the drags.
-    #[arg(long = "move", value_parser = parse_pair)]
+    #[arg(long = "move", value_parser = parse_pair, allow_hyphen_values = true)]
     pub moves: Vec<(Vec3, Vec3)>,
     /// Region of influence of the drags (world units): only control points
     /// resting within this distance of a dragged point move.

@@ -528,3 +528,48 @@ fn contours_and_rbf_morph_run_and_refuse_bad_input() {
     assert_eq!(report["frames"][1]["components"], 1);
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// `--landmark` pairs reach the RBF method (the paper's warped
+/// transformation) as well as the volume warp, and no other method.
+#[test]
+fn landmarks_warp_the_rbf_transformation() {
+    let out = scratch("rbf-landmarks");
+    let mut args: Vec<String> = [
+        "morph", "--method", "rbf", "--source", "sphere", "--target", "torus", "--frames", "3", "--res", "32",
+    ]
+    .map(String::from)
+    .to_vec();
+    for k in 0..4 {
+        let a = k as f32 * std::f32::consts::FRAC_PI_2;
+        let (c, s) = (a.cos(), a.sin());
+        for z in [-1.0f32, 1.0] {
+            let n = (1.0f32 + z * z).sqrt();
+            let (p, q) = ([0.3 * c / n, 0.3 * s / n, 0.3 * z / n], [0.3 * c, 0.3 * s, 0.12 * z]);
+            args.push(format!("--landmark={},{},{}:{},{},{}", p[0], p[1], p[2], q[0], q[1], q[2]));
+        }
+    }
+    let run = |extra: &[&str]| {
+        let all: Vec<&str> = args.iter().map(String::as_str).chain(extra.iter().copied()).collect();
+        isomorph(&all)
+    };
+    let o = run(&["--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["method"], "rbf-warp");
+    assert_eq!(report["morph"]["details"]["correspondences"], 8);
+    let o = isomorph(&[
+        "morph",
+        "--method",
+        "tspline",
+        "--source",
+        "sphere",
+        "--target",
+        "torus",
+        "--landmark",
+        "0,0,0:0,0,0",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("--landmarks (warp, rbf)"), "{err}");
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -37,6 +37,10 @@ use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+/// An endpoint frame farther than this (Hausdorff, voxels) from its input
+/// is reported in [`Report::warnings`].
+pub const ENDPOINT_WARNING_VOXELS: f32 = 3.0;
+
 /// What to export and how.
 #[derive(Debug, Clone)]
 pub struct ExportSettings {
@@ -349,6 +353,15 @@ fn export_on_pool<M: Morph + ?Sized>(
         source: endpoint(&settings.source_reference, &meshes[0]),
         target: endpoint(&settings.target_reference, &meshes[total - 1]),
     };
+    for (which, end) in [("first", &endpoints.source), ("last", &endpoints.target)] {
+        if let Some(e) = end.filter(|e| e.hausdorff_voxels > ENDPOINT_WARNING_VOXELS) {
+            let input = if which == "first" { "source" } else { "target" };
+            warnings.push(format!(
+                "the {which} frame is {:.1} voxels (Hausdorff; mean {:.2}) off the {input}",
+                e.hausdorff_voxels, e.mean_voxels
+            ));
+        }
+    }
     let report = Report {
         method: morph.method().to_string(),
         resolution: settings.resolution,

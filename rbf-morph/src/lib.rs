@@ -129,4 +129,7 @@ pub use reconstruct::{ContourSet, ContourSurface, Plane, ReconstructSettings};
 pub use slice::{Slice2, Slice3};
 pub use solve::{Factorization, Solver};
 pub use transform::{ContourMorph, RbfMorph, RbfSettings, TransformSettings};
-pub use warp::{DisplacementWarp, HalfwayWarps, WarpedContourMorph, WarpedMorph, WarpedSlice, WarpedSlice2};
+pub use warp::{
+    DisplacementWarp, HalfwayWarps, WarpedContourMorph, WarpedMorph, WarpedSettings, WarpedSlice,
+    WarpedSlice2,
+};

@@ -166,7 +166,7 @@ impl SlabPreconditioner {
     /// definite or the coupling is not smooth.
     pub(crate) fn new(b: MatRef<'_, f64>, h: usize) -> Option<Self> {
         let k = b.nrows();
-        let par = Par::rayon(0);
+        let par = crate::solve::PARALLELISM;
         let l_a = cholesky(b.submatrix(0, 0, h, h), par)?;
         let l_d = cholesky(b.submatrix(h, h, k - h, k - h), par)?;
         let g = b.submatrix(h, 0, k - h, h);
@@ -201,7 +201,7 @@ impl SlabPreconditioner {
     /// `r ← M⁻¹ r`.
     pub(crate) fn apply(&self, r: &mut [f64]) {
         let h = self.l_a.nrows();
-        let par = Par::rayon(0);
+        let par = crate::solve::PARALLELISM;
         let (r1, r2) = r.split_at_mut(h);
         let mut w1 = MatMut::from_column_major_slice_mut(r1, h, 1);
         let mut w2 = MatMut::from_column_major_slice_mut(r2, self.l_d.nrows(), 1);

@@ -193,7 +193,7 @@ fn build_projected(
     // Y = A V (A symmetric from its lower triangle L: Y = L V + L_strictᵀ V),
     // M = Vᵀ Y,  X = Y T − ½ V Tᵀ M T,  QᵀAQ = A − X Vᵀ − V Xᵀ.
     let t = qr.wy_t();
-    let par = Par::rayon(0);
+    let par = crate::solve::PARALLELISM;
     let mut y = Mat::<f64>::zeros(n, qr.m);
     symmetric_lower_mul(y.as_mut(), Accum::Replace, am.as_ref(), qr.v.as_ref(), par);
     let mm = qr.v.transpose() * &y;
@@ -263,6 +263,13 @@ pub enum Solver {
     /// Always the dense Cholesky (with its `LBLᵀ` fallback).
     Dense,
 }
+
+/// The parallelism of the dense kernels (faer): a fixed task count rather
+/// than the pool's thread count, because faer's blocking, and with it the
+/// rounding, follows the task count; rayon runs the tasks on however many
+/// threads the [`Control`](isomorph_common::Control) gives, so the solution
+/// is bit-identical for any thread count.
+pub(crate) const PARALLELISM: Par = Par::Rayon(std::num::NonZeroUsize::new(4).expect("4 > 0"));
 
 /// Solves the interpolation system for `positions` (row-major `n × dim`,
 /// already normalized) and `values`.
@@ -406,7 +413,7 @@ fn dense_solve(
     rebuild: &dyn Fn(&mut [f64]),
 ) -> (Factorization, f64) {
     let k = n - m;
-    let par = Par::rayon(0);
+    let par = crate::solve::PARALLELISM;
     let llt_ok = {
         let am = MatMut::from_column_major_slice_mut(a, n, n);
         let b = am.submatrix_mut(m, m, k, k);

@@ -161,6 +161,40 @@ impl RbfSettings {
     }
 }
 
+impl RbfSettings {
+    /// The paper-level settings of the fit these settings describe.
+    pub fn transform(&self) -> TransformSettings {
+        TransformSettings {
+            fit: FitSettings::default().with_kernel(self.kernel),
+            separation: self.separation,
+            margin: self.margin,
+        }
+    }
+}
+
+/// The boundary and inward normal constraints (§4.2) of `settings.points`
+/// surface points of each solid (the mesh itself, or the polygonized
+/// distance volume of other solids).
+pub(crate) fn surface_constraints(
+    source: &Solid,
+    target: &Solid,
+    settings: &RbfSettings,
+    control: &Control,
+) -> Result<[Vec<Constraint<3>>; 2], RbfError> {
+    let surface = SurfaceSettings {
+        offset: NormalOffset::RelativeToDiagonal(settings.normal_offset),
+        subsample: Subsample::FarthestPoint(settings.points),
+    };
+    let side = |done: f32, solid: &Solid| -> Result<Vec<Constraint<3>>, RbfError> {
+        control.progress("constraints", Some(done), String::new);
+        let mesh = solid.surface(settings.surface_resolution, control)?;
+        let constraints = mesh_constraints(&mesh, &surface)?;
+        control.check()?;
+        Ok(constraints)
+    };
+    Ok([side(0.0, source)?, side(0.5, target)?])
+}
+
 /// Transformation between two 3D shapes through one 4D variational implicit
 /// (§5.2); implements [`Morph`] with [`Slice3`] frames (iso 0, positive
 /// inside, field space = world space).
@@ -209,26 +243,10 @@ impl RbfMorph {
         let warnings = isomorph_common::validate_inputs(source, target, control)?;
         control.install(|| {
             let mut stages = Stages::start();
-            let surface = SurfaceSettings {
-                offset: NormalOffset::RelativeToDiagonal(settings.normal_offset),
-                subsample: Subsample::FarthestPoint(settings.points),
-            };
-            let mut sides = Vec::with_capacity(2);
-            for (k, solid) in [source, target].into_iter().enumerate() {
-                control.progress("constraints", Some(k as f32 / 2.0), String::new);
-                let mesh = solid.surface(settings.surface_resolution, control)?;
-                sides.push(mesh_constraints(&mesh, &surface)?);
-                control.check()?;
-            }
+            let [a, b] = surface_constraints(source, target, settings, control)?;
             stages.lap("constraints");
-            control
-                .progress("fit", None, || format!("{} constraints in 4D", sides[0].len() + sides[1].len()));
-            let transform = TransformSettings {
-                fit: FitSettings::default().with_kernel(settings.kernel),
-                separation: settings.separation,
-                margin: settings.margin,
-            };
-            let mut morph = Self::from_constraints(&sides[0], &sides[1], &transform)?;
+            control.progress("fit", None, || format!("{} constraints in 4D", a.len() + b.len()));
+            let mut morph = Self::from_constraints(&a, &b, &settings.transform())?;
             control.check()?;
             stages.lap("fit");
             morph.report = morph.report.with_stages(stages).with_warnings(warnings);

@@ -26,11 +26,13 @@
 use crate::error::RbfError;
 use crate::interpolant::{Constraint, FitSettings, Interpolant};
 use crate::slice::{Slice2, Slice3, sample_lattice};
-use crate::transform::{ContourMorph, RbfMorph, TransformSettings, frame_lattice};
+use crate::transform::{
+    ContourMorph, RbfMorph, RbfSettings, TransformSettings, frame_lattice, surface_constraints,
+};
 use glam::{Mat2, Mat3, Vec2, Vec3};
 use isomorph_common::check_time;
 use isomorph_common::marching_squares::{Polyline2, marching_squares};
-use isomorph_common::{Aabb, Field3, Frame, Grid2, Morph, MorphReport};
+use isomorph_common::{Aabb, Control, Field3, Frame, Grid2, Morph, MorphReport, Solid, Stages};
 use rayon::prelude::*;
 use std::sync::Arc;
 
@@ -162,7 +164,7 @@ impl<const N: usize> HalfwayWarps<N> {
 /// let on_a = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z].map(|d| d * 0.2);
 /// let on_b = on_a.map(|p| p + shift);
 /// let settings = TransformSettings { separation: 0.2, ..Default::default() };
-/// let morph = WarpedMorph::new(&a, &b, &on_a, &on_b, &settings)?;
+/// let morph = WarpedMorph::from_constraints(&a, &b, &on_a, &on_b, &settings)?;
 /// // Half-way, the sphere is half-way: its centre is at 0.15, its pole
 /// // (0.2, 0, 0) near 0.35 (the in-between sphere bulges slightly).
 /// let mid = morph.frame(0.5)?.field;
@@ -179,15 +181,85 @@ pub struct WarpedMorph {
     report: MorphReport,
 }
 
+/// Settings of [`WarpedMorph::new`]: those of the plain transformation and
+/// the user's correspondences.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct WarpedSettings {
+    /// Sampling and fit of the shapes, as for [`RbfMorph::new`].
+    pub rbf: RbfSettings,
+    /// Corresponding points `(on the source, on the target)` in world units;
+    /// at least 4, not all on one plane.
+    pub correspondences: Vec<(Vec3, Vec3)>,
+}
+
 impl WarpedMorph {
+    /// The contract's constructor: samples both solids' surface constraints
+    /// as [`RbfMorph::new`] does, then fits the half-way warps from
+    /// `settings.correspondences` and the 4D implicit between the warped
+    /// shapes ([`WarpedMorph::from_constraints`]).
+    ///
+    /// ```
+    /// use glam::Vec3;
+    /// use isomorph_common::{Control, Field3, Morph, Shape, Solid};
+    /// use isomorph_rbf::{RbfSettings, WarpedMorph, WarpedSettings};
+    ///
+    /// let shift = Vec3::X * 0.5;
+    /// let a = Solid::shape(Shape::sphere(0.2));
+    /// let b = Solid::shape(Shape::sphere(0.2).translated(shift));
+    /// let poles = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z].map(|d| d * 0.2);
+    /// let settings = WarpedSettings {
+    ///     rbf: RbfSettings { points: 100, ..Default::default() },
+    ///     correspondences: poles.iter().map(|&p| (p, p + shift)).collect(),
+    /// };
+    /// let morph = WarpedMorph::new(&a, &b, &settings, &Control::new())?;
+    /// // Half-way the sphere has slid half-way (the plain transformation
+    /// // blends two spheres in place instead).
+    /// assert!(morph.frame(0.5)?.field.value(shift * 0.5) > 0.0);
+    /// # Ok::<(), isomorph_rbf::RbfError>(())
+    /// ```
+    ///
+    /// # Errors
+    /// [`MorphError::BadSetting`](isomorph_common::MorphError::BadSetting),
+    /// [`RbfError::TooFewCorrespondences`] and [`RbfError::NonFinite`] before
+    /// any work, [`MorphError::Cancelled`](isomorph_common::MorphError::Cancelled),
+    /// the solids' conversion errors, and those of
+    /// [`WarpedMorph::from_constraints`].
+    pub fn new(
+        source: &Solid,
+        target: &Solid,
+        settings: &WarpedSettings,
+        control: &Control,
+    ) -> Result<Self, RbfError> {
+        settings.rbf.validate()?;
+        let (on_source, on_target): (Vec<Vec3>, Vec<Vec3>) = settings.correspondences.iter().copied().unzip();
+        let arrays = |p: &[Vec3]| p.iter().map(|v| v.to_array()).collect::<Vec<_>>();
+        check_pairs(&arrays(&on_source), &arrays(&on_target))?;
+        let warnings = isomorph_common::validate_inputs(source, target, control)?;
+        control.install(|| {
+            let mut stages = Stages::start();
+            let [a, b] = surface_constraints(source, target, &settings.rbf, control)?;
+            stages.lap("constraints");
+            control.progress("fit", None, || {
+                format!("{} constraints in 4D, {} correspondences", a.len() + b.len(), on_source.len())
+            });
+            let mut morph =
+                Self::from_constraints(&a, &b, &on_source, &on_target, &settings.rbf.transform())?;
+            control.check()?;
+            stages.lap("fit");
+            morph.report = morph.report.with_stages(stages).with_warnings(warnings);
+            Ok(morph)
+        })
+    }
+
     /// Fits the warps from the corresponding points `on_source[i] ↔
     /// on_target[i]` (with [`TransformSettings::fit`]), displaces the
     /// constraints of each shape half-way, and fits the 4D implicit between
-    /// the warped shapes.
+    /// the warped shapes (the paper-level constructor: constraints made by
+    /// the caller).
     ///
     /// # Errors
-    /// Those of [`HalfwayWarps::new`] and [`RbfMorph::new`].
-    pub fn new(
+    /// Those of [`HalfwayWarps::new`] and [`RbfMorph::from_constraints`].
+    pub fn from_constraints(
         source: &[Constraint<3>],
         target: &[Constraint<3>],
         on_source: &[Vec3],
@@ -527,7 +599,8 @@ mod tests {
         // A small separation (§6.2): identical warped shapes stay nearly
         // identical in between (measured radius 0.21 half-way, 0.16 with t_max = 1).
         let settings = TransformSettings { separation: 0.2, ..Default::default() };
-        let morph = WarpedMorph::new(&a, &b, &poles(Vec3::ZERO), &poles(shift), &settings).unwrap();
+        let morph =
+            WarpedMorph::from_constraints(&a, &b, &poles(Vec3::ZERO), &poles(shift), &settings).unwrap();
         // A pure translation is the warps' polynomial part: w_A ≡ shift / 2.
         let w = Vec3::from_array(morph.warps().source().displacement([0.1, -0.2, 0.05]));
         assert!(w.distance(shift * 0.5) < 1e-5, "{w}");
@@ -641,7 +714,7 @@ mod tests {
         let (a, b) = (sphere(Vec3::ZERO), sphere(Vec3::new(0.1, 0.05, 0.0)));
         let points = poles(Vec3::ZERO);
         let settings = TransformSettings::default();
-        let warped = WarpedMorph::new(&a, &b, &points, &points, &settings).unwrap();
+        let warped = WarpedMorph::from_constraints(&a, &b, &points, &points, &settings).unwrap();
         let plain = RbfMorph::from_constraints(&a, &b, &settings).unwrap();
         let probe: Vec<Vec3> =
             (0..50).map(|i| Vec3::new((i as f32).sin(), (i as f32 * 1.7).cos(), 0.3) * 0.3).collect();
@@ -659,23 +732,26 @@ mod tests {
         let s = TransformSettings::default();
         let p = poles(Vec3::ZERO);
         assert!(matches!(
-            WarpedMorph::new(&a, &a, &p, &p[..5], &s),
+            WarpedMorph::from_constraints(&a, &a, &p, &p[..5], &s),
             Err(RbfError::CorrespondenceCount { on_source: 6, on_target: 5 })
         ));
         let mut nan = p.clone();
         nan[2].y = f32::NAN;
         assert!(matches!(
-            WarpedMorph::new(&a, &a, &p, &nan, &s),
+            WarpedMorph::from_constraints(&a, &a, &p, &nan, &s),
             Err(RbfError::NonFinite { what: "correspondence", .. })
         ));
         assert!(matches!(
-            WarpedMorph::new(&a, &a, &p[..3], &p[..3], &s),
+            WarpedMorph::from_constraints(&a, &a, &p[..3], &p[..3], &s),
             Err(RbfError::TooFewCorrespondences { got: 3, needed: 4, dim: 3 })
         ));
         // Four points in one plane do not determine a 3D warp.
         let flat = [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::ONE.with_z(0.0)];
-        assert!(matches!(WarpedMorph::new(&a, &a, &flat, &flat, &s), Err(RbfError::NotUnisolvent { .. })));
-        let m = WarpedMorph::new(&a, &a, &p, &p, &s).unwrap();
+        assert!(matches!(
+            WarpedMorph::from_constraints(&a, &a, &flat, &flat, &s),
+            Err(RbfError::NotUnisolvent { .. })
+        ));
+        let m = WarpedMorph::from_constraints(&a, &a, &p, &p, &s).unwrap();
         assert!(matches!(m.frame(-0.1), Err(RbfError::Morph(isomorph_common::MorphError::InvalidTime(_)))));
     }
 }
