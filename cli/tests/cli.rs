@@ -1,17 +1,9 @@
 //! End-to-end tests of the `isomorph` binary.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn isomorph(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_isomorph")).args(args).output().expect("the binary runs")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("isomorph-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
-}
+use common::{isomorph, scratch};
+use std::path::Path;
 
 fn bunny() -> String {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/bunny.ply").to_string_lossy().into_owned()

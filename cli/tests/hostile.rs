@@ -1,16 +1,15 @@
 //! Hostile and unusable input through the command line: a clear error and a
 //! nonzero exit, never an abort or wrong files with exit status 0.
 
+mod common;
+
+use common::isomorph;
 use std::path::PathBuf;
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn isomorph(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_isomorph")).args(args).output().expect("the binary runs")
-}
-
+/// An empty scratch folder.
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("isomorph-hostile-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let dir = common::scratch(&format!("hostile-{name}"));
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
