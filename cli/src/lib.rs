@@ -17,3 +17,4 @@
 //! ```
 
 pub mod methods;
+pub mod parse;

@@ -1,9 +1,9 @@
 //! `isomorph warp`: True's B-spline volume warp of a shape or mesh, driven by
 //! dragged points (direct manipulation) and/or moved control points.
 
-use crate::options::parse_pair;
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
+use isomorph_cli::parse::parse_pair;
 use isomorph_common::glam::{UVec3, Vec3};
 use isomorph_common::marching_cubes::marching_cubes;
 use isomorph_common::{Control, Grid3};
