@@ -6,7 +6,8 @@
 //! Rust, so CI checks the corpus without nightly.
 //!
 //! Readers that take a path only ([`npy`] with its sidecar, [`align_map`])
-//! get the bytes through files in a scratch folder of their own per thread.
+//! get the bytes through scratch files of their own per thread, removed
+//! after each input.
 
 use isomorph_blobtree::{BlobTree, GenericTree, MorphSpec};
 use isomorph_io::mesh::{MeshFormat, read_mesh_from};
@@ -49,18 +50,12 @@ fn limit_memory() {
     isomorph_common::set_memory_limit(MEMORY_LIMIT);
 }
 
-/// A file named `name` in this thread's scratch folder (created on demand).
-fn scratch(name: &str) -> PathBuf {
-    thread_local! {
-        static DIR: PathBuf = {
-            let thread = format!("{:?}", std::thread::current().id());
-            let tag: String = thread.chars().filter(char::is_ascii_digit).collect();
-            let dir = std::env::temp_dir().join(format!("isomorph-fuzz-{}-{tag}", std::process::id()));
-            std::fs::create_dir_all(&dir).expect("a scratch folder for the fuzzed files");
-            dir
-        };
-    }
-    DIR.with(|dir| dir.join(name))
+/// A scratch file of this process and thread in the temporary folder:
+/// `isomorph-fuzz-<process>-<thread><suffix>` (the caller removes it).
+fn scratch(suffix: &str) -> PathBuf {
+    let thread = format!("{:?}", std::thread::current().id());
+    let thread: String = thread.chars().filter(char::is_ascii_digit).collect();
+    std::env::temp_dir().join(format!("isomorph-fuzz-{}-{thread}{suffix}", std::process::id()))
 }
 
 /// OBJ through [`read_mesh_from`] (`isomorph_io::mesh::obj::read_obj`).
@@ -92,15 +87,15 @@ pub fn npy(data: &[u8]) {
     let split = data.windows(magic.len()).position(|w| w == magic).unwrap_or(data.len());
     let (sidecar, array) = data.split_at(split);
     let _ = isomorph_io::npy::read_npy(array, glam::Vec3::ZERO, 1.0, std::path::Path::new("fuzz.npy"));
-    let npy = scratch("fuzz.npy");
+    let npy = scratch(".npy");
     let json = isomorph_io::npy::sidecar_path(&npy);
     std::fs::write(&npy, array).expect("write the scratch .npy");
-    if sidecar.is_empty() {
-        let _ = std::fs::remove_file(&json);
-    } else {
+    if !sidecar.is_empty() {
         std::fs::write(&json, sidecar).expect("write the scratch sidecar");
     }
     let _ = isomorph_io::npy::load_npy(&npy);
+    let _ = std::fs::remove_file(&npy);
+    let _ = std::fs::remove_file(&json);
 }
 
 /// A grayscale contour image through [`isomorph_io::png_gray::decode_png_gray`].
@@ -148,9 +143,10 @@ pub fn links(data: &[u8]) {
 /// through a scratch file).
 pub fn align_map(data: &[u8]) {
     limit_memory();
-    let path = scratch("map.json");
+    let path = scratch("-map.json");
     std::fs::write(&path, data).expect("write the scratch map");
     let _ = cli_options::read_map(&path);
+    let _ = std::fs::remove_file(&path);
 }
 
 /// A `--landmark` / `--drag` / `--move` pair `A,B,C:D,E,F` through the
