@@ -14,13 +14,6 @@ use isomorph_io::mesh::{MeshFormat, read_mesh_from};
 use std::path::PathBuf;
 use std::sync::OnceLock;
 
-/// The command line's option parsers (`--align <map.json>`, `--landmark`)
-/// live in the `isomorph` binary, not in the `isomorph-cli` library, so the
-/// module is compiled here as well to reach them.
-#[allow(dead_code, unreachable_pub, clippy::all)]
-#[path = "../../cli/src/options.rs"]
-mod cli_options;
-
 /// Largest grid any reader may allocate while fuzzing (the default, 8 GiB,
 /// is above the fuzzer's RSS limit, so a wrong size would read as an OOM
 /// rather than as the [`isomorph_common::GridError::TooLarge`] it should be).
@@ -145,7 +138,7 @@ pub fn align_map(data: &[u8]) {
     limit_memory();
     let path = scratch("-map.json");
     std::fs::write(&path, data).expect("write the scratch map");
-    let _ = cli_options::read_map(&path);
+    let _ = isomorph_cli::parse::read_map(&path);
     let _ = std::fs::remove_file(&path);
 }
 
@@ -153,5 +146,5 @@ pub fn align_map(data: &[u8]) {
 /// command line's `parse_pair`.
 pub fn landmark(data: &[u8]) {
     let Ok(text) = std::str::from_utf8(data) else { return };
-    let _ = cli_options::parse_pair(text);
+    let _ = isomorph_cli::parse::parse_pair(text);
 }
