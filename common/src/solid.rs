@@ -193,6 +193,14 @@ impl Solid {
                 .install(|| Grid3::sample_box(field, &self.bounds().padded(0.05), PROBE_RESOLUTION))?;
             Ok((grid.data().iter().any(|&v| v > 0.0), grid.data().iter().any(|&v| v <= 0.0)))
         };
+        // A field sampled on the probe grid must be inside and outside somewhere.
+        let has_surface = |field: &dyn Field3| -> Result<(), MorphError> {
+            match probe(field)? {
+                (false, _) => Err(empty(format!("no node of a {PROBE_RESOLUTION}³ probe grid is inside it"))),
+                (_, false) => Err(empty("it fills its whole box: no surface".into())),
+                _ => Ok(()),
+            }
+        };
         let mut warnings = Vec::new();
         match &*self.0 {
             Repr::Mesh { mesh, sdf } => {
@@ -242,20 +250,8 @@ impl Solid {
                     return Err(empty("every node of the distance volume is inside: no surface".into()));
                 }
             }
-            Repr::Shape(shape) => match probe(shape)? {
-                (false, _) => {
-                    return Err(empty(format!("no node of a {PROBE_RESOLUTION}³ probe grid is inside it")));
-                }
-                (_, false) => return Err(empty("it fills its whole box: no surface".into())),
-                _ => {}
-            },
-            Repr::Implicit { field, .. } => match probe(field.as_ref())? {
-                (false, _) => {
-                    return Err(empty(format!("no node of a {PROBE_RESOLUTION}³ probe grid is inside it")));
-                }
-                (_, false) => return Err(empty("it fills its whole box: no surface".into())),
-                _ => {}
-            },
+            Repr::Shape(shape) => has_surface(shape)?,
+            Repr::Implicit { field, .. } => has_surface(field.as_ref())?,
         }
         Ok(warnings)
     }
