@@ -14,7 +14,7 @@ use isomorph_common::marching_cubes::{SparseSettings, polygonize_near_surface};
 use isomorph_common::marching_cubes::{marching_cubes, polygonize};
 use isomorph_common::{Aabb, Grid3};
 use isomorph_rbf::constraints::{NormalOffset, Subsample, SurfaceSettings, field_constraints};
-use isomorph_rbf::{FitSettings, Interpolant, Kernel, RbfMorph, TransformSettings, transform::lift};
+use isomorph_rbf::{FitSettings, Interpolant, Kernel, RbfMorph, TransformSettings, lift};
 use std::hint::black_box;
 
 /// The reference case: a sphere (radius 0.3) and a torus (R = 0.3,

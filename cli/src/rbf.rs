@@ -10,8 +10,7 @@ use isomorph_common::{Aabb, Grid2};
 use isomorph_io::mesh::{MeshFormat, write_mesh};
 use isomorph_io::png_gray::read_png_gray;
 use isomorph_io::render::{Image, RenderSettings, contact_sheet_titled, render};
-use isomorph_rbf::image::image_constraints;
-use isomorph_rbf::{ContourMorph, FitSettings, TransformSettings, figures};
+use isomorph_rbf::{ContourMorph, FitSettings, TransformSettings, figures, image_constraints};
 use std::path::PathBuf;
 use std::time::Instant;
 

@@ -1,11 +1,4 @@
 //! Constraints of a 2D shape from a grayscale image (paper §4.1).
-//!
-//! White (high) pixels are inside, black outside. Between every pixel and its
-//! east and north neighbour whose values straddle the mid-gray `m`, a
-//! boundary constraint (0) is placed where the linearly interpolated image
-//! equals `m`; the image gradient there (central differences at the two
-//! pixels, interpolated linearly) gives the inward direction, and a normal
-//! constraint (1) is placed one pixel width along it.
 
 use crate::error::RbfError;
 use crate::interpolant::Constraint;
@@ -16,6 +9,13 @@ use isomorph_common::MorphError;
 /// Boundary and normal constraints of the shape in `image` (node values,
 /// bright = inside), with the boundary at level `mid` (0.5 for images read
 /// by `isomorph_io::png_gray::read_png_gray`).
+///
+/// White (high) pixels are inside, black outside. Between every pixel and its
+/// east and north neighbour whose values straddle the mid-gray `m`, a
+/// boundary constraint (0) is placed where the linearly interpolated image
+/// equals `m`; the image gradient there (central differences at the two
+/// pixels, interpolated linearly) gives the inward direction, and a normal
+/// constraint (1) is placed one pixel width along it.
 ///
 /// # Errors
 /// [`RbfError::EmptyShape`] when no pair of neighbouring pixels straddles

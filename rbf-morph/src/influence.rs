@@ -2,11 +2,6 @@
 //! `N + 2` dimensions or four at the corners of a regular tetrahedron in
 //! `N + 3`, one variational implicit through all of them, and a path through
 //! the extra dimensions that chooses the blend.
-//!
-//! With three shapes the corners are the paper's `(0, 0)`, `(1, 0)` and
-//! `(½, ½)`; with four, a regular tetrahedron of unit edge. Both are scaled
-//! by the separation. A path from A's corner to B's that bends towards C's
-//! gives a sequence from A to B that takes on some of C's character (Fig. 8).
 
 use crate::error::RbfError;
 use crate::interpolant::{Constraint, Interpolant};
@@ -25,6 +20,11 @@ enum Blend {
 
 /// One implicit through three or four 3D shapes placed at the corners of a
 /// simplex in the extra dimensions.
+///
+/// With three shapes the corners are the paper's `(0, 0)`, `(1, 0)` and
+/// `(½, ½)`; with four, a regular tetrahedron of unit edge. Both are scaled
+/// by the separation. A path from A's corner to B's that bends towards C's
+/// gives a sequence from A to B that takes on some of C's character (Fig. 8).
 #[derive(Debug, Clone)]
 pub struct InfluenceShapes {
     blend: Blend,

@@ -1,11 +1,5 @@
 //! Variational (polyharmonic) scattered-data interpolation in `D` dimensions,
 //! paper §3: `f(x) = Σ_j d_j φ(|x − c_j|) + P(x)` with a degree-one `P`.
-//!
-//! Constraint positions are centred on their bounding box and scaled to unit
-//! diagonal before the solve (both kernels give the same interpolant under
-//! this map, since the weights annihilate degree-one polynomials; it only
-//! improves the conditioning of the polynomial block). The system is solved
-//! in f64 by the projected Cholesky method described in the crate docs.
 
 use crate::duplicates::{DuplicatePolicy, dedup};
 use crate::error::RbfError;
@@ -95,6 +89,12 @@ pub struct FitReport {
 }
 
 /// A fitted variational implicit function in `D` dimensions (`D = 2..=6`).
+///
+/// Constraint positions are centred on their bounding box and scaled to unit
+/// diagonal before the solve (both kernels give the same interpolant under
+/// this map, since the weights annihilate degree-one polynomials; it only
+/// improves the conditioning of the polynomial block). The system is solved
+/// in f64 by the projected Cholesky method described in the crate docs.
 ///
 /// ```
 /// use isomorph_rbf::{Constraint, FitSettings, Interpolant};

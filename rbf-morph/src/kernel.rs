@@ -1,15 +1,15 @@
 //! Radial basis kernels φ(r) of the variational interpolant (paper §3, eq. 2),
 //! in f64 for the solver and in a vectorizable f32 form for batch evaluation.
-//!
-//! Both kernels are written as functions of `r²` so no square root is needed
-//! for the thin-plate kernel: `r² log r = ½ r² ln r²`.
 
 /// The radial basis function of the interpolant.
+///
+/// Both kernels are written as functions of `r²` so no square root is needed
+/// for the thin-plate kernel: `r² log r = ½ r² ln r²`.
 ///
 /// Both are conditionally positive definite of order 2: on coefficient
 /// vectors orthogonal to the degree-one polynomials their quadratic form is
 /// positive, which is what makes the projected system symmetric positive
-/// definite ([`crate::interpolant`]).
+/// definite ([`crate::Interpolant`]).
 ///
 /// How the kernel shapes the in-between shapes: `r² log r` (the paper's
 /// kernel, eq. 2; the thin-plate spline, which is the variational `m = 3`
@@ -140,7 +140,7 @@ const SQRT_HALF: f32 = std::f32::consts::FRAC_1_SQRT_2;
 /// gives a meaningless finite or NaN result, never a panic.
 #[inline(always)]
 #[allow(clippy::excessive_precision)] // the Cephes coefficients as published
-pub fn fast_ln(x: f32) -> f32 {
+pub(crate) fn fast_ln(x: f32) -> f32 {
     let bits = x.to_bits();
     // x = m · 2^e with m in [0.5, 1).
     let mut e = ((bits >> 23) & 0xff) as i32 - 126;
@@ -167,7 +167,7 @@ pub fn fast_ln(x: f32) -> f32 {
 
 /// Lower clamp of `r²` in the f32 thin-plate kernel: keeps [`fast_ln`] in its
 /// normal range; `½ r² ln r²` is below 1e-28 there, i.e. zero for all purposes.
-pub const TINY_R2: f32 = 1e-30;
+pub(crate) const TINY_R2: f32 = 1e-30;
 
 /// `φ` of `kernel` as a function of `r²`, in f32, vectorizable.
 #[inline(always)]

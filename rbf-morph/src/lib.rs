@@ -9,19 +9,18 @@
 //! through all of them gives `f(x, t)`. The in-between shape at `t` is the
 //! zero set of the slice, positive inside.
 //!
-//! # Paper sections → modules
-//! | paper | module |
+//! # Paper sections → items
+//! | paper | items |
 //! |---|---|
-//! | §3 variational interpolation, eq. 2–3, the bordered system | [`interpolant`] ([`Interpolant`], [`FitSettings`], [`FitReport`]), [`kernel`], the private `solve` |
-//! | §4.1 constraints from a grayscale image | [`image`] |
+//! | §3 variational interpolation, eq. 2–3, the bordered system | [`Interpolant`], [`FitSettings`], [`FitReport`], [`Kernel`], [`Solver`] |
+//! | §4.1 constraints from a grayscale image | [`image_constraints`] |
 //! | §4.2 constraints from points with normals / meshes | [`constraints`] |
-//! | §5.1, §5.2 shape transformation in N + 1 dimensions, §6.2 separation | [`transform`] ([`RbfMorph`], [`RbfSettings`], [`ContourMorph`]) |
-//! | §6, §6.1, §6.2 surface reconstruction from parallel (any spacing) and non-parallel contours | [`reconstruct`] ([`ContourSet`], [`Plane`], [`ContourSurface`]) |
-//! | appendix: warping by point correspondences, eq. 4–5 unwarping | [`warp`] ([`WarpedContourMorph`] for 2D shapes as in Fig. 9, [`WarpedMorph`] for 3D, [`HalfwayWarps`], [`DisplacementWarp`]) |
-//! | §7 influence shapes (triangle in N + 2, tetrahedron in N + 3 dimensions) | [`influence`] ([`InfluenceShapes`], [`InfluencePath`]) |
+//! | §5.1, §5.2 shape transformation in N + 1 dimensions, §6.2 separation | [`RbfMorph`], [`RbfSettings`], [`ContourMorph`], [`lift`] |
+//! | §6, §6.1, §6.2 surface reconstruction from parallel (any spacing) and non-parallel contours | [`ContourSet`], [`Plane`], [`ContourSurface`] |
+//! | appendix: warping by point correspondences, eq. 4–5 unwarping | [`WarpedContourMorph`] for 2D shapes as in Fig. 9, [`WarpedMorph`] for 3D, [`HalfwayWarps`], [`DisplacementWarp`] |
+//! | §7 influence shapes (triangle in N + 2, tetrahedron in N + 3 dimensions) | [`InfluenceShapes`], [`InfluencePath`] |
 //! | §5.2 polygonizing only near the surface (the paper uses Bloomenthal's continuation polygonizer) | `isomorph_common::marching_cubes::level_set_mesh` |
-//! | fast evaluation of slices (what the paper's Bloomenthal polygonizer calls) | [`slice`](mod@slice) ([`Slice3`], [`Slice2`]) |
-//!
+//! | fast evaluation of slices (what the paper's Bloomenthal polygonizer calls) | [`Slice3`], [`Slice2`] |
 //!
 //! # Choices where the paper leaves details open
 //! - **Kernel**: `r² log r` (eq. 2) is the default; `r³` is selectable
@@ -98,23 +97,23 @@
 //! [`TransformSettings`], [`Interpolant::fit`] fits any constraint set in
 //! 2–6 dimensions, and [`ContourMorph`] morphs 2D shapes (e.g. images read
 //! with `isomorph_io::png_gray::read_png_gray` and made into constraints
-//! with [`image::image_constraints`]).
+//! with [`image_constraints`]).
 
 // Index loops mirror the formulas of the numeric code (reflectors, slices).
 #![allow(clippy::needless_range_loop)]
 
 pub mod constraints;
-pub mod error;
 pub mod figures;
-pub mod image;
-pub mod influence;
-pub mod interpolant;
-pub mod kernel;
 
-pub mod reconstruct;
-pub mod slice;
-pub mod transform;
-pub mod warp;
+mod error;
+mod image;
+mod influence;
+mod interpolant;
+mod kernel;
+mod reconstruct;
+mod slice;
+mod transform;
+mod warp;
 
 mod duplicates;
 mod slab;
@@ -122,13 +121,14 @@ mod solve;
 
 pub use duplicates::DuplicatePolicy;
 pub use error::RbfError;
+pub use image::image_constraints;
 pub use influence::{InfluencePath, InfluenceShapes};
 pub use interpolant::{Constraint, FitReport, FitSettings, Interpolant};
 pub use kernel::Kernel;
 pub use reconstruct::{ContourSet, ContourSurface, Plane, ReconstructSettings};
 pub use slice::{Slice2, Slice3};
 pub use solve::{Factorization, Solver};
-pub use transform::{ContourMorph, RbfMorph, RbfSettings, TransformSettings};
+pub use transform::{ContourMorph, RbfMorph, RbfSettings, TransformSettings, lift};
 pub use warp::{
     DisplacementWarp, HalfwayWarps, WarpedContourMorph, WarpedMorph, WarpedSettings, WarpedSlice,
     WarpedSlice2,

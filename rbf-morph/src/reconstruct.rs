@@ -1,40 +1,4 @@
 //! Surface reconstruction from planar contours (paper §6, §6.1, §6.2).
-//!
-//! Every contour lies in a [`Plane`] (an origin and two in-plane axes); its
-//! 2D boundary and normal constraints are lifted into 3D there, the normal
-//! constraints stay in the plane and point inward. The constraints of *all*
-//! slices are interpolated **once** by one variational implicit in 3D, so the
-//! zero set passes through every contour and its normal is continuous across
-//! the slice planes (no pairwise stacking), with rounded caps beyond the
-//! outermost slices. Parallel slices with any (also varying) spacing are
-//! planes [`Plane::at_z`]; slices in any other orientation, also crossing
-//! each other (§6.1), are planes [`Plane::new`]. The spacing is the real
-//! one: constraints sit where the slices were taken (§6.2).
-//!
-//! Positive inside, zero on the surface, world units throughout.
-//!
-//! ```
-//! use glam::{Vec2, Vec3};
-//! use isomorph_common::Field3;
-//! use isomorph_rbf::reconstruct::{ContourSet, Plane, ReconstructSettings};
-//!
-//! // Circles of a sphere (radius 0.3) at unevenly spaced heights.
-//! let mut set = ContourSet::new();
-//! for z in [-0.25f32, -0.1, 0.0, 0.05, 0.2] {
-//!     let r = (0.09 - z * z).sqrt();
-//!     let circle: Vec<Vec2> = (0..24)
-//!         .map(|i| Vec2::from_angle(i as f32 * std::f32::consts::TAU / 24.0) * r)
-//!         .collect();
-//!     set.add_polylines(&Plane::at_z(z)?, &[circle])?;
-//! }
-//! let surface = set.fit(&ReconstructSettings::default())?;
-//! let field = surface.field();
-//! assert!(field.value(Vec3::new(0.3, 0.0, 0.0)).abs() < 1e-3); // on a contour
-//! assert!(field.value(Vec3::ZERO) > 0.0); // inside
-//! let mesh = surface.mesh(32)?;
-//! assert_eq!(mesh.connected_components(), 1);
-//! # Ok::<(), isomorph_rbf::RbfError>(())
-//! ```
 
 use crate::constraints::NormalOffset;
 use crate::error::RbfError;
@@ -126,6 +90,42 @@ impl Default for ReconstructSettings {
 }
 
 /// The contours of all slices, collected before one fit.
+///
+/// Every contour lies in a [`Plane`] (an origin and two in-plane axes); its
+/// 2D boundary and normal constraints are lifted into 3D there, the normal
+/// constraints stay in the plane and point inward. The constraints of *all*
+/// slices are interpolated **once** by one variational implicit in 3D, so the
+/// zero set passes through every contour and its normal is continuous across
+/// the slice planes (no pairwise stacking), with rounded caps beyond the
+/// outermost slices. Parallel slices with any (also varying) spacing are
+/// planes [`Plane::at_z`]; slices in any other orientation, also crossing
+/// each other (§6.1), are planes [`Plane::new`]. The spacing is the real
+/// one: constraints sit where the slices were taken (§6.2).
+///
+/// Positive inside, zero on the surface, world units throughout.
+///
+/// ```
+/// use glam::{Vec2, Vec3};
+/// use isomorph_common::Field3;
+/// use isomorph_rbf::{ContourSet, Plane, ReconstructSettings};
+///
+/// // Circles of a sphere (radius 0.3) at unevenly spaced heights.
+/// let mut set = ContourSet::new();
+/// for z in [-0.25f32, -0.1, 0.0, 0.05, 0.2] {
+///     let r = (0.09 - z * z).sqrt();
+///     let circle: Vec<Vec2> = (0..24)
+///         .map(|i| Vec2::from_angle(i as f32 * std::f32::consts::TAU / 24.0) * r)
+///         .collect();
+///     set.add_polylines(&Plane::at_z(z)?, &[circle])?;
+/// }
+/// let surface = set.fit(&ReconstructSettings::default())?;
+/// let field = surface.field();
+/// assert!(field.value(Vec3::new(0.3, 0.0, 0.0)).abs() < 1e-3); // on a contour
+/// assert!(field.value(Vec3::ZERO) > 0.0); // inside
+/// let mesh = surface.mesh(32)?;
+/// assert_eq!(mesh.connected_components(), 1);
+/// # Ok::<(), isomorph_rbf::RbfError>(())
+/// ```
 #[derive(Debug, Clone, Default)]
 pub struct ContourSet {
     /// Complete constraints (from 2D constraints and images).

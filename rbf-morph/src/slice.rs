@@ -1,21 +1,4 @@
 //! Fast batch evaluation of 2D and 3D slices of an interpolant.
-//!
-//! A slice fixes the trailing coordinates of a `D`-dimensional interpolant;
-//! each centre then contributes `d_j φ(√(|p − c_j|² + w_j))` with a constant
-//! per-centre offset `w_j`, and the polynomial collapses to an affine
-//! function of `p`. The centres are stored as structure-of-arrays `f32`.
-//!
-//! The hot loop takes a block of points at a time (32 for `r² log r`, 8 for
-//! `r³`) and walks over all centres: one independent accumulator per point,
-//! the centre broadcast, the point block in registers, so the compiler
-//! vectorizes across points (AVX2/FMA or
-//! AVX-512 chosen at run time by `pulp`, SSE2 otherwise). `r² log r` uses the
-//! branch-free [`fast_ln`](crate::kernel::fast_ln). Partial sums over 256
-//! centres are added into `f64` totals. Weights and centres are rounded to
-//! `f32`, so a slice agrees with the exact f64 [`Interpolant`](crate::Interpolant)
-//! to about `1e-4` of the unit constraint value (tested); near the surface,
-//! where `|∇f| ≈ 1/offset`, that is a positional error of about `1e-6` world units. Rayon splits the points
-//! into blocks; the result does not depend on the thread count.
 
 use crate::kernel::{Kernel, eval_r2_f32};
 use glam::{Vec2, Vec3};
@@ -187,6 +170,23 @@ impl<const S: usize> SliceEval<S> {
 /// A 3D slice of an interpolant (e.g. the shape at time `t` of a 4D shape
 /// transformation): a [`Field3`], positive inside, surface at 0, with fast
 /// parallel batch evaluation ([`Field3::values`]) and an analytic gradient.
+///
+/// A slice fixes the trailing coordinates of a `D`-dimensional interpolant;
+/// each centre then contributes `d_j φ(√(|p − c_j|² + w_j))` with a constant
+/// per-centre offset `w_j`, and the polynomial collapses to an affine
+/// function of `p`. The centres are stored as structure-of-arrays `f32`.
+///
+/// The hot loop takes a block of points at a time (32 for `r² log r`, 8 for
+/// `r³`) and walks over all centres: one independent accumulator per point,
+/// the centre broadcast, the point block in registers, so the compiler
+/// vectorizes across points (AVX2/FMA or
+/// AVX-512 chosen at run time by `pulp`, SSE2 otherwise). `r² log r` uses the
+/// branch-free `fast_ln`. Partial sums over 256
+/// centres are added into `f64` totals. Weights and centres are rounded to
+/// `f32`, so a slice agrees with the exact f64 [`Interpolant`](crate::Interpolant)
+/// to about `1e-4` of the unit constraint value (tested); near the surface,
+/// where `|∇f| ≈ 1/offset`, that is a positional error of about `1e-6` world units. Rayon splits the points
+/// into blocks; the result does not depend on the thread count.
 #[derive(Debug, Clone)]
 pub struct Slice3 {
     eval: SliceEval<3>,

@@ -1,11 +1,6 @@
 //! Shape transformation (paper §5): the constraints of shape A placed at
 //! `t = 0` and those of shape B at `t = t_max` in one higher dimension, one
 //! variational interpolation, and the in-between shapes as slices.
-//!
-//! The separation `t_max` is the user's local/global control (§6.2): small
-//! separations keep only features that nearly coincide in A and B, large
-//! ones let the global shape guide the in-between shapes (which then round
-//! off and bulge more, especially with the `r³` kernel).
 
 use crate::Kernel;
 use crate::constraints::{NormalOffset, Subsample, SurfaceSettings, mesh_constraints};
@@ -199,6 +194,11 @@ pub(crate) fn surface_constraints(
 /// (§5.2); implements [`Morph`] with [`Slice3`] frames (iso 0, positive
 /// inside, field space = world space).
 ///
+/// The separation `t_max` is the user's local/global control (§6.2): small
+/// separations keep only features that nearly coincide in A and B, large
+/// ones let the global shape guide the in-between shapes (which then round
+/// off and bulge more, especially with the `r³` kernel).
+///
 /// ```
 /// use isomorph_common::{Control, Morph, Shape, Solid};
 /// use isomorph_rbf::{RbfMorph, RbfSettings};
@@ -262,7 +262,7 @@ impl RbfMorph {
     /// use glam::Vec3;
     /// use isomorph_common::{Aabb, Field3, Morph, Shape};
     /// use isomorph_rbf::constraints::{field_constraints, NormalOffset, SurfaceSettings, Subsample};
-    /// use isomorph_rbf::transform::{RbfMorph, TransformSettings};
+    /// use isomorph_rbf::{RbfMorph, TransformSettings};
     ///
     /// let s = SurfaceSettings { offset: NormalOffset::Absolute(0.01), subsample: Subsample::FarthestPoint(60) };
     /// let a = field_constraints(&Shape::sphere(0.3), &Aabb::cube(0.5), 16, &s).unwrap();

@@ -1,27 +1,4 @@
 //! Warping combined with shape transformation (paper appendix, eq. 4–5).
-//!
-//! From user correspondences `a_i ↔ b_i` two displacement warps are fitted
-//! by variational interpolation, one per coordinate: `w_A(a_i) = (b_i − a_i)/2`
-//! takes shape A half-way to B and `w_B(b_i) = (a_i − b_i)/2` takes B
-//! half-way to A. The constraints of A are displaced by `w_A`, those of B by
-//! `w_B`, and the shape transformation is fitted between the warped shapes
-//! (the paper's Fig. 9, top row). The frames are then unwarped: with morph
-//! time `τ ∈ [0, 1]` (the paper's `t = 2τ` for `t_max = 2`), the frame is
-//! `G(x, τ) = F(u(x, τ), τ)` with
-//!
-//! ```text
-//! u(x, τ) = x + (1 − 2τ) w_A(x)   for τ ≤ ½      (eq. 4)
-//! u(x, τ) = x + (2τ − 1) w_B(x)   for τ > ½      (eq. 5)
-//! ```
-//!
-//! so `τ = 0` undoes the warp of A (the frame is A), `τ = 1` undoes that of
-//! B, and the middle frame is not warped. A feature `a_i ↔ b_i` travels from
-//! `a_i` to the midpoint `(a_i + b_i)/2` at `τ = ½` and on to `b_i`.
-//!
-//! Choice where the paper leaves it open: the paper displaces the boundary
-//! constraints; here the normal constraints are displaced by the same warp,
-//! so that they stay inside the warped boundary (the warp is smooth, so a
-//! small inward offset stays inward).
 
 use crate::error::RbfError;
 use crate::interpolant::{Constraint, FitSettings, Interpolant};
@@ -149,11 +126,34 @@ impl<const N: usize> HalfwayWarps<N> {
 /// shapes and its slices are unwarped. Implements [`Morph`]; frame 0 is the
 /// source and frame 1 the target.
 ///
+/// From user correspondences `a_i ↔ b_i` two displacement warps are fitted
+/// by variational interpolation, one per coordinate: `w_A(a_i) = (b_i − a_i)/2`
+/// takes shape A half-way to B and `w_B(b_i) = (a_i − b_i)/2` takes B
+/// half-way to A. The constraints of A are displaced by `w_A`, those of B by
+/// `w_B`, and the shape transformation is fitted between the warped shapes
+/// (the paper's Fig. 9, top row). The frames are then unwarped: with morph
+/// time `τ ∈ [0, 1]` (the paper's `t = 2τ` for `t_max = 2`), the frame is
+/// `G(x, τ) = F(u(x, τ), τ)` with
+///
+/// ```text
+/// u(x, τ) = x + (1 − 2τ) w_A(x)   for τ ≤ ½      (eq. 4)
+/// u(x, τ) = x + (2τ − 1) w_B(x)   for τ > ½      (eq. 5)
+/// ```
+///
+/// so `τ = 0` undoes the warp of A (the frame is A), `τ = 1` undoes that of
+/// B, and the middle frame is not warped. A feature `a_i ↔ b_i` travels from
+/// `a_i` to the midpoint `(a_i + b_i)/2` at `τ = ½` and on to `b_i`.
+///
+/// Choice where the paper leaves it open: the paper displaces the boundary
+/// constraints; here the normal constraints are displaced by the same warp,
+/// so that they stay inside the warped boundary (the warp is smooth, so a
+/// small inward offset stays inward).
+///
 /// ```
 /// use glam::Vec3;
 /// use isomorph_common::{Aabb, Field3, Morph, Shape};
 /// use isomorph_rbf::constraints::{field_constraints, NormalOffset, Subsample, SurfaceSettings};
-/// use isomorph_rbf::warp::WarpedMorph;
+/// use isomorph_rbf::WarpedMorph;
 /// use isomorph_rbf::TransformSettings;
 ///
 /// let s = SurfaceSettings { offset: NormalOffset::Absolute(0.01), subsample: Subsample::FarthestPoint(40) };
@@ -381,7 +381,7 @@ impl Field3 for WarpedSlice {
 ///
 /// ```
 /// use glam::Vec2;
-/// use isomorph_rbf::warp::WarpedContourMorph;
+/// use isomorph_rbf::WarpedContourMorph;
 /// use isomorph_rbf::{Constraint, TransformSettings};
 ///
 /// // A circle of radius 0.2 (boundary 0, centre 1), and the same moved by 0.3.

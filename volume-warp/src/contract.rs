@@ -2,14 +2,6 @@
 //! into another by warping both densities towards each other with
 //! trivariate B-spline maps (True's warp, thesis §5) and cross-dissolving
 //! them — the classic "warp and dissolve" volume morph.
-//!
-//! Frame `t`: the source density is pushed forward through the source map at
-//! `t`, the target density through the target map at `t`, and the frame is
-//! `(1 − t) · source_t + t · target_t` with its surface at density 0.5. The
-//! correspondence ([`WarpSpec`]) decides the maps: none (a plain
-//! cross-dissolve), the moment alignment (an affine map, which cubic
-//! B-splines reproduce exactly), or landmark pairs solved by direct
-//! manipulation (thesis §6).
 
 use crate::{BSplineMap, Filter, Handle, VolumeWarp, WarpError, WarpSettings, solve_drag};
 use glam::{Affine3A, UVec3, Vec3};
@@ -119,9 +111,20 @@ enum Correspondence {
     Landmarks { forward: BSplineMap, backward: BSplineMap },
 }
 
-/// The warp-and-dissolve morph of two solids (see the [module docs](self)).
-/// Frames are `f32` densities on one lattice, positive inside, surface at
-/// 0.5, in world space.
+/// The warp-and-dissolve morph of two solids: both densities are warped
+/// towards each other with trivariate B-spline maps (True's warp, thesis
+/// §5) and cross-dissolved.
+///
+/// Frame `t`: the source density is pushed forward through the source map at
+/// `t`, the target density through the target map at `t`, and the frame is
+/// `(1 − t) · source_t + t · target_t` with its surface at density 0.5. The
+/// correspondence ([`WarpSpec`]) decides the maps: none (a plain
+/// cross-dissolve), the moment alignment (an affine map, which cubic
+/// B-splines reproduce exactly), or landmark pairs solved by direct
+/// manipulation (thesis §6).
+///
+/// Frames are `f32` densities on one lattice, positive inside, in world
+/// space.
 ///
 /// ```
 /// use isomorph_common::{Control, Morph, Shape, Solid};

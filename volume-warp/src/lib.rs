@@ -10,17 +10,17 @@
 //! regions a control point influences are recomputed.
 //!
 //! # Paper sections → modules
-//! | thesis | module |
+//! | thesis | module (source file): items |
 //! |---|---|
-//! | §5.1 basis `B0…B3`, eq. 3 | [`basis`], [`map`] ([`BSplineMap`]) |
+//! | §5.1 basis `B0…B3`, eq. 3 | [`basis`], `map` ([`BSplineMap`]) |
 //! | §5.5 control point placement (identity map) | [`BSplineMap::identity`] |
-//! | §5.2 rapid evaluation, table eq. 4, eq. 5 | [`table`] ([`CoefficientTable`], [`DeformationArray`]); beyond the thesis, its tensor-product factorization [`Evaluation::Separable`] |
-//! | §5.3 map-and-round, main loop with local updates | [`pushforward`] ([`Filter::Round`]), [`warp`] ([`VolumeWarp::move_control_points`]) |
-//! | §5.4 antialiasing box filter, weight normalization | [`pushforward`] ([`Filter::Box`]) |
-//! | §6 direct manipulation (after Hsu et al. 1992) | [`manipulate`] ([`solve_drag`], [`VolumeWarp::drag`]) |
+//! | §5.2 rapid evaluation, table eq. 4, eq. 5 | `table` ([`CoefficientTable`], [`DeformationArray`]); beyond the thesis, its tensor-product factorization [`Evaluation::Separable`] |
+//! | §5.3 map-and-round, main loop with local updates | `pushforward` ([`Filter::Round`]), `warp` ([`VolumeWarp::move_control_points`]) |
+//! | §5.4 antialiasing box filter, weight normalization | `pushforward` ([`Filter::Box`]) |
+//! | §6 direct manipulation (after Hsu et al. 1992) | `manipulate` ([`solve_drag`], [`VolumeWarp::drag`]) |
 //! | beyond the thesis: backward resampling by Newton inversion | [`Filter::Backward`], [`BSplineMap::inverse`] |
-//! | the map in world space (`Fn(Vec3) -> Vec3`, approximate inverse), one volume's warp animated ([`WarpAnimation`]) | [`morph`] ([`WorldMap`]) |
-//! | the morph contract: two solids warped towards each other and cross-dissolved | [`contract`] ([`WarpMorph`], [`WarpMorphSettings`], [`WarpSpec`]) |
+//! | the map in world space (`Fn(Vec3) -> Vec3`, approximate inverse), one volume's warp animated ([`WarpAnimation`]) | `morph` ([`WorldMap`]) |
+//! | the morph contract: two solids warped towards each other and cross-dissolved | `contract` ([`WarpMorph`], [`WarpMorphSettings`], [`WarpSpec`]) |
 //!
 //! # Choices where the thesis is open
 //! - Coordinates are source voxel indices; a lattice of `C` points per axis
@@ -55,7 +55,7 @@
 //! # The morph contract
 //! [`WarpMorph::new`] morphs two [`Solid`](isomorph_common::Solid)s by
 //! warping both densities towards each other and cross-dissolving them
-//! ([`contract`]); its correspondence is the moment alignment by default,
+//! its correspondence is the moment alignment by default,
 //! or landmarks solved by direct manipulation.
 //!
 //! ```
@@ -102,14 +102,14 @@
 //! ```
 
 pub mod basis;
-pub mod contract;
+mod contract;
 mod error;
-pub mod manipulate;
-pub mod map;
-pub mod morph;
-pub mod pushforward;
-pub mod table;
-pub mod warp;
+mod manipulate;
+mod map;
+mod morph;
+mod pushforward;
+mod table;
+mod warp;
 
 pub use contract::{WarpMorph, WarpMorphSettings, WarpSpec};
 pub use error::WarpError;

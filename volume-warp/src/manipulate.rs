@@ -1,20 +1,5 @@
 //! Direct manipulation of the map (thesis §6, after Hsu, Hughes & Kaufman,
 //! *Direct Manipulation of Free-Form Deformations*, SIGGRAPH 1992).
-//!
-//! The user picks points `x_k` of the source and says where their images
-//! should go, `y_k`. Each image is linear in the control displacements,
-//! `B(x_k) = x_k + Σ_m W_km D_m` with `W_km` the basis-weight product of
-//! control point `m` at `x_k`, so the change `ΔD` that moves every picked
-//! point to its goal solves `W ΔD = Y − B(X)` (one system per coordinate,
-//! same matrix). With fewer constraints than free control points the system
-//! is underdetermined and we take Hsu's minimum-norm solution
-//! `ΔD = W⁺ (Y − B(X))`; with more (or conflicting) constraints the same
-//! pseudo-inverse gives the least-squares compromise. The pseudo-inverse is
-//! computed by SVD (singular values below `1e-9 · σ_max` dropped).
-//!
-//! A *region of influence* (Hsu's "magnet tool" size) restricts the free
-//! control points to those resting within a radius of some picked point;
-//! the others stay put, which keeps the edit local.
 
 use crate::{BSplineMap, WarpError};
 use glam::{UVec3, Vec3};
@@ -48,6 +33,21 @@ pub struct Drag {
 /// handle's image to its goal. `influence`: optional radius (voxels) of the
 /// region of influence; only control points whose rest position lies within
 /// it of some handle's point may move.
+///
+/// The user picks points `x_k` of the source and says where their images
+/// should go, `y_k`. Each image is linear in the control displacements,
+/// `B(x_k) = x_k + Σ_m W_km D_m` with `W_km` the basis-weight product of
+/// control point `m` at `x_k`, so the change `ΔD` that moves every picked
+/// point to its goal solves `W ΔD = Y − B(X)` (one system per coordinate,
+/// same matrix). With fewer constraints than free control points the system
+/// is underdetermined and we take Hsu's minimum-norm solution
+/// `ΔD = W⁺ (Y − B(X))`; with more (or conflicting) constraints the same
+/// pseudo-inverse gives the least-squares compromise. The pseudo-inverse is
+/// computed by SVD (singular values below `1e-9 · σ_max` dropped).
+///
+/// A *region of influence* (Hsu's "magnet tool" size) restricts the free
+/// control points to those resting within a radius of some picked point;
+/// the others stay put, which keeps the edit local.
 ///
 /// # Errors
 /// [`WarpError::NonFinite`] for a NaN or infinite handle,

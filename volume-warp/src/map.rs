@@ -1,24 +1,5 @@
 //! The trivariate uniform cubic B-spline map `B` of thesis §5.1 and its
 //! control lattice (§5.5).
-//!
-//! Coordinates are **source voxel coordinates**: voxel `(e, f, g)` of the
-//! source volume sits at the point `(e, f, g)`. A lattice of `C = controls`
-//! points per axis spans `C − 3` regions per axis; region `a` covers
-//! `a·h ≤ x < (a + 1)·h` with `h = source_dims / (C − 3)` voxels per region
-//! (the thesis' granularity `G` when it is an integer). The voxel at `x` has
-//! spline parameter `s = x / h` (eq. 2).
-//!
-//! Control point `m` rests at `(m − 1)·h` (§5.5: an evenly spaced lattice
-//! whose end points lie outside the data). Because `Σ_i B_i(t)(a + i − 1) =
-//! a + t`, the untouched lattice maps every point exactly to itself. The map
-//! stores each control point as its **displacement** from that rest position
-//! and evaluates `B(x) = x + Σ B_i B_j B_k D_{a+i,b+j,c+k}` — by linear
-//! precision the same map as eq. 3 over the absolute positions, but the
-//! identity is reproduced bit for bit and rounding scales with the
-//! displacement, not with the coordinates.
-//!
-//! Outside `[0, source_dims)` the map continues the polynomial of the nearest
-//! region (needed by the boundary voxels' faces and by inversion).
 
 use crate::WarpError;
 use crate::basis::{derivatives, weights};
@@ -26,6 +7,25 @@ use glam::{Mat3, UVec3, Vec3};
 
 /// A trivariate cubic B-spline map from the source voxel space to itself
 /// (target voxel coordinates minus the target padding).
+///
+/// Coordinates are **source voxel coordinates**: voxel `(e, f, g)` of the
+/// source volume sits at the point `(e, f, g)`. A lattice of `C = controls`
+/// points per axis spans `C − 3` regions per axis; region `a` covers
+/// `a·h ≤ x < (a + 1)·h` with `h = source_dims / (C − 3)` voxels per region
+/// (the thesis' granularity `G` when it is an integer). The voxel at `x` has
+/// spline parameter `s = x / h` (eq. 2).
+///
+/// Control point `m` rests at `(m − 1)·h` (§5.5: an evenly spaced lattice
+/// whose end points lie outside the data). Because `Σ_i B_i(t)(a + i − 1) =
+/// a + t`, the untouched lattice maps every point exactly to itself. The map
+/// stores each control point as its **displacement** from that rest position
+/// and evaluates `B(x) = x + Σ B_i B_j B_k D_{a+i,b+j,c+k}` — by linear
+/// precision the same map as eq. 3 over the absolute positions, but the
+/// identity is reproduced bit for bit and rounding scales with the
+/// displacement, not with the coordinates.
+///
+/// Outside `[0, source_dims)` the map continues the polynomial of the nearest
+/// region (needed by the boundary voxels' faces and by inversion).
 #[derive(Debug, Clone, PartialEq)]
 pub struct BSplineMap {
     source_dims: UVec3,

@@ -1,41 +1,5 @@
 //! Pushing a density forward through the map (thesis §4, §5.3, §5.4), and
 //! backward resampling for comparison.
-//!
-//! **Box filter** (§5.4, [`Filter::Box`]): each source voxel is a unit cube of
-//! constant density. Its image is approximated by the axis-aligned bounding
-//! box of its six transformed face centres, each the average of two
-//! neighbouring entries of the deformation mapping array (at the volume's
-//! border, where one neighbour is missing, the face centre is extrapolated
-//! linearly: `M[e] − (M[e+1] − M[e])/2`). For every target voxel the box
-//! overlaps, the overlap volume (a fraction of the unit target voxel) is the
-//! *weight*; weights and weighted values are summed per target voxel. The
-//! target density is then the weighted value where the total weight is below
-//! one (the uncovered part counts as empty space) and the weighted value
-//! divided by the weight otherwise (overlapping boxes, and folds, average).
-//!
-//! **Map and round** (§5.3, [`Filter::Round`]): each source voxel centre is
-//! mapped and rounded to the nearest target voxel. Where several land on one
-//! target voxel the thesis overwrote; we average them (the same
-//! weight rule with weight 1 per voxel) so the result does not depend on
-//! the order of the loop. Aliases badly, as the thesis' Fig. 6 shows.
-//!
-//! **Backward** ([`Filter::Backward`], beyond the thesis): each target voxel
-//! `y` is pulled back, `x = B⁻¹(y)` by Newton iteration from `x = y`
-//! ([`crate::BSplineMap::inverse`]), and the source is sampled trilinearly at `x`
-//! (zero outside the source's voxels). No holes and no blockiness where the
-//! map stretches, smoother than the box filter on mild warps; but it samples
-//! only one preimage, so where the map folds (not injective) it shows one
-//! sheet instead of averaging, and where it compresses strongly it aliases
-//! (point sampling instead of the box filter's area average). It costs one
-//! Newton solve (a few map and Jacobian evaluations, direct, no table) per
-//! target voxel. Measured on a sheared ball (`volume_preserving_warp_keeps_the_mass`),
-//! all three filters keep the total density within 0.5 %; the identity and
-//! whole-voxel translations are exact for all three.
-//!
-//! The accumulation is parallel over fixed slabs of source z-slices. Slabs
-//! whose target z-ranges are disjoint run concurrently on disjoint parts of
-//! the accumulator ("waves"); the partition does not depend on the thread
-//! count, so neither does the result.
 
 use crate::table::DeformationArray;
 use glam::{IVec3, UVec3, Vec3A};
@@ -43,6 +7,42 @@ use isomorph_common::Grid3;
 use rayon::prelude::*;
 
 /// How source voxels are pushed to the target.
+///
+/// **Box filter** (§5.4, [`Filter::Box`]): each source voxel is a unit cube of
+/// constant density. Its image is approximated by the axis-aligned bounding
+/// box of its six transformed face centres, each the average of two
+/// neighbouring entries of the deformation mapping array (at the volume's
+/// border, where one neighbour is missing, the face centre is extrapolated
+/// linearly: `M[e] − (M[e+1] − M[e])/2`). For every target voxel the box
+/// overlaps, the overlap volume (a fraction of the unit target voxel) is the
+/// *weight*; weights and weighted values are summed per target voxel. The
+/// target density is then the weighted value where the total weight is below
+/// one (the uncovered part counts as empty space) and the weighted value
+/// divided by the weight otherwise (overlapping boxes, and folds, average).
+///
+/// **Map and round** (§5.3, [`Filter::Round`]): each source voxel centre is
+/// mapped and rounded to the nearest target voxel. Where several land on one
+/// target voxel the thesis overwrote; we average them (the same
+/// weight rule with weight 1 per voxel) so the result does not depend on
+/// the order of the loop. Aliases badly, as the thesis' Fig. 6 shows.
+///
+/// **Backward** ([`Filter::Backward`], beyond the thesis): each target voxel
+/// `y` is pulled back, `x = B⁻¹(y)` by Newton iteration from `x = y`
+/// ([`crate::BSplineMap::inverse`]), and the source is sampled trilinearly at `x`
+/// (zero outside the source's voxels). No holes and no blockiness where the
+/// map stretches, smoother than the box filter on mild warps; but it samples
+/// only one preimage, so where the map folds (not injective) it shows one
+/// sheet instead of averaging, and where it compresses strongly it aliases
+/// (point sampling instead of the box filter's area average). It costs one
+/// Newton solve (a few map and Jacobian evaluations, direct, no table) per
+/// target voxel. Measured on a sheared ball (`volume_preserving_warp_keeps_the_mass`),
+/// all three filters keep the total density within 0.5 %; the identity and
+/// whole-voxel translations are exact for all three.
+///
+/// The accumulation is parallel over fixed slabs of source z-slices. Slabs
+/// whose target z-ranges are disjoint run concurrently on disjoint parts of
+/// the accumulator ("waves"); the partition does not depend on the thread
+/// count, so neither does the result.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Filter {
     /// Map each voxel centre and round to the nearest target voxel (§5.3).

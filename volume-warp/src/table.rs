@@ -1,22 +1,5 @@
 //! Rapid evaluation of the B-spline map (thesis §5.2) and the deformation
 //! mapping array.
-//!
-//! When the source size is an integer multiple `G` of the region count along
-//! each axis, the voxel `(e, f, g)` of region `(a, b, c)` always has the local
-//! parameters `(ē/G, f̄/G, ḡ/G)` with `ē = e mod G`. The products of basis
-//! weights therefore take only `G³` distinct sets of 64 values, precomputed
-//! once as
-//!
-//! `c[ē][f̄][ḡ][i][j][k] = Σ_{p,q,r} b_ip (ē/G)^p · b_jq (f̄/G)^q · b_kr (ḡ/G)^r`   (eq. 4)
-//!
-//! ([`CoefficientTable`]), after which each voxel's image is one 64-term dot
-//! product with the 64 control points of its region (eq. 5). The 64 entries
-//! of a voxel are contiguous, and a region's 64 control displacements are
-//! gathered once into three contiguous arrays, so the dot products vectorize.
-//!
-//! [`DeformationArray`] holds `B` at every source voxel centre (the thesis'
-//! deformation mapping array), filled by the table ([`Evaluation::Table`]) or
-//! by direct basis evaluation ([`Evaluation::Direct`], any source size).
 
 use crate::basis::{weight_poly, weights};
 use crate::{BSplineMap, WarpError};
@@ -27,6 +10,23 @@ use rayon::prelude::*;
 /// The precomputed basis-weight products of eq. 4: for each of the `G³`
 /// parameter triples `(ē, f̄, ḡ)`, the 64 weights `c[i][j][k]` with `i`
 /// fastest.
+///
+/// When the source size is an integer multiple `G` of the region count along
+/// each axis, the voxel `(e, f, g)` of region `(a, b, c)` always has the local
+/// parameters `(ē/G, f̄/G, ḡ/G)` with `ē = e mod G`. The products of basis
+/// weights therefore take only `G³` distinct sets of 64 values, precomputed
+/// once as
+///
+/// `c[ē][f̄][ḡ][i][j][k] = Σ_{p,q,r} b_ip (ē/G)^p · b_jq (f̄/G)^q · b_kr (ḡ/G)^r`   (eq. 4)
+///
+/// ([`CoefficientTable`]), after which each voxel's image is one 64-term dot
+/// product with the 64 control points of its region (eq. 5). The 64 entries
+/// of a voxel are contiguous, and a region's 64 control displacements are
+/// gathered once into three contiguous arrays, so the dot products vectorize.
+///
+/// [`DeformationArray`] holds `B` at every source voxel centre (the thesis'
+/// deformation mapping array), filled by the table ([`Evaluation::Table`]) or
+/// by direct basis evaluation ([`Evaluation::Direct`], any source size).
 #[derive(Debug, Clone, PartialEq)]
 pub struct CoefficientTable {
     granularity: UVec3,

@@ -1,41 +1,6 @@
 //! Exact nearest-triangle queries for every node of a regular lattice
 //! ([`TriangleBvh::nearest_on_lattice`]), much faster than one tree descent
 //! per node.
-//!
-//! The lattice is cut into blocks of 8³ nodes. For a block with centre
-//! `c`, one tree query gives the exact distance `d(c)`. Since the distance
-//! is 1-Lipschitz, every node `x` of the block has `d(x) ≤ d(c) + |x − c|`,
-//! and a triangle `T` nearest to `x` satisfies
-//! `dist(T, c) ≤ d(x) + |x − c| ≤ d(c) + 2r` where `r` bounds `|x − c|`. One
-//! range query collects those candidates with their exact distances
-//! `e_T = dist(T, c)`,
-//! sorted by `e_T`. Each half of the block along every axis (a sub-block
-//! with centre `c'` and radius `r'`) then narrows the list the same way to
-//! the triangles within `d(c') + 2r'` of `c'`, found among the block's
-//! candidates (the ball they lie in is inside the block's ball). Each node
-//! scans its sub-block's list in order of `e'_T` and stops at the first with
-//! `e'_T − |x − c'| >` its best distance so far (the triangle inequality
-//! makes that a lower bound for all the rest). The result is the exact
-//! minimum over all triangles, as a brute-force search would find it, at the
-//! cost of a few dozen point–triangle tests per node (eight at a time,
-//! branch-free, over structure-of-arrays packs that the compiler
-//! vectorizes) and one tree traversal per block.
-//!
-//! # Example
-//! ```
-//! use isomorph_common::mesh::bvh::{Lattice, TriangleBvh};
-//! use isomorph_common::{Aabb, TriMesh, glam::{UVec3, Vec3}};
-//!
-//! let mesh = TriMesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]])?;
-//! let bvh = TriangleBvh::new(&mesh);
-//! // 3 × 3 × 2 nodes over [0, 1]² × [1, 2].
-//! let lattice = Lattice::spanning(&Aabb::new(Vec3::Z, Vec3::ONE + Vec3::Z), UVec3::new(3, 3, 2));
-//! let hits = bvh.nearest_on_lattice(&lattice).expect("non-empty mesh");
-//! assert_eq!(hits.len(), 18);
-//! assert_eq!(hits[0].distance, 1.0); // node (0, 0, 0) at z = 1 above the corner
-//! assert_eq!(hits[17].distance, Vec3::new(0.5, 0.5, 2.0).length()); // (1, 1, 2) to (½, ½, 0)
-//! # Ok::<(), isomorph_common::MeshError>(())
-//! ```
 
 use super::{Best, ClosestPoint, STACK, Tri, TriangleBvh, closest_on_triangle};
 use crate::Aabb;
@@ -263,8 +228,42 @@ impl LatticeHit {
 
 impl TriangleBvh {
     /// The exact nearest triangle of every node of `lattice` (x-fastest
-    /// order), computed block by block in parallel (see the
-    /// [module docs](self)). `None` for an empty tree.
+    /// order), computed block by block in parallel. `None` for an empty tree.
+    ///
+    /// The lattice is cut into blocks of 8³ nodes. For a block with centre
+    /// `c`, one tree query gives the exact distance `d(c)`. Since the distance
+    /// is 1-Lipschitz, every node `x` of the block has `d(x) ≤ d(c) + |x − c|`,
+    /// and a triangle `T` nearest to `x` satisfies
+    /// `dist(T, c) ≤ d(x) + |x − c| ≤ d(c) + 2r` where `r` bounds `|x − c|`. One
+    /// range query collects those candidates with their exact distances
+    /// `e_T = dist(T, c)`,
+    /// sorted by `e_T`. Each half of the block along every axis (a sub-block
+    /// with centre `c'` and radius `r'`) then narrows the list the same way to
+    /// the triangles within `d(c') + 2r'` of `c'`, found among the block's
+    /// candidates (the ball they lie in is inside the block's ball). Each node
+    /// scans its sub-block's list in order of `e'_T` and stops at the first with
+    /// `e'_T − |x − c'| >` its best distance so far (the triangle inequality
+    /// makes that a lower bound for all the rest). The result is the exact
+    /// minimum over all triangles, as a brute-force search would find it, at the
+    /// cost of a few dozen point–triangle tests per node (eight at a time,
+    /// branch-free, over structure-of-arrays packs that the compiler
+    /// vectorizes) and one tree traversal per block.
+    ///
+    /// # Example
+    /// ```
+    /// use isomorph_common::mesh::bvh::{Lattice, TriangleBvh};
+    /// use isomorph_common::{Aabb, TriMesh, glam::{UVec3, Vec3}};
+    ///
+    /// let mesh = TriMesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]])?;
+    /// let bvh = TriangleBvh::new(&mesh);
+    /// // 3 × 3 × 2 nodes over [0, 1]² × [1, 2].
+    /// let lattice = Lattice::spanning(&Aabb::new(Vec3::Z, Vec3::ONE + Vec3::Z), UVec3::new(3, 3, 2));
+    /// let hits = bvh.nearest_on_lattice(&lattice).expect("non-empty mesh");
+    /// assert_eq!(hits.len(), 18);
+    /// assert_eq!(hits[0].distance, 1.0); // node (0, 0, 0) at z = 1 above the corner
+    /// assert_eq!(hits[17].distance, Vec3::new(0.5, 0.5, 2.0).length()); // (1, 1, 2) to (½, ½, 0)
+    /// # Ok::<(), isomorph_common::MeshError>(())
+    /// ```
     ///
     /// # Panics
     /// If the lattice has more than `u32::MAX` nodes along an axis product

@@ -29,7 +29,7 @@
 //! as [`MeshSdf`](crate::sdf::MeshSdf) and
 //! [`surface_distance`](crate::mesh::distance::surface_distance) do.
 
-pub mod lattice;
+mod lattice;
 
 pub use lattice::{Lattice, LatticeHit};
 
