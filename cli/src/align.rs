@@ -58,7 +58,7 @@ pub fn run(args: &AlignArgs) -> anyhow::Result<()> {
     let Some(format) = MeshFormat::from_path(&args.out) else {
         bail!("cannot tell the mesh format of {}: use .ply, .obj or .stl", args.out.display());
     };
-    let own = LoadOptions { fit: false, iso: None };
+    let own = LoadOptions { fit: false, ..LoadOptions::default() };
     let control = Control::new();
     let source = load_solid(&args.source, &own)?;
     let target = load_solid(&args.target, &own)?;

@@ -3,8 +3,9 @@
 
 use crate::morph::{Format, Io, morph, print_summary};
 use crate::options::KernelArg;
+use crate::raw::RawArgs;
 use crate::rbf::{self, ContoursArgs};
-use crate::warp::{self, FilterArg, RawType, WarpArgs};
+use crate::warp::{self, FilterArg, WarpArgs};
 use clap::Args;
 use isomorph_cli::methods::{Method, Settings};
 use isomorph_common::glam::Vec3;
@@ -68,6 +69,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
             frames: args.frames,
             keep_scale: false,
             iso: None,
+            raw: RawArgs::default(),
             threads: args.threads,
             format: Format::Ply,
         };
@@ -97,8 +99,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
     // influence of 3 units so the rest of the bunny stays put.
     let warp_args = WarpArgs {
         input: BUNNY.into(),
-        raw_dims: None,
-        raw_type: RawType::U8,
+        raw: RawArgs::default(),
         drags: vec![(Vec3::new(0.0027, 9.65, -1.356), Vec3::new(0.0, 2.5, 0.0))],
         moves: Vec::new(),
         radius: Some(3.0),

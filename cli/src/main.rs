@@ -12,6 +12,7 @@ mod info;
 mod morph;
 mod options;
 mod progress;
+mod raw;
 mod rbf;
 mod sdf;
 mod warp;

@@ -2,6 +2,7 @@
 
 use crate::options::{MethodArgs, refuse_foreign};
 use crate::progress;
+use crate::raw::RawArgs;
 use anyhow::Context;
 use clap::{ArgMatches, Args, ValueEnum};
 use isomorph_cli::methods::{Method, Settings, build, load_input_with_warnings};
@@ -35,7 +36,8 @@ pub struct Io {
     /// Source: a built-in shape (sphere, torus, ball, c-shape, mug, chain,
     /// cube, holed-cube, bunny), a mesh file (.obj, .ply, .stl), a `.npy`
     /// volume (signed distance, positive inside, placed by its JSON
-    /// sidecar; u8 densities with the surface at 127.5), or a BlobTree scene
+    /// sidecar; u8 densities with the surface at 127.5), a `.raw` volume
+    /// (with `--raw-dims`, `--raw-type`), or a BlobTree scene
     /// (.ron/.json, or a built-in scene for `--method blobtree`).
     #[arg(long)]
     pub source: String,
@@ -59,6 +61,9 @@ pub struct Io {
     /// u8 volumes densities with the surface at 127.5.
     #[arg(long)]
     pub iso: Option<f32>,
+    /// The layout of `.raw` volume inputs.
+    #[command(flatten)]
+    pub raw: RawArgs,
     /// Threads to use (default: all cores); results do not depend on it.
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
     pub threads: Option<u64>,
@@ -78,7 +83,7 @@ impl Io {
     /// # Errors
     /// Unreadable or unknown inputs.
     pub fn inputs(&self, method: Method) -> anyhow::Result<(Solid, Solid)> {
-        let options = LoadOptions { fit: !self.keep_scale, iso: self.iso };
+        let options = LoadOptions { fit: !self.keep_scale, iso: self.iso, raw: self.raw.layout() };
         let load = |spec: &str| -> anyhow::Result<Solid> {
             let (solid, warnings) =
                 load_input_with_warnings(method, spec, &options).with_context(|| format!("input {spec}"))?;

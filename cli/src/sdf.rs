@@ -48,7 +48,7 @@ fn parse_pad(s: &str) -> Result<f32, String> {
 /// Runs `isomorph sdf`.
 pub fn run(args: &SdfArgs) -> anyhow::Result<()> {
     let start = Instant::now();
-    let input = load_solid(&args.input, &LoadOptions { fit: false, iso: None })?;
+    let input = load_solid(&args.input, &LoadOptions { fit: false, ..LoadOptions::default() })?;
     let bounds = input.bounds().padded(args.pad);
     let sampled = Instant::now();
     let grid = distance_grid(&input, &bounds, args.res, args.band)

@@ -1,15 +1,17 @@
 //! `isomorph warp`: True's B-spline volume warp of a shape or mesh, driven by
 //! dragged points (direct manipulation) and/or moved control points.
 
+use crate::raw::RawArgs;
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 use isomorph_cli::parse::parse_pair;
-use isomorph_common::glam::{UVec3, Vec3};
+use isomorph_common::glam::Vec3;
 use isomorph_common::marching_cubes::marching_cubes;
 use isomorph_common::{Control, Grid3};
 use isomorph_io::inputs::{LoadOptions, load_solid};
 use isomorph_io::mesh::{MeshFormat, write_mesh};
 use isomorph_io::npy::{self, Volume};
+use isomorph_io::raw::load_raw;
 use isomorph_io::render::{Camera, RenderSettings, contact_sheet_titled, render};
 use isomorph_warp::{Evaluation, Filter, Handle, VolumeWarp, WarpSettings};
 use std::path::{Path, PathBuf};
@@ -24,12 +26,9 @@ pub struct WarpArgs {
     /// positive inside, surface at 0; placed by its `.json` sidecar if any,
     /// else in voxel units) or `.raw` (with `--raw-dims`).
     pub input: String,
-    /// Dimensions NX,NY,NZ of a `.raw` input (x fastest, no header).
-    #[arg(long, value_parser = parse_dims)]
-    pub raw_dims: Option<[u32; 3]>,
-    /// Value type of a `.raw` input.
-    #[arg(long, value_enum, default_value_t = RawType::U8)]
-    pub raw_type: RawType,
+    /// The layout of a `.raw` input.
+    #[command(flatten)]
+    pub raw: RawArgs,
     /// Drag the surface point X,Y,Z by DX,DY,DZ (world units), e.g.
     /// `--drag 0.3,0,0:0.2,0,0`. Repeat for several points; all land exactly
     /// where asked unless they conflict (then least squares).
@@ -73,32 +72,11 @@ pub enum FilterArg {
     Backward,
 }
 
-/// Value types of `.raw` volumes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum RawType {
-    /// Bytes: densities 0–255, surface at 127.5.
-    U8,
-    /// Little-endian f32: a field, positive inside, surface at 0.
-    F32,
-}
-
 /// Parses a positive finite radius.
 fn parse_radius(s: &str) -> Result<f32, String> {
     match s.trim().parse::<f32>() {
         Ok(r) if r.is_finite() && r > 0.0 => Ok(r),
         _ => Err(format!("'{s}' is not a positive radius (world units)")),
-    }
-}
-
-/// Parses `NX,NY,NZ`.
-fn parse_dims(s: &str) -> Result<[u32; 3], String> {
-    let v: Vec<u32> = s
-        .split(',')
-        .map(|x| x.trim().parse::<u32>().map_err(|e| format!("'{x}': {e}")))
-        .collect::<Result<_, _>>()?;
-    match v[..] {
-        [x, y, z] if x >= 2 && y >= 2 && z >= 2 => Ok([x, y, z]),
-        _ => Err(format!("'{s}' is not three sizes of at least 2")),
     }
 }
 
@@ -109,7 +87,11 @@ fn density(args: &WarpArgs) -> anyhow::Result<Grid3<u8>> {
     let volume = if args.input.ends_with(".npy") {
         Some(npy::load_npy(Path::new(&args.input))?)
     } else if args.input.ends_with(".raw") {
-        Some(read_raw(args)?)
+        let layout = args
+            .raw
+            .layout()
+            .with_context(|| format!("{}: a .raw volume needs --raw-dims NX,NY,NZ", args.input))?;
+        Some(load_raw(Path::new(&args.input), layout)?)
     } else {
         None
     };
@@ -122,7 +104,7 @@ fn density(args: &WarpArgs) -> anyhow::Result<Grid3<u8>> {
             to_density(&field)?
         }
         None => {
-            let input = load_solid(&args.input, &LoadOptions { fit: false, iso: None })?;
+            let input = load_solid(&args.input, &LoadOptions { fit: false, ..LoadOptions::default() })?;
             let distance = input
                 .distance_volume(&input.bounds().padded(0.15), args.res, &Control::new())
                 .with_context(|| format!("cannot sample the distance field of {}", args.input))?;
@@ -136,40 +118,6 @@ fn density(args: &WarpArgs) -> anyhow::Result<Grid3<u8>> {
 fn to_density(field: &Grid3<f32>) -> anyhow::Result<Grid3<u8>> {
     let h = field.spacing();
     Ok(field.map(|d| (127.5 + 64.0 * d / h).clamp(0.0, 255.0) as u8)?)
-}
-
-/// Reads a headerless `.raw` volume of `--raw-dims` and `--raw-type`.
-fn read_raw(args: &WarpArgs) -> anyhow::Result<Volume> {
-    let Some([x, y, z]) = args.raw_dims else {
-        bail!("{}: a .raw volume needs --raw-dims NX,NY,NZ", args.input);
-    };
-    let dims = UVec3::new(x, y, z);
-    let size: u64 = match args.raw_type {
-        RawType::U8 => 1,
-        RawType::F32 => 4,
-    };
-    // Checked: three u32 sizes can overflow u64.
-    let needed = [y, z]
-        .into_iter()
-        .try_fold(u64::from(x), |n, d| n.checked_mul(u64::from(d)))
-        .and_then(|n| n.checked_mul(size));
-    let length = std::fs::metadata(&args.input).with_context(|| format!("cannot read {}", args.input))?.len();
-    if needed != Some(length) {
-        let needed = needed.map_or("more than 2^64".to_string(), |n| n.to_string());
-        bail!("{}: {length} bytes, but {x}×{y}×{z} {:?} values need {needed}", args.input, args.raw_type);
-    }
-    let bytes = std::fs::read(&args.input).with_context(|| format!("cannot read {}", args.input))?;
-    if bytes.len() as u64 != length {
-        bail!("{}: the file changed while it was read", args.input);
-    }
-    Ok(match args.raw_type {
-        RawType::U8 => Volume::U8(Grid3::from_vec(dims, Vec3::ZERO, 1.0, bytes)?),
-        RawType::F32 => {
-            let values =
-                bytes.chunks_exact(4).map(|v| f32::from_le_bytes([v[0], v[1], v[2], v[3]])).collect();
-            Volume::F32(Grid3::from_vec(dims, Vec3::ZERO, 1.0, values)?)
-        }
-    })
 }
 
 /// Runs `isomorph warp`.

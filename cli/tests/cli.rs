@@ -380,7 +380,7 @@ fn level_set_morph_takes_an_align_file_and_prints_its_report() {
 }
 
 #[test]
-fn warp_takes_npy_and_raw_volumes() {
+fn warp_and_morph_take_npy_and_raw_volumes() {
     use isomorph_io::mesh::read_mesh;
     let out = scratch("warp-volumes");
     std::fs::create_dir_all(&out).unwrap();
@@ -425,6 +425,20 @@ fn warp_takes_npy_and_raw_volumes() {
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("--raw-dims"));
     let o = isomorph(&[&args[..], &["--raw-dims", "24,24,23"]].concat());
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("bytes"));
+    // `morph` takes both volumes: the density cube (fitted like a mesh,
+    // its level kept) into the distance-volume sphere.
+    let morphed = out.join("morph");
+    let args = ["morph", "--method", "level-set", "--source", raw.to_str().unwrap(), "--target"];
+    let args = [&args[..], &[npy.to_str().unwrap(), "--res", "32", "--frames", "3", "--out"]].concat();
+    let args = [&args[..], &[morphed.to_str().unwrap()]].concat();
+    let o = isomorph(&[&args[..], &["--raw-dims", "24,24,24"]].concat());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(morphed.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["morph"]["converged"], true, "{report}");
+    assert!(report["endpoints"]["target"]["mean_voxels"].as_f64().unwrap() < 0.5, "{report}");
+    let o = isomorph(&args);
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("--raw-dims"));
     let _ = std::fs::remove_dir_all(&out);
 }
 

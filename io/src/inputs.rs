@@ -1,6 +1,6 @@
 //! Input solids from what a user types ([`load_solid`]): a built-in shape
-//! name, the built-in Stanford bunny, a mesh file (OBJ, PLY, STL) or a
-//! `.npy` volume with its JSON sidecar.
+//! name, the built-in Stanford bunny, a mesh file (OBJ, PLY, STL), a
+//! `.npy` volume with its JSON sidecar or a headerless `.raw` volume.
 //!
 //! ```
 //! use isomorph_io::inputs::{LoadOptions, load_solid};
@@ -15,6 +15,7 @@
 
 use crate::mesh::{MeshFormat, MeshIoError, MeshRead, read_mesh_from, read_mesh_with_warnings};
 use crate::npy::{NpyError, Volume, load_npy};
+use crate::raw::{RawError, RawLayout, load_raw};
 use isomorph_common::glam::{Affine3A, Quat, Vec3};
 use isomorph_common::{Aabb, Grid3, MorphError, Solid, TriMesh, models};
 use std::path::Path;
@@ -42,11 +43,14 @@ pub struct LoadOptions {
     /// with the surface at 127.5 (True's convention); with a level, values
     /// above it are inside and the volume is redistanced.
     pub iso: Option<f32>,
+    /// The node counts and value type of headerless `.raw` volumes (which
+    /// cannot say them); `None` refuses `.raw` inputs.
+    pub raw: Option<RawLayout>,
 }
 
 impl Default for LoadOptions {
     fn default() -> Self {
-        Self { fit: true, iso: None }
+        Self { fit: true, iso: None, raw: None }
     }
 }
 
@@ -73,6 +77,17 @@ pub enum InputError {
     /// A volume file could not be read.
     #[error(transparent)]
     Volume(#[from] NpyError),
+    /// A `.raw` volume could not be read.
+    #[error(transparent)]
+    Raw(#[from] RawError),
+    /// A `.raw` volume was given without its layout ([`LoadOptions::raw`]).
+    #[error(
+        "{spec}: a headerless .raw volume needs its node counts and value type (on the command line: --raw-dims NX,NY,NZ and --raw-type u8|f32)"
+    )]
+    RawLayoutMissing {
+        /// What was given.
+        spec: String,
+    },
     /// The input cannot be a solid (empty mesh, non-finite values, no
     /// surface in a volume).
     #[error("{spec}: {source}")]
@@ -99,8 +114,11 @@ pub fn bunny() -> TriMesh {
 }
 
 /// The solid named by `spec`: a built-in shape (`isomorph_common::models`
-/// names), `bunny`, a mesh file (`.obj`, `.ply`, `.stl`) or a `.npy`
-/// volume (placed by its JSON sidecar, see [`crate::npy`]).
+/// names), `bunny`, a mesh file (`.obj`, `.ply`, `.stl`), a `.npy`
+/// volume (placed by its JSON sidecar, see [`crate::npy`]) or a `.raw`
+/// volume of the layout [`LoadOptions::raw`] (voxel units, see
+/// [`crate::raw`]). Volumes are signed distances (positive inside) or,
+/// with [`LoadOptions::iso`] and for u8 values, levels of a density.
 ///
 /// # Errors
 /// [`InputError`] naming the input and what is wrong with it.
@@ -123,7 +141,36 @@ pub fn load_solid_with_warnings(
     }
     let solid_error = |source| InputError::Solid { spec: spec.to_string(), source };
     let path = Path::new(spec);
-    if spec == BUNNY || (path.is_file() && !is_npy(path)) {
+    let volume = if !path.is_file() {
+        None
+    } else if has_extension(path, "npy") {
+        Some(load_npy(path)?)
+    } else if has_extension(path, "raw") {
+        let layout = options.raw.ok_or_else(|| InputError::RawLayoutMissing { spec: spec.to_string() })?;
+        Some(load_raw(path, layout)?)
+    } else {
+        None
+    };
+    if let Some(volume) = volume {
+        // A density's level is kept as it is; a distance scales with the lattice.
+        let (values, iso) = match volume {
+            Volume::F32(grid) => (grid, options.iso),
+            Volume::U8(grid) => (
+                grid.map(|&v| f32::from(v)).map_err(|e| solid_error(e.into()))?,
+                Some(options.iso.unwrap_or(127.5)),
+            ),
+        };
+        let values = match options.fit {
+            true => fitted(&values, iso.is_none()).map_err(|e| solid_error(e.into()))?,
+            false => values,
+        };
+        let solid = match iso {
+            Some(iso) => Solid::level_volume(&values, iso),
+            None => Solid::volume(values),
+        };
+        return Ok((solid.map_err(solid_error)?, Vec::new()));
+    }
+    if spec == BUNNY || path.is_file() {
         let MeshRead { mut mesh, warnings } = if spec == BUNNY {
             MeshRead { mesh: bunny(), warnings: Vec::new() }
         } else {
@@ -136,26 +183,11 @@ pub fn load_solid_with_warnings(
         let warnings = warnings.iter().map(ToString::to_string).collect();
         return Ok((Solid::mesh(mesh).map_err(solid_error)?, warnings));
     }
-    if path.is_file() {
-        let (values, iso) = match load_npy(path)? {
-            Volume::F32(grid) => (grid, options.iso),
-            Volume::U8(grid) => (
-                grid.map(|&v| f32::from(v)).map_err(|e| solid_error(e.into()))?,
-                Some(options.iso.unwrap_or(127.5)),
-            ),
-        };
-        let values = if options.fit { fitted(&values).map_err(|e| solid_error(e.into()))? } else { values };
-        let solid = match iso {
-            Some(iso) => Solid::level_volume(&values, iso),
-            None => Solid::volume(values),
-        };
-        return Ok((solid.map_err(solid_error)?, Vec::new()));
-    }
     Err(InputError::Unknown { spec: spec.to_string(), names: builtin_names().join(", ") })
 }
 
-fn is_npy(path: &Path) -> bool {
-    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("npy"))
+fn has_extension(path: &Path, extension: &str) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case(extension))
 }
 
 /// The uniform scale and translation that centres `bounds` at the origin
@@ -165,13 +197,15 @@ fn fit_map(bounds: &Aabb) -> Affine3A {
     Affine3A::from_scale_rotation_translation(Vec3::splat(scale), Quat::IDENTITY, -scale * bounds.center())
 }
 
-/// A volume fitted like a mesh: its lattice moved and scaled, its
-/// distances scaled by the same factor (so a distance stays a distance).
-fn fitted(values: &Grid3<f32>) -> Result<Grid3<f32>, isomorph_common::GridError> {
+/// A volume fitted like a mesh: its lattice moved and scaled, and, when
+/// `distances`, its values scaled by the same factor (so a distance stays a
+/// distance; a density keeps its level).
+fn fitted(values: &Grid3<f32>, distances: bool) -> Result<Grid3<f32>, isomorph_common::GridError> {
     let map = fit_map(&values.bounds());
-    let scale = map.matrix3.x_axis.x;
+    let scale = if distances { map.matrix3.x_axis.x } else { 1.0 };
     let data = values.data().iter().map(|v| v * scale).collect();
-    Grid3::from_vec(values.dims(), map.transform_point3(values.origin()), values.spacing() * scale, data)
+    let spacing = values.spacing() * map.matrix3.x_axis.x;
+    Grid3::from_vec(values.dims(), map.transform_point3(values.origin()), spacing, data)
 }
 
 #[cfg(test)]
@@ -199,7 +233,7 @@ mod tests {
         let path = dir.join("ball.npy");
         save_npy(&grid, &path).unwrap();
         let spec = path.to_str().unwrap();
-        let kept = load_solid(spec, &LoadOptions { fit: false, iso: None }).unwrap();
+        let kept = load_solid(spec, &LoadOptions { fit: false, ..LoadOptions::default() }).unwrap();
         assert_eq!(kept.kind(), "distance volume");
         let d = kept.distance_field(0, &Control::new()).unwrap();
         assert!((d.value(Vec3::ZERO) - 2.0).abs() < 1e-5);
@@ -208,9 +242,51 @@ mod tests {
         // The box [-3, 3]³ becomes [-0.45, 0.45]³: the radius 2 becomes 0.3.
         assert!((d.value(Vec3::ZERO) - 0.3).abs() < 1e-5, "{}", d.value(Vec3::ZERO));
         // As a level set at 1: the ball of radius 1.
-        let level = load_solid(spec, &LoadOptions { fit: false, iso: Some(1.0) }).unwrap();
+        let level =
+            load_solid(spec, &LoadOptions { fit: false, iso: Some(1.0), ..LoadOptions::default() }).unwrap();
         let d = level.distance_field(0, &Control::new()).unwrap();
         assert!((d.value(Vec3::ZERO) - 1.0).abs() < 0.05, "{}", d.value(Vec3::ZERO));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A u8 density ball of radius `r` voxels in an `n³` `.raw` file, with
+    /// True's two-voxel ramp (64 levels per voxel around 127.5).
+    fn density_ball(dir: &Path, n: u32, r: f32) -> std::path::PathBuf {
+        let c = (n - 1) as f32 / 2.0;
+        let bytes: Vec<u8> = (0..n * n * n)
+            .map(|i| {
+                let p = Vec3::new((i % n) as f32, (i / n % n) as f32, (i / (n * n)) as f32);
+                (127.5 + 64.0 * (r - p.distance(Vec3::splat(c)))).clamp(0.0, 255.0) as u8
+            })
+            .collect();
+        let path = dir.join("ball.raw");
+        std::fs::write(&path, bytes).unwrap();
+        path
+    }
+
+    #[test]
+    fn raw_densities_load_kept_and_fitted() {
+        let dir = std::env::temp_dir().join(format!("isomorph-inputs-raw-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = density_ball(&dir, 33, 10.0);
+        let spec = path.to_str().unwrap();
+        assert!(matches!(
+            load_solid(spec, &LoadOptions::default()),
+            Err(InputError::RawLayoutMissing { .. })
+        ));
+        let raw = Some(RawLayout { dims: glam::UVec3::splat(33), value: crate::raw::RawType::U8 });
+        let kept = load_solid(spec, &LoadOptions { fit: false, raw, ..LoadOptions::default() }).unwrap();
+        let centre = kept.distance_field(0, &Control::new()).unwrap().value(Vec3::splat(16.0));
+        assert!((centre - 10.0).abs() < 0.3, "kept: {centre} voxels, not 10");
+        // Fitted, the 32-voxel box becomes 0.9 wide: the level stays at
+        // 127.5 and the radius becomes 10 · 0.9 / 32.
+        let fitted = load_solid(spec, &LoadOptions { raw, ..LoadOptions::default() }).unwrap();
+        let centre = fitted.distance_field(0, &Control::new()).unwrap().value(Vec3::ZERO);
+        let expected = 10.0 * 0.9 / 32.0;
+        assert!((centre - expected).abs() < 0.01, "fitted: {centre}, not {expected}");
+        let wrong = Some(RawLayout { dims: glam::UVec3::splat(32), value: crate::raw::RawType::U8 });
+        let err = load_solid(spec, &LoadOptions { raw: wrong, ..LoadOptions::default() }).unwrap_err();
+        assert!(err.to_string().contains("35937 bytes, but 32×32×32 u8 values need 32768"), "{err}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

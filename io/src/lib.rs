@@ -1,5 +1,6 @@
 //! Files and pictures of isomorph, kept out of the geometry core: mesh files
-//! ([`mesh`]: OBJ, PLY, STL), NumPy volumes ([`npy`]), the software preview
+//! ([`mesh`]: OBJ, PLY, STL), NumPy and headerless volumes ([`npy`],
+//! [`raw`]), the software preview
 //! renderer ([`render`]) and the sequence exporter ([`export`]) that
 //! polygonizes the frames of any [`isomorph_common::Morph`] and writes
 //! meshes, a contact sheet and `report.json`.
@@ -10,4 +11,5 @@ pub mod inputs;
 pub mod mesh;
 pub mod npy;
 pub mod png_gray;
+pub mod raw;
 pub mod render;
