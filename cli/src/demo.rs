@@ -107,6 +107,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         filter: FilterArg::Box,
         res: args.res.unwrap_or(64),
         pad: None,
+        frames: None,
         out: args.out.join("warp_bunny_ear"),
     };
     warp::run(&warp_args)?;

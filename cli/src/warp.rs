@@ -8,12 +8,13 @@ use isomorph_cli::parse::parse_pair;
 use isomorph_common::glam::Vec3;
 use isomorph_common::marching_cubes::marching_cubes;
 use isomorph_common::{Control, Grid3};
+use isomorph_io::export::{ExportSettings, export_sequence};
 use isomorph_io::inputs::{LoadOptions, load_solid};
 use isomorph_io::mesh::{MeshFormat, write_mesh};
 use isomorph_io::npy::{self, Volume};
 use isomorph_io::raw::load_raw;
 use isomorph_io::render::{Camera, RenderSettings, contact_sheet_titled, render};
-use isomorph_warp::{Evaluation, Filter, Handle, VolumeWarp, WarpSettings};
+use isomorph_warp::{Density, Evaluation, Filter, Handle, VolumeWarp, WarpAnimation, WarpSettings};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -55,8 +56,14 @@ pub struct WarpArgs {
     /// plus the longest drag or move, so the warped shape stays inside).
     #[arg(long, value_parser = clap::value_parser!(u32).range(0..=i64::from(isomorph_warp::MAX_PAD)))]
     pub pad: Option<u32>,
-    /// Output folder: warped.npy (+ .json sidecar), source.obj, warped.obj,
-    /// before_after.png.
+    /// Also write the warp as an animation of K frames from the identity to
+    /// the edited map (every frame a B-spline warp) into OUT/frames, with
+    /// its contact sheet and report.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(2..=1000))]
+    pub frames: Option<u32>,
+    /// Output folder: warped.npy (+ .json sidecar; density 0–1, surface at
+    /// 0.5, f32 without quantization for f32 inputs), source.obj,
+    /// warped.obj, before_after.png.
     #[arg(long)]
     pub out: PathBuf,
 }
@@ -80,10 +87,12 @@ fn parse_radius(s: &str) -> Result<f32, String> {
     }
 }
 
-/// The input as a u8 density volume (0–255, surface at 127.5): volumes as
-/// they are (f32 fields converted as shapes are), shapes and meshes from
-/// their distance fields sampled at `res` nodes along the longest edge.
-fn density(args: &WarpArgs) -> anyhow::Result<Grid3<u8>> {
+/// The input as a density volume (True's convention: material high, the
+/// surface at the middle level): u8 volumes as they are (0–255, surface at
+/// 127.5); f32 fields (positive inside, surface at 0) and shapes and meshes
+/// (their distance fields sampled at `res` nodes along the longest edge)
+/// as f32 densities 0–1 with the surface at 0.5, never quantized.
+fn density(args: &WarpArgs) -> anyhow::Result<Volume> {
     let volume = if args.input.ends_with(".npy") {
         Some(npy::load_npy(Path::new(&args.input))?)
     } else if args.input.ends_with(".raw") {
@@ -96,34 +105,47 @@ fn density(args: &WarpArgs) -> anyhow::Result<Grid3<u8>> {
         None
     };
     Ok(match volume {
-        Some(Volume::U8(grid)) => grid,
+        Some(Volume::U8(grid)) => Volume::U8(grid),
         Some(Volume::F32(field)) => {
             if let Some(node) = field.data().iter().position(|v| !v.is_finite()) {
                 bail!("{}: value at node {node} is not finite", args.input);
             }
-            to_density(&field)?
+            Volume::F32(to_density(&field)?)
         }
         None => {
             let input = load_solid(&args.input, &LoadOptions { fit: false, ..LoadOptions::default() })?;
             let distance = input
                 .distance_volume(&input.bounds().padded(0.15), args.res, &Control::new())
                 .with_context(|| format!("cannot sample the distance field of {}", args.input))?;
-            to_density(&distance)?
+            Volume::F32(to_density(&distance)?)
         }
     })
 }
 
 /// Density as in the thesis from a field (positive inside, world units):
-/// 0–255, surface at 127.5, a two-voxel ramp.
-fn to_density(field: &Grid3<f32>) -> anyhow::Result<Grid3<u8>> {
+/// 0–1, surface at 0.5, a ramp four voxels wide.
+fn to_density(field: &Grid3<f32>) -> anyhow::Result<Grid3<f32>> {
     let h = field.spacing();
-    Ok(field.map(|d| (127.5 + 64.0 * d / h).clamp(0.0, 255.0) as u8)?)
+    Ok(field.map(|d| (0.5 + 0.25 * d / h).clamp(0.0, 1.0))?)
 }
 
 /// Runs `isomorph warp`.
 pub fn run(args: &WarpArgs) -> anyhow::Result<()> {
     let start = Instant::now();
-    let density = density(args)?;
+    match density(args)? {
+        Volume::U8(density) => warp_density(args, density, 255.0, start),
+        Volume::F32(density) => warp_density(args, density, 1.0, start),
+    }
+}
+
+/// Warps `density` (values up to `full`, surface at `full / 2`) as the
+/// arguments say and writes the results; `start` is when the command began.
+fn warp_density<T: Density>(
+    args: &WarpArgs,
+    density: Grid3<T>,
+    full: f32,
+    start: Instant,
+) -> anyhow::Result<()> {
     let h = density.spacing();
     let to_voxels = |p: Vec3| density.to_grid(p);
     let filter = match args.filter {
@@ -161,7 +183,7 @@ pub fn run(args: &WarpArgs) -> anyhow::Result<()> {
 
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
     let target = warp.target();
-    let as_f32 = |g: &Grid3<u8>| g.map(|&v| f32::from(v) / 255.0);
+    let as_f32 = |g: &Grid3<T>| g.map(|&v| v.to_f32() / full);
     let warped = as_f32(target)?;
     let npy_path = args.out.join("warped.npy");
     npy::save_npy(&warped, &npy_path)?;
@@ -194,5 +216,19 @@ pub fn run(args: &WarpArgs) -> anyhow::Result<()> {
         start.elapsed().as_secs_f64()
     );
     println!("  wrote {} (+ .json), source.obj, warped.obj, before_after.png", npy_path.display());
+    if let Some(frames) = args.frames {
+        let animation = WarpAnimation::new(density, warp.map().clone(), settings, full / 2.0)?;
+        let export = ExportSettings {
+            frames: frames as usize,
+            out_dir: args.out.join("frames"),
+            ..ExportSettings::default()
+        };
+        let report = export_sequence(&animation, &export, &Control::new())?.report;
+        println!(
+            "  wrote {} frames of the warp animation to {}",
+            report.frames.len(),
+            export.out_dir.display()
+        );
+    }
     Ok(())
 }

@@ -326,6 +326,8 @@ fn warp_drags_a_sphere_point_and_writes_volume_meshes_and_png() {
         "7",
         "--drag",
         "0.3,0,0:0.15,0,0",
+        "--frames",
+        "3",
         "--out",
         out.to_str().unwrap(),
     ]);
@@ -333,6 +335,19 @@ fn warp_drags_a_sphere_point_and_writes_volume_meshes_and_png() {
     for f in ["warped.npy", "warped.json", "source.obj", "warped.obj", "before_after.png"] {
         assert!(out.join(f).is_file(), "missing {f}");
     }
+    // A shape's distance field is warped as an f32 density, not quantized
+    // to bytes: most ramp values are no multiple of 1/255.
+    let (_, values) = read_npy(&out.join("warped.npy"));
+    let ramp: Vec<f32> = values.into_iter().filter(|v| *v > 0.0 && *v < 1.0).collect();
+    let off_grid = ramp.iter().filter(|v| ((*v * 255.0) - (*v * 255.0).round()).abs() > 1e-3).count();
+    assert!(off_grid * 2 > ramp.len(), "{off_grid} of {} ramp values are off the u8 levels", ramp.len());
+    // The animation from the identity: frame 0 is the sphere, the last the warp.
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("frames/report.json")).unwrap()).unwrap();
+    let frames = report["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), 3);
+    let volume = |i: usize| frames[i]["volume"].as_f64().unwrap();
+    assert!(volume(2) > volume(0) * 1.02 && volume(1) > volume(0), "volumes {frames:?}");
     let before = read_mesh(out.join("source.obj")).unwrap().bounds();
     let after = read_mesh(out.join("warped.obj")).unwrap().bounds();
     assert!(after.max.x > before.max.x + 0.1, "pole moved from {} to {}", before.max.x, after.max.x);
