@@ -4,7 +4,7 @@
 use crate::morph::{Format, Io, morph, print_summary};
 use crate::options::KernelArg;
 use crate::raw::RawArgs;
-use crate::rbf::{self, ContoursArgs};
+use crate::rbf::{self, ContourMethod, ContoursArgs};
 use crate::warp::{self, FilterArg, WarpArgs};
 use clap::Args;
 use isomorph_cli::methods::{Method, Settings};
@@ -92,6 +92,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         res: 128,
         separation: 1.0,
         kernel: KernelArg::Tps,
+        method: ContourMethod::Rbf,
         out: args.out.join("rbf_x_to_o"),
     })?;
     // True's kind of edit (the thesis' teapot spout): drag the bunny's ear

@@ -3,10 +3,10 @@
 
 use crate::options::KernelArg;
 use anyhow::{Context, bail};
-use clap::Args;
+use clap::{Args, ValueEnum};
 use isomorph_common::glam::UVec2;
 use isomorph_common::marching_cubes::polygonize;
-use isomorph_common::{Aabb, Grid2};
+use isomorph_common::{Aabb, ContourBlend, Control, Grid2};
 use isomorph_io::mesh::{MeshFormat, write_mesh};
 use isomorph_io::png_gray::read_png_gray;
 use isomorph_io::render::{Image, RenderSettings, contact_sheet_titled, render};
@@ -35,10 +35,24 @@ pub struct ContoursArgs {
     /// The radial kernel.
     #[arg(long, value_enum, default_value_t = KernelArg::Tps)]
     pub kernel: KernelArg,
-    /// Output folder: frame_NNN.png, contact_sheet.png and spacetime.ply
-    /// (the 3D surface whose slices are the frames).
+    /// `rbf`: the variational transformation; `baseline`: the linear blend
+    /// of the two shapes' signed distances (the paper's Figs. 2–3, top
+    /// row), for comparison.
+    #[arg(long, value_enum, default_value_t = ContourMethod::Rbf)]
+    pub method: ContourMethod,
+    /// Output folder: frame_NNN.png, contact_sheet.png and, for `rbf`,
+    /// spacetime.ply (the 3D surface whose slices are the frames).
     #[arg(long, default_value = "out/contours")]
     pub out: PathBuf,
+}
+
+/// The 2D morphs of `isomorph contours`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ContourMethod {
+    /// Turk & O'Brien's variational implicit in 3D.
+    Rbf,
+    /// Linear interpolation of the signed distances.
+    Baseline,
 }
 
 /// A 2D input: a PNG or one of the paper's letters.
@@ -56,44 +70,79 @@ pub fn contours(args: &ContoursArgs) -> anyhow::Result<()> {
         bail!("--separation must be finite and positive, got {}", args.separation);
     }
     let start = Instant::now();
-    let a = image_constraints(&image(&args.a)?, 0.5).with_context(|| format!("no shape in {}", args.a))?;
-    let b = image_constraints(&image(&args.b)?, 0.5).with_context(|| format!("no shape in {}", args.b))?;
-    let settings = TransformSettings {
-        fit: FitSettings::default().with_kernel(args.kernel.into()),
-        separation: args.separation,
-        ..TransformSettings::default()
-    };
-    let morph = ContourMorph::new(&a, &b, &settings).context("cannot fit the variational implicit")?;
+    let (image_a, image_b) = (image(&args.a)?, image(&args.b)?);
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
+    let frame_times = (0..args.frames).map(|i| i as f32 / (args.frames - 1) as f32);
+    let (frames, summary) = match args.method {
+        ContourMethod::Baseline => {
+            let blend = ContourBlend::new(&image_a, &image_b, 0.5, args.res, &Control::new())?;
+            let frames =
+                frame_times.map(|t| Ok((t, blend.frame_grid(t)?))).collect::<anyhow::Result<Vec<_>>>()?;
+            (frames, "baseline distance blend".to_string())
+        }
+        ContourMethod::Rbf => {
+            let a = image_constraints(&image_a, 0.5).with_context(|| format!("no shape in {}", args.a))?;
+            let b = image_constraints(&image_b, 0.5).with_context(|| format!("no shape in {}", args.b))?;
+            let settings = TransformSettings {
+                fit: FitSettings::default().with_kernel(args.kernel.into()),
+                separation: args.separation,
+                ..TransformSettings::default()
+            };
+            let morph =
+                ContourMorph::new(&a, &b, &settings).context("cannot fit the variational implicit")?;
+            let frames = frame_times
+                .map(|t| Ok((t, morph.frame_grid(t, args.res)?)))
+                .collect::<anyhow::Result<Vec<_>>>()?;
+            (frames, spacetime(&morph, args)? + &format!(" from {} constraints in 3D", a.len() + b.len()))
+        }
+    };
     let mut tiles = Vec::new();
-    for i in 0..args.frames {
-        let t = i as f32 / (args.frames - 1) as f32;
-        let grid = morph.frame_grid(t, args.res)?;
-        let picture = silhouette(&grid);
+    for (i, (t, grid)) in frames.iter().enumerate() {
+        let picture = silhouette(grid);
         picture.write_png(args.out.join(format!("frame_{i:03}.png")))?;
         tiles.push((picture, format!("t = {t:.2}")));
     }
-    contact_sheet_titled(&tiles, 5, &format!("isomorph contours: {} -> {}", args.a, args.b))
-        .write_png(args.out.join("contact_sheet.png"))?;
-    // The space-time surface: the 3D implicit itself, t along z.
+    contact_sheet_titled(
+        &tiles,
+        5,
+        &format!("isomorph contours ({}): {} -> {}", args.method.name(), args.a, args.b),
+    )
+    .write_png(args.out.join("contact_sheet.png"))?;
+    println!(
+        "contours {} -> {}: {} frames in {:.2} s; {summary}",
+        args.a,
+        args.b,
+        args.frames,
+        start.elapsed().as_secs_f64(),
+    );
+    println!("  wrote {}/frame_*.png, contact_sheet.png", args.out.display());
+    Ok(())
+}
+
+impl ContourMethod {
+    /// The name on the command line.
+    fn name(self) -> &'static str {
+        match self {
+            ContourMethod::Rbf => "rbf",
+            ContourMethod::Baseline => "baseline",
+        }
+    }
+}
+
+/// Writes the space-time surface (the 3D implicit itself, t along z) as
+/// spacetime.ply and .png; returns a summary.
+fn spacetime(morph: &ContourMorph, args: &ContoursArgs) -> anyhow::Result<String> {
     let (lo, hi) = morph.bounds();
     let whole = morph.interpolant().slice3(&[])?;
     let bounds = Aabb::new(lo.extend(-0.1 * args.separation), hi.extend(1.1 * args.separation));
     let surface = polygonize(&whole, &bounds, 96, 0.0)?;
     write_mesh(&surface, args.out.join("spacetime.ply"), MeshFormat::PlyBinaryLittleEndian)?;
     render(&surface, &RenderSettings::default()).write_png(args.out.join("spacetime.png"))?;
-    println!(
-        "contours {} -> {}: {} constraints in 3D, {} frames in {:.2} s; space-time surface: {} triangles, genus {:?}",
-        args.a,
-        args.b,
-        a.len() + b.len(),
-        args.frames,
-        start.elapsed().as_secs_f64(),
+    Ok(format!(
+        "space-time surface (spacetime.ply, .png): {} triangles, genus {:?},",
         surface.triangles.len(),
         surface.genus()
-    );
-    println!("  wrote {}/frame_*.png, contact_sheet.png, spacetime.ply, spacetime.png", args.out.display());
-    Ok(())
+    ))
 }
 
 /// The inside (value > 0) of a slice as a dark shape on white, y up.

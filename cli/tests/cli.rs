@@ -523,6 +523,13 @@ fn contours_and_rbf_morph_run_and_refuse_bad_input() {
     }
     let o = isomorph(&["contours", "x", "no-such.png", "--out", out.to_str().unwrap()]);
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("no-such.png"));
+    // The paper's comparison row: the distance blend writes the same
+    // frames and sheet (it has no space-time surface).
+    let blend = out.join("baseline");
+    let args = ["contours", "x", "o", "--frames", "3", "--res", "32", "--method", "baseline", "--out"];
+    let o = isomorph(&[&args[..], &[blend.to_str().unwrap()]].concat());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(blend.join("frame_001.png").is_file() && !blend.join("spacetime.ply").exists());
     // RBF morph with a mesh: the bunny into the sphere, the report says rbf.
     let frames = out.join("morph");
     let o = isomorph(&[

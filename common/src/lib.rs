@@ -87,9 +87,9 @@ pub use grid::{
 };
 pub use mesh::trimesh::{MeshError, TriMesh};
 pub use morph::{
-    BlendSettings, BoxedError, BoxedMorph, Details, DistanceBlend, DynField, Frame, MissedPart, Morph,
-    MorphError, MorphExt, MorphFailure, MorphReport, Outcome, Residual, Side, StageTime, Stages, Value,
-    check, check_time, placed_bounds,
+    BlendSettings, BoxedError, BoxedMorph, ContourBlend, Details, DistanceBlend, DynField, Frame, MissedPart,
+    Morph, MorphError, MorphExt, MorphFailure, MorphReport, Outcome, Residual, Side, StageTime, Stages,
+    Value, check, check_time, placed_bounds,
 };
 pub use shape::{PlacedShape, Shape, ShapeError};
 pub use solid::{DistanceField, Implicit, PROBE_RESOLUTION, Solid, validate_inputs};

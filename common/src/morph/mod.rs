@@ -32,11 +32,13 @@
 
 mod blend;
 mod boxed;
+mod contour_blend;
 mod error;
 mod report;
 
 pub use blend::{BlendSettings, DistanceBlend};
 pub use boxed::{BoxedError, BoxedMorph, DynField, MorphExt};
+pub use contour_blend::ContourBlend;
 pub use error::{MissedPart, MorphError, MorphFailure, Side, check, check_time};
 pub use report::{Details, MorphReport, Outcome, Residual, StageTime, Stages, Value};
 
