@@ -14,6 +14,7 @@ mod options;
 mod progress;
 mod raw;
 mod rbf;
+mod reconstruct;
 mod sdf;
 mod warp;
 
@@ -75,6 +76,9 @@ enum Command {
     /// Transform one 2D shape into another (Turk & O'Brien): PNG frames of
     /// the in-between shapes and the 3D space-time surface.
     Contours(rbf::ContoursArgs),
+    /// Reconstruct a surface from planar contours (Turk & O'Brien §6): a
+    /// JSON file of slices or a folder of PNG slices.
+    Reconstruct(reconstruct::ReconstructArgs),
     /// Polygonize one BlobTree (scene file or built-in) and preview it.
     Blob(blob::BlobArgs),
     /// Warp a shape or mesh with True's trivariate B-spline volume warp: drag
@@ -98,6 +102,7 @@ fn main() -> ExitCode {
         Command::Warp(args) => warp::run(&args),
         Command::Blob(args) => blob::run(&args),
         Command::Contours(args) => rbf::contours(&args),
+        Command::Reconstruct(args) => reconstruct::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -601,3 +601,60 @@ fn landmarks_warp_the_rbf_transformation() {
     assert!(!o.status.success() && err.contains("--landmarks (warp, rbf)"), "{err}");
     let _ = std::fs::remove_dir_all(&out);
 }
+
+#[test]
+fn reconstruct_takes_a_slices_file_and_a_folder_of_pngs() {
+    use isomorph_io::mesh::read_mesh;
+    use isomorph_io::render::Image;
+    let out = scratch("reconstruct");
+    std::fs::create_dir_all(&out).unwrap();
+    // Circles of a sphere of radius 0.3 at unevenly spaced heights, and one
+    // vertical great circle crossing them (§6.1).
+    let circle = |r: f32, n: usize| -> Vec<[f32; 2]> {
+        (0..n)
+            .map(|i| i as f32 * std::f32::consts::TAU / n as f32)
+            .map(|a| [r * a.cos(), r * a.sin()])
+            .collect()
+    };
+    let mut slices: Vec<serde_json::Value> = [-0.25f32, -0.1, 0.0, 0.05, 0.2]
+        .iter()
+        .map(|&z| serde_json::json!({ "z": z, "polylines": [circle((0.09 - z * z).sqrt(), 24)] }))
+        .collect();
+    slices.push(serde_json::json!({ "origin": [0, 0, 0], "u": [1, 0, 0], "v": [0, 0, 1], "polylines": [circle(0.3, 32)] }));
+    let file = out.join("sphere.json");
+    std::fs::write(&file, serde_json::json!({ "slices": slices }).to_string()).unwrap();
+    let surface = out.join("from-json");
+    let o =
+        isomorph(&["reconstruct", file.to_str().unwrap(), "--res", "48", "--out", surface.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mesh = read_mesh(surface.join("surface.ply")).unwrap();
+    assert_eq!((mesh.connected_components(), mesh.genus()), (1, Some(0)));
+    let size = mesh.bounds().size();
+    assert!((size.x - 0.6).abs() < 0.05 && (size.z - 0.6).abs() < 0.08, "box {size}");
+
+    // A folder of PNG slices: discs growing then shrinking, a lens.
+    let pngs = out.join("pngs");
+    std::fs::create_dir_all(&pngs).unwrap();
+    for (k, r) in [6.0f32, 11.0, 13.0, 11.0, 6.0].into_iter().enumerate() {
+        let mut image = Image::new(32, 32, [0, 0, 0]);
+        for (x, y) in (0..32).flat_map(|x| (0..32).map(move |y| (x, y))) {
+            if (x as f32 - 15.5).hypot(y as f32 - 15.5) < r {
+                image.set(x, y, [255, 255, 255]);
+            }
+        }
+        image.write_png(pngs.join(format!("slice_{k}.png"))).unwrap();
+    }
+    let lens = out.join("from-pngs");
+    let o =
+        isomorph(&["reconstruct", pngs.to_str().unwrap(), "--res", "40", "--out", lens.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mesh = read_mesh(lens.join("surface.ply")).unwrap();
+    assert_eq!((mesh.connected_components(), mesh.genus()), (1, Some(0)));
+
+    // A slice with two planes is one error line naming the slice.
+    std::fs::write(&file, r#"{"slices": [{"z": 0, "origin": [0, 0, 0], "polylines": []}]}"#).unwrap();
+    let o = isomorph(&["reconstruct", file.to_str().unwrap(), "--out", surface.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("slice 0") && err.contains("either `z`"), "{err}");
+    let _ = std::fs::remove_dir_all(&out);
+}
