@@ -72,6 +72,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
             raw: RawArgs::default(),
             threads: args.threads,
             format: Format::Ply,
+            no_preview: false,
         };
         let out = args.out.join(folder);
         let report = morph(method, &io, settings, &out)?;

@@ -70,6 +70,9 @@ pub struct Io {
     /// Mesh format of the frames.
     #[arg(long, value_enum, default_value_t = Format::Ply)]
     pub format: Format,
+    /// Do not write preview.gif (the frames' renders as a loop).
+    #[arg(long)]
+    pub no_preview: bool,
 }
 
 impl Io {
@@ -125,6 +128,7 @@ impl Io {
             resolution: self.resolution(),
             out_dir: out,
             format: self.format.into(),
+            preview: !self.no_preview,
             source_reference: Some(inputs.0.surface(reference, control)?.into_owned()),
             target_reference: Some(inputs.1.surface(reference, control)?.into_owned()),
             ..ExportSettings::default()

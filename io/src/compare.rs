@@ -10,8 +10,8 @@
 //! `/proc/self/clear_refs`), so it includes the process's baseline, which is
 //! reported beside it; `None` where the system does not tell.
 
-use crate::export::{ExportError, ExportSettings, Exported, Report, frame_tiles};
-use crate::render::{Camera, ContactSheet, RenderError};
+use crate::export::{ExportError, ExportSettings, Exported, PREVIEW_DELAY, Report, frame_tiles};
+use crate::render::{Camera, ContactSheet, Image, RenderError, write_gif};
 use base64::Engine;
 use isomorph_common::{Aabb, BoxedError, BoxedMorph, Control, MorphError, MorphFailure, StageTime, TriMesh};
 use serde::Serialize;
@@ -187,7 +187,8 @@ pub struct Comparison {
 
 /// Runs every candidate on the pair (`source` and `target` name it in the
 /// outputs), exporting each into `settings.out_dir/<name>/`, and writes
-/// `compare.png`, `compare.json`, `compare.md` and `compare.html` into
+/// `compare.png`, `preview.gif` (unless [`ExportSettings::preview`] is
+/// off), `compare.json`, `compare.md` and `compare.html` into
 /// `settings.out_dir`. A method that fails is a [`Status::Failed`] row, one
 /// that does not take the inputs ([`MorphError::UnsupportedInput`]) a
 /// [`Status::Skipped`] row; a cancelled run stops everything.
@@ -255,10 +256,13 @@ pub fn compare(
         frames: settings.frames,
         rows,
     };
-    let sheet = comparison_sheet(&shown, settings);
+    let tiles = method_tiles(&shown, settings);
     let mut png = Vec::new();
-    sheet.write_png_to(&mut png)?;
+    comparison_sheet(&tiles, settings).write_png_to(&mut png)?;
     write(&dir.join("compare.png"), &png)?;
+    if settings.preview && !tiles.is_empty() {
+        write_gif(&comparison_preview(&tiles, settings), PREVIEW_DELAY, dir.join("preview.gif"))?;
+    }
     write(
         &dir.join("compare.json"),
         serde_json::to_string_pretty(&comparison).expect("serializes").as_bytes(),
@@ -286,9 +290,10 @@ fn error_chain(e: &dyn std::error::Error) -> String {
     text
 }
 
-/// One row of tiles per method, the same camera for all (fitted to every
-/// frame of every method) and the same times in each column.
-fn comparison_sheet(shown: &[(String, Exported)], settings: &ExportSettings) -> crate::render::Image {
+/// Every method's frames rendered with one camera (fitted to every frame
+/// of every method), in time order, labelled with the method's name and the
+/// time.
+fn method_tiles(shown: &[(String, Exported)], settings: &ExportSettings) -> Vec<Vec<(Image, String)>> {
     let bounds = shown
         .iter()
         .flat_map(|(_, e)| e.meshes.iter())
@@ -297,21 +302,37 @@ fn comparison_sheet(shown: &[(String, Exported)], settings: &ExportSettings) -> 
     if !bounds.is_empty() {
         render.camera = Some(Camera::fit(&bounds, Camera::DEFAULT_VIEW_DIR));
     }
-    let mut tiles = Vec::new();
-    for (name, exported) in shown {
-        let times: Vec<f32> = exported.report.frames.iter().map(|f| f.t).collect();
-        tiles.extend(
+    shown
+        .iter()
+        .map(|(name, exported)| {
+            let times: Vec<f32> = exported.report.frames.iter().map(|f| f.t).collect();
             frame_tiles(&times, &exported.meshes, &render)
                 .into_iter()
-                .map(|(image, label)| (image, format!("{name} {label}"))),
-        );
-    }
+                .map(|(image, label)| (image, format!("{name} {label}")))
+                .collect()
+        })
+        .collect()
+}
+
+/// One row of tiles per method, the same times in each column.
+fn comparison_sheet(tiles: &[Vec<(Image, String)>], settings: &ExportSettings) -> Image {
     ContactSheet {
         columns: settings.frames as u32,
         title: Some("isomorph compare".into()),
         ..Default::default()
     }
-    .compose(&tiles)
+    .compose(&tiles.concat())
+}
+
+/// The methods side by side, one animation frame per time.
+fn comparison_preview(tiles: &[Vec<(Image, String)>], settings: &ExportSettings) -> Vec<Image> {
+    let sheet = ContactSheet { columns: tiles.len() as u32, ..Default::default() };
+    (0..settings.frames)
+        .map(|i| {
+            let column: Vec<(Image, String)> = tiles.iter().filter_map(|row| row.get(i).cloned()).collect();
+            sheet.compose(&column)
+        })
+        .collect()
 }
 
 fn opt<T: std::fmt::Display>(v: Option<T>) -> String {
@@ -588,6 +609,16 @@ mod tests {
         assert_eq!(ok.genus.last().copied(), Some(Some(1)));
         for file in ["compare.png", "compare.json", "compare.md", "compare.html", "baseline/report.json"] {
             assert!(dir.join(file).is_file(), "{file}");
+        }
+        // The animated previews: 3 frames forward and back are 4 GIF frames.
+        for file in ["preview.gif", "baseline/preview.gif"] {
+            let bytes = std::fs::read(dir.join(file)).unwrap();
+            let mut reader = gif::DecodeOptions::new().read_info(bytes.as_slice()).unwrap();
+            let mut count = 0;
+            while reader.read_next_frame().unwrap().is_some() {
+                count += 1;
+            }
+            assert_eq!(count, 4, "{file}");
         }
         let page = std::fs::read_to_string(dir.join("compare.html")).unwrap();
         assert!(page.contains("data:image/png;base64,iVBOR") && page.matches("<svg").count() == 3);

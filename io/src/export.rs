@@ -28,18 +28,21 @@
 //! [`MorphReport`].
 
 use crate::mesh::{MeshFormat, write_mesh};
-use crate::render::{Camera, Image, RenderSettings, contact_sheet, render};
+use crate::render::{Camera, Image, RenderSettings, contact_sheet, render, write_gif};
 use isomorph_common::mesh::distance::{SurfaceDistance, surface_distance};
 use isomorph_common::{Aabb, Control, Morph, MorphError, TriMesh};
 use isomorph_common::{BoxedError, MorphReport};
 use rayon::prelude::*;
 use serde::Serialize;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// An endpoint frame farther than this (Hausdorff, voxels) from its input
 /// is reported in [`Report::warnings`].
 pub const ENDPOINT_WARNING_VOXELS: f32 = 3.0;
+
+/// Hundredths of a second per frame of `preview.gif`.
+pub const PREVIEW_DELAY: u16 = 12;
 
 /// What to export and how.
 #[derive(Debug, Clone)]
@@ -54,6 +57,9 @@ pub struct ExportSettings {
     pub format: MeshFormat,
     /// Write `contact_sheet.png`.
     pub contact_sheet: bool,
+    /// Write `preview.gif`: the contact sheet's renders as a loop, forward
+    /// and back.
+    pub preview: bool,
     /// Frames per row of the contact sheet.
     pub sheet_columns: u32,
     /// Preview settings of each contact-sheet tile (camera fitted to all frames when `None`).
@@ -76,6 +82,7 @@ impl Default for ExportSettings {
             out_dir: PathBuf::from("out"),
             format: MeshFormat::PlyBinaryLittleEndian,
             contact_sheet: true,
+            preview: true,
             sheet_columns: 5,
             render: RenderSettings { width: 240, height: 240, ..RenderSettings::default() },
             source_reference: None,
@@ -235,8 +242,8 @@ pub struct Exported {
 }
 
 /// Polygonizes `settings.frames` frames of `morph` (in parallel on the
-/// control's threads), writes `frame_NNN.<ext>`, `contact_sheet.png` and
-/// `report.json` into `settings.out_dir`, and returns the report with the
+/// control's threads), writes `frame_NNN.<ext>`, `contact_sheet.png`,
+/// `preview.gif` and `report.json` into `settings.out_dir`, and returns the report with the
 /// meshes. Progress is reported as stage `"frames"`.
 ///
 /// # Errors
@@ -325,10 +332,18 @@ fn export_on_pool<M: Morph + ?Sized>(
         ));
     }
 
-    if settings.contact_sheet {
+    if settings.contact_sheet || settings.preview {
         control.check()?;
         control.progress("contact sheet", None, String::new);
-        write_contact_sheet(&frames, &meshes, settings, &dir.join("contact_sheet.png"))?;
+        let times: Vec<f32> = frames.iter().map(|f| f.t).collect();
+        let tiles = frame_tiles(&times, &meshes, &settings.render);
+        if settings.contact_sheet {
+            contact_sheet(&tiles, settings.sheet_columns).write_png(dir.join("contact_sheet.png"))?;
+        }
+        if settings.preview {
+            let images: Vec<Image> = tiles.into_iter().map(|(image, _)| image).collect();
+            write_gif(&images, PREVIEW_DELAY, dir.join("preview.gif"))?;
+        }
     }
 
     control.check()?;
@@ -400,18 +415,4 @@ pub fn frame_tiles(
         }
     }
     times.par_iter().zip(meshes).map(|(t, m)| (render(m, &settings), format!("t = {t:.2}"))).collect()
-}
-
-/// Renders every frame with one camera fitted to all of them and tiles the
-/// images, labelled with their times.
-fn write_contact_sheet(
-    frames: &[FrameReport],
-    meshes: &[TriMesh],
-    settings: &ExportSettings,
-    path: &Path,
-) -> Result<(), ExportError> {
-    let times: Vec<f32> = frames.iter().map(|f| f.t).collect();
-    let tiles = frame_tiles(&times, meshes, &settings.render);
-    contact_sheet(&tiles, settings.sheet_columns).write_png(path)?;
-    Ok(())
 }

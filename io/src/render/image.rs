@@ -122,7 +122,7 @@ impl From<png::EncodingError> for RenderError {
     fn from(e: png::EncodingError) -> Self {
         match e {
             png::EncodingError::IoError(io) => RenderError::Io(io),
-            other => RenderError::Encode(other.to_string()),
+            other => RenderError::Encode(format!("PNG encoding failed: {other}")),
         }
     }
 }

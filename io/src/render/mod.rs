@@ -6,7 +6,8 @@
 //! highlight, relative to the camera). Both sides of every triangle are
 //! drawn, the back side in [`RenderSettings::back_color`], so open meshes and
 //! inside-out patches are visible. [`contact_sheet`] tiles labelled frames
-//! into one image, and [`Image::write_png`] saves any of them.
+//! into one image, [`Image::write_png`] saves any of them and [`write_gif`]
+//! saves a sequence as a looping animation.
 //!
 //! ```
 //! use isomorph_io::render::{render, RenderSettings};
@@ -32,6 +33,7 @@
 //! corner or an out-of-range index are skipped, an empty mesh gives a plain
 //! background image.
 
+mod animation;
 mod camera;
 mod font;
 mod image;
@@ -39,6 +41,7 @@ mod raster;
 mod shade;
 mod sheet;
 
+pub use animation::{write_gif, write_gif_to};
 pub use camera::Camera;
 pub use font::text_size;
 pub use image::Image;
@@ -57,11 +60,14 @@ pub enum RenderError {
     /// The file could not be created or written.
     #[error("could not write the image: {0}")]
     Io(#[from] std::io::Error),
-    /// The PNG encoder rejected the image.
-    #[error("PNG encoding failed: {0}")]
+    /// The PNG or GIF encoder rejected the image(s).
+    #[error("{0}")]
     Encode(String),
-    /// The image has no pixels; PNG needs at least one row and column.
-    #[error("cannot save a {width}×{height} image: PNG needs a width and height of at least 1")]
+    /// The image has no pixels, or more than a GIF can hold (65535 per
+    /// side).
+    #[error(
+        "cannot save a {width}×{height} image: it needs a width and height of at least 1 (at most 65535 for a GIF)"
+    )]
     EmptyImage {
         /// Width in pixels.
         width: u32,
