@@ -19,12 +19,17 @@ pub enum Format {
     Ply,
     /// Wavefront OBJ.
     Obj,
+    /// One USD stage (`morph.usda`) holding every frame as a time sample,
+    /// instead of one file per frame.
+    Usd,
 }
 
-impl From<Format> for MeshFormat {
-    fn from(f: Format) -> Self {
-        match f {
-            Format::Ply => MeshFormat::PlyBinaryLittleEndian,
+impl Format {
+    /// The frame file format (PLY for `usd`, whose frames are not written
+    /// one by one).
+    fn mesh_format(self) -> MeshFormat {
+        match self {
+            Format::Ply | Format::Usd => MeshFormat::PlyBinaryLittleEndian,
             Format::Obj => MeshFormat::Obj,
         }
     }
@@ -127,7 +132,9 @@ impl Io {
             frames: self.frames as usize,
             resolution: self.resolution(),
             out_dir: out,
-            format: self.format.into(),
+            format: self.format.mesh_format(),
+            frame_files: self.format != Format::Usd,
+            usd: self.format == Format::Usd,
             preview: !self.no_preview,
             source_reference: Some(inputs.0.surface(reference, control)?.into_owned()),
             target_reference: Some(inputs.1.surface(reference, control)?.into_owned()),
@@ -232,5 +239,11 @@ pub fn print_summary(report: &Report, io: &Io, out: &Path) {
             );
         }
     }
-    println!("  wrote {}/frame_*.{{ply,obj}}, contact_sheet.png, report.json", out.display());
+    let frames = match io.format {
+        Format::Usd => "morph.usda",
+        Format::Ply => "frame_*.ply",
+        Format::Obj => "frame_*.obj",
+    };
+    let preview = if io.no_preview { "" } else { ", preview.gif" };
+    println!("  wrote {}/{frames}, contact_sheet.png{preview}, report.json", out.display());
 }

@@ -658,3 +658,28 @@ fn reconstruct_takes_a_slices_file_and_a_folder_of_pngs() {
     assert!(!o.status.success() && err.contains("slice 0") && err.contains("either `z`"), "{err}");
     let _ = std::fs::remove_dir_all(&out);
 }
+
+#[test]
+fn usd_format_writes_one_stage_with_a_sample_per_frame() {
+    let out = scratch("usd");
+    let args = ["morph", "--method", "baseline", "--source", "sphere", "--target", "torus", "--res", "24"];
+    let o = isomorph(
+        &[&args[..], &["--frames", "3", "--format", "usd", "--no-preview", "--out", out.to_str().unwrap()]]
+            .concat(),
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(!out.join("frame_000.ply").exists() && !out.join("preview.gif").exists());
+    let text = std::fs::read_to_string(out.join("morph.usda")).unwrap();
+    assert!(text.starts_with("#usda 1.0") && text.contains("endTimeCode = 2"), "{}", &text[..300]);
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    let frames = report["frames"].as_array().unwrap();
+    assert_eq!(frames[2]["file"], "morph.usda@2");
+    // Each frame's vertex count is its sample's point count.
+    let points = &text[text.find("point3f[] points.timeSamples").unwrap()..];
+    for (i, frame) in frames.iter().enumerate() {
+        let line = points.lines().find(|l| l.trim_start().starts_with(&format!("{i}: ["))).unwrap();
+        assert_eq!(line.matches('(').count() as u64, frame["vertices"].as_u64().unwrap(), "frame {i}");
+    }
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -29,17 +29,22 @@
 
 use crate::mesh::{MeshFormat, write_mesh};
 use crate::render::{Camera, Image, RenderSettings, contact_sheet, render, write_gif};
+use crate::usd::{UsdSettings, write_usda};
 use isomorph_common::mesh::distance::{SurfaceDistance, surface_distance};
 use isomorph_common::{Aabb, Control, Morph, MorphError, TriMesh};
 use isomorph_common::{BoxedError, MorphReport};
 use rayon::prelude::*;
 use serde::Serialize;
+use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
 /// An endpoint frame farther than this (Hausdorff, voxels) from its input
 /// is reported in [`Report::warnings`].
 pub const ENDPOINT_WARNING_VOXELS: f32 = 3.0;
+
+/// The USD stage of the whole sequence ([`ExportSettings::usd`]).
+pub const USD_FILE: &str = "morph.usda";
 
 /// Hundredths of a second per frame of `preview.gif`.
 pub const PREVIEW_DELAY: u16 = 12;
@@ -55,6 +60,11 @@ pub struct ExportSettings {
     pub out_dir: PathBuf,
     /// Mesh file format of the frames.
     pub format: MeshFormat,
+    /// Write each frame as `frame_NNN.<ext>` (default true).
+    pub frame_files: bool,
+    /// Write the whole sequence as one USD stage, `morph.usda` (a mesh with
+    /// a time sample per frame, see [`crate::usd`]).
+    pub usd: bool,
     /// Write `contact_sheet.png`.
     pub contact_sheet: bool,
     /// Write `preview.gif`: the contact sheet's renders as a loop, forward
@@ -81,6 +91,8 @@ impl Default for ExportSettings {
             resolution: 64,
             out_dir: PathBuf::from("out"),
             format: MeshFormat::PlyBinaryLittleEndian,
+            frame_files: true,
+            usd: false,
             contact_sheet: true,
             preview: true,
             sheet_columns: 5,
@@ -140,7 +152,9 @@ pub enum ExportError {
 pub struct FrameReport {
     /// Morph time.
     pub t: f32,
-    /// Mesh file name inside the output folder.
+    /// Mesh file name inside the output folder; `morph.usda@N` (time code
+    /// `N` of the USD stage) when only the stage is written, empty when
+    /// neither is.
     pub file: String,
     /// Vertex count.
     pub vertices: usize,
@@ -285,8 +299,15 @@ fn export_on_pool<M: Morph + ?Sized>(
             let mesh = morph
                 .frame_mesh(t, settings.resolution)
                 .map_err(|e| ExportError::Frame { t, source: BoxedError::new(e) })?;
-            let file = format!("frame_{i:03}.{}", settings.format.extension());
-            write_mesh(&mesh, dir.join(&file), settings.format)?;
+            let file = if settings.frame_files {
+                let file = format!("frame_{i:03}.{}", settings.format.extension());
+                write_mesh(&mesh, dir.join(&file), settings.format)?;
+                file
+            } else if settings.usd {
+                format!("{USD_FILE}@{i}")
+            } else {
+                String::new()
+            };
             let m = mesh.metrics();
             let report = FrameReport {
                 t,
@@ -332,6 +353,15 @@ fn export_on_pool<M: Morph + ?Sized>(
         ));
     }
 
+    if settings.usd {
+        control.check()?;
+        let usd =
+            UsdSettings { doc: format!("isomorph morph: {}", morph.method()), ..UsdSettings::default() };
+        let path = dir.join(USD_FILE);
+        let io_error = |source| ExportError::Io { path: path.clone(), source };
+        let mut file = std::io::BufWriter::new(std::fs::File::create(&path).map_err(io_error)?);
+        write_usda(&meshes, &usd, &mut file).and_then(|()| file.flush()).map_err(io_error)?;
+    }
     if settings.contact_sheet || settings.preview {
         control.check()?;
         control.progress("contact sheet", None, String::new);

@@ -13,3 +13,4 @@ pub mod npy;
 pub mod png_gray;
 pub mod raw;
 pub mod render;
+pub mod usd;
