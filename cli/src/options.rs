@@ -42,6 +42,11 @@ pub struct MethodArgs {
     /// The radial kernel.
     #[arg(long, help_heading = "RBF (Turk & O'Brien)", value_enum, default_value_t = KernelArg::from(RbfSettings::default().kernel))]
     pub kernel: KernelArg,
+    /// Fit to this tolerance through greedily chosen centres (FastRBF)
+    /// instead of interpolating every constraint: relative to the normal
+    /// constraints' value, 0.001–1; allows up to 250000 --points.
+    #[arg(long, help_heading = "RBF (Turk & O'Brien)")]
+    pub tolerance: Option<f64>,
 
     /// How the source is carried onto the target: `identity` (a plain
     /// cross-dissolve) or `align` (moment alignment as a B-spline warp);
@@ -92,7 +97,7 @@ pub struct MethodArgs {
 }
 
 /// Which options belong to which method (by their argument ids).
-const OWNERS: [(&str, &[Method]); 18] = [
+const OWNERS: &[(&str, &[Method])] = &[
     ("align", &[Method::LevelSet]),
     ("solver", &[Method::LevelSet]),
     ("curvature", &[Method::LevelSet]),
@@ -100,6 +105,7 @@ const OWNERS: [(&str, &[Method]); 18] = [
     ("points", &[Method::Rbf]),
     ("separation", &[Method::Rbf]),
     ("kernel", &[Method::Rbf]),
+    ("tolerance", &[Method::Rbf]),
     ("warp_spec", &[Method::Warp]),
     ("landmarks", &[Method::Warp, Method::Rbf]),
     ("control_spacing", &[Method::Warp]),
@@ -166,6 +172,7 @@ impl MethodArgs {
         r.points = self.points;
         r.separation = self.separation;
         r.kernel = self.kernel.into();
+        r.tolerance = self.tolerance;
         settings.rbf_correspondences.clone_from(&self.landmarks);
 
         let w = &mut settings.warp;

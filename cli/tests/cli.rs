@@ -683,3 +683,28 @@ fn usd_format_writes_one_stage_with_a_sample_per_frame() {
     }
     let _ = std::fs::remove_dir_all(&out);
 }
+
+#[test]
+fn rbf_tolerance_fits_many_points_through_fewer_centres() {
+    let out = scratch("rbf-greedy");
+    let args = [
+        "morph", "--method", "rbf", "--source", "sphere", "--target", "torus", "--res", "32", "--frames", "3",
+    ];
+    let greedy = ["--points", "1500", "--tolerance", "0.05", "--no-preview", "--out", out.to_str().unwrap()];
+    let o = isomorph(&[&args[..], &greedy[..]].concat());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    let morph = &report["morph"];
+    assert_eq!(morph["outcome"], "converged", "{morph}");
+    let centres = morph["details"]["constraints"].as_u64().unwrap();
+    assert!(centres < 6000 && morph["details"]["input_constraints"] == 6000, "{morph}");
+    assert!(morph["residual"]["value"].as_f64().unwrap() <= 0.05, "{morph}");
+    // Without a tolerance, 9000 points are over the exact fit's limit.
+    let o = isomorph(&[&args[..], &["--points", "9000", "--out", out.to_str().unwrap()]].concat());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("points"), "{err}");
+    let o = isomorph(&[&args[..], &["--tolerance", "0", "--out", out.to_str().unwrap()]].concat());
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("tolerance"));
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -3,6 +3,7 @@
 
 use crate::duplicates::{DuplicatePolicy, dedup};
 use crate::error::RbfError;
+use crate::greedy::{Centres, GreedyReport, fit_greedy};
 use crate::kernel::Kernel;
 use crate::slice::{Slice2, Slice3, SliceEval};
 pub use crate::solve::{Factorization, Solver};
@@ -47,6 +48,10 @@ pub struct FitSettings {
     /// for two separated groups of constraints, the dense Cholesky
     /// otherwise).
     pub solver: Solver,
+    /// Which constraints become centres (default [`Centres::All`]: exact
+    /// interpolation; [`Centres::Greedy`] fits to a tolerance through fewer
+    /// centres).
+    pub centres: Centres,
 }
 
 impl Default for FitSettings {
@@ -58,6 +63,7 @@ impl Default for FitSettings {
             duplicates: DuplicatePolicy::MergeEqual,
             check_residual: true,
             solver: Solver::Auto,
+            centres: Centres::All,
         }
     }
 }
@@ -84,8 +90,13 @@ pub struct FitReport {
     /// system; values near machine epsilon (`2e-16`) mean digits are lost.
     pub rcond: f64,
     /// Largest `|f(c_i) − h_i|` over the constraints, relative to the largest
-    /// `|h_i|` (`None` when [`FitSettings::check_residual`] is off).
+    /// `|h_i|` (`None` when [`FitSettings::check_residual`] is off). With
+    /// [`Centres::Greedy`], over every input constraint, not only the
+    /// centres (evaluated in f32, to about `1e-4`).
     pub max_residual: Option<f64>,
+    /// The greedy selection's rounds ([`Centres::Greedy`] with more
+    /// constraints than its initial subset).
+    pub greedy: Option<GreedyReport>,
 }
 
 /// A fitted variational implicit function in `D` dimensions (`D = 2..=6`).
@@ -135,6 +146,21 @@ impl<const D: usize> Interpolant<D> {
     /// dimensions, [`RbfError::Singular`] when even the indefinite fallback
     /// finds the system singular.
     pub fn fit(constraints: &[Constraint<D>], settings: &FitSettings) -> Result<Self, RbfError> {
+        match settings.centres {
+            Centres::Greedy(greedy) if constraints.len() > greedy.initial => {
+                Self::check_input(constraints, settings)?;
+                let (mut fit, report) =
+                    fit_greedy(constraints, &greedy, |subset| Self::fit_all(subset, settings))?;
+                fit.report.max_residual = report.rounds.last().map(|r| r.max_residual);
+                fit.report.greedy = Some(report);
+                Ok(fit)
+            }
+            _ => Self::fit_all(constraints, settings),
+        }
+    }
+
+    /// The settings and constraints [`Interpolant::fit`] refuses.
+    fn check_input(constraints: &[Constraint<D>], settings: &FitSettings) -> Result<(), RbfError> {
         const { assert!(D >= 2 && D <= 6, "Interpolant supports 2 to 6 dimensions") };
         if !(settings.smoothing >= 0.0 && settings.smoothing.is_finite()) {
             return Err(
@@ -160,6 +186,12 @@ impl<const D: usize> Interpolant<D> {
         if constraints.len() < D + 1 {
             return Err(RbfError::TooFewConstraints { got: constraints.len(), needed: D + 1, dim: D });
         }
+        Ok(())
+    }
+
+    /// Interpolates every constraint.
+    fn fit_all(constraints: &[Constraint<D>], settings: &FitSettings) -> Result<Self, RbfError> {
+        Self::check_input(constraints, settings)?;
         // Normalize: bounding-box centre to the origin, unit diagonal.
         let mut lo = [f64::INFINITY; D];
         let mut hi = [f64::NEG_INFINITY; D];
@@ -196,6 +228,7 @@ impl<const D: usize> Interpolant<D> {
                 factorization: sol.factorization,
                 rcond: sol.rcond,
                 max_residual: None,
+                greedy: None,
             },
         };
         if settings.check_residual {
@@ -268,6 +301,15 @@ impl<const D: usize> Interpolant<D> {
 
     fn normalize(&self, x: &[f64; D]) -> [f64; D] {
         std::array::from_fn(|k| (x[k] - self.shift[k]) * self.scale)
+    }
+
+    /// `f` at the constraints' positions, in f32 batches (as slices
+    /// evaluate: within about `1e-4` of the f64 value).
+    pub(crate) fn values_at(&self, constraints: &[Constraint<D>]) -> Result<Vec<f32>, RbfError> {
+        let points: Vec<[f32; D]> = constraints.iter().map(|c| c.position).collect();
+        let mut out = vec![0.0; points.len()];
+        self.slice_eval::<D>(&[])?.values(&points, &mut out);
+        Ok(out)
     }
 
     /// `f(x)` in f64 (exact evaluation, `O(n)`; use slices for batches).

@@ -106,6 +106,7 @@ pub mod constraints;
 pub mod figures;
 
 mod error;
+mod greedy;
 mod image;
 mod influence;
 mod interpolant;
@@ -121,6 +122,7 @@ mod solve;
 
 pub use duplicates::DuplicatePolicy;
 pub use error::RbfError;
+pub use greedy::{Centres, GreedyReport, GreedyRound, GreedySettings};
 pub use image::image_constraints;
 pub use influence::{InfluencePath, InfluenceShapes};
 pub use interpolant::{Constraint, FitReport, FitSettings, Interpolant};

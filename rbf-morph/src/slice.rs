@@ -140,7 +140,7 @@ impl<const S: usize> SliceEval<S> {
     }
 
     /// Values at `points` into `out`, parallel over blocks of points.
-    fn values<P: AsPoint<S>>(&self, points: &[P], out: &mut [f32]) {
+    pub(crate) fn values<P: AsPoint<S>>(&self, points: &[P], out: &mut [f32]) {
         assert_eq!(points.len(), out.len(), "values: points and out differ in length");
         points.par_chunks(TASK).zip(out.par_chunks_mut(TASK)).for_each(|(p, o)| self.run(p, o));
     }

@@ -5,6 +5,7 @@
 use crate::Kernel;
 use crate::constraints::{NormalOffset, Subsample, SurfaceSettings, mesh_constraints};
 use crate::error::RbfError;
+use crate::greedy::{Centres, GreedySettings};
 use crate::interpolant::{Constraint, FitSettings, Interpolant};
 use crate::slice::{Slice2, Slice3};
 use glam::{UVec2, Vec2, Vec3};
@@ -103,13 +104,21 @@ fn check_separation(settings: &TransformSettings) -> Result<(), RbfError> {
     Ok(())
 }
 
+/// Most surface points per shape for an exact fit (`4 · points`
+/// constraints in a dense system).
+const MOST_POINTS: u64 = 8000;
+
+/// Most surface points per shape with greedy centres.
+const MOST_GREEDY_POINTS: u64 = 250_000;
+
 /// Settings of [`RbfMorph::new`]: how many surface points of each solid
 /// become constraints, and the fit.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RbfSettings {
     /// Surface points per shape, chosen by farthest-point sampling (each
     /// gives a boundary and a normal constraint: `4 · points` constraints in
-    /// all; 8–8000, default 400). The fit costs `O(points³)`.
+    /// all; 8–8000, or up to 250000 with a [`RbfSettings::tolerance`];
+    /// default 400). The exact fit costs `O(points³)`.
     pub points: usize,
     /// The separation `t_max` of the shapes along the fourth axis, in world
     /// units (paper §6.2: small keeps local features, large lets the global
@@ -127,6 +136,12 @@ pub struct RbfSettings {
     /// fraction of the union's diagonal (0–2, default 0.1): in-between
     /// shapes may bulge beyond both inputs.
     pub margin: f32,
+    /// Fit to this tolerance through greedily chosen centres (FastRBF's
+    /// "fit to an accuracy", [`Centres::Greedy`]) instead of interpolating
+    /// every constraint: relative to the normal constraints' value, 1e-3 to
+    /// 1. With it, `points` may go up to 250000 per shape. Default `None`
+    /// (exact).
+    pub tolerance: Option<f64>,
 }
 
 impl Default for RbfSettings {
@@ -138,6 +153,7 @@ impl Default for RbfSettings {
             normal_offset: 0.01,
             surface_resolution: 64,
             margin: 0.1,
+            tolerance: None,
         }
     }
 }
@@ -148,7 +164,11 @@ impl RbfSettings {
     /// # Errors
     /// [`MorphError::BadSetting`] naming the field, its value and the range.
     pub fn validate(&self) -> Result<(), MorphError> {
-        check::count("points", self.points as u64, 8, 8000)?;
+        let most_points = if self.tolerance.is_some() { MOST_GREEDY_POINTS } else { MOST_POINTS };
+        check::count("points", self.points as u64, 8, most_points)?;
+        if let Some(tolerance) = self.tolerance {
+            GreedySettings { tolerance, ..GreedySettings::default() }.validate()?;
+        }
         check::positive("separation", f64::from(self.separation))?;
         check::range("normal_offset", f64::from(self.normal_offset), 1e-6, 0.2)?;
         check::count("surface_resolution", u64::from(self.surface_resolution), 16, 1024)?;
@@ -159,8 +179,12 @@ impl RbfSettings {
 impl RbfSettings {
     /// The paper-level settings of the fit these settings describe.
     pub fn transform(&self) -> TransformSettings {
+        let centres = match self.tolerance {
+            Some(tolerance) => Centres::Greedy(GreedySettings { tolerance, ..GreedySettings::default() }),
+            None => Centres::All,
+        };
         TransformSettings {
-            fit: FitSettings::default().with_kernel(self.kernel),
+            fit: FitSettings { centres, ..FitSettings::default().with_kernel(self.kernel) },
             separation: self.separation,
             margin: self.margin,
         }
@@ -286,12 +310,24 @@ impl RbfMorph {
         let bounds = Aabb::new(Vec3::from_array(lo), Vec3::from_array(hi));
         let fit = interpolant.report();
         let n = fit.constraints;
-        let mut report = MorphReport::new("rbf", Outcome::Direct)
+        // The greedy selection is iterative: converged when every constraint
+        // is within its tolerance, capped at its most centres otherwise.
+        let outcome = match &fit.greedy {
+            None => Outcome::Direct,
+            Some(g) if g.converged => Outcome::Converged,
+            Some(_) => Outcome::IterationCap,
+        };
+        let mut report = MorphReport::new("rbf", outcome)
             .with_rcond(fit.rcond)
             .with_memory(n * (4 + 1) * size_of::<f64>(), Some(12 * n * n))
             .with_detail("constraints", n)
             .with_detail("merged", fit.merged)
             .with_detail("factorization", format!("{:?}", fit.factorization).as_str());
+        if let Some(g) = &fit.greedy {
+            report = report
+                .with_iterations(g.rounds.len())
+                .with_detail("input_constraints", source.len() + target.len());
+        }
         if let Some(r) = fit.max_residual {
             report = report.with_residual(Residual {
                 what: "largest residual at the constraints",
