@@ -138,9 +138,9 @@ pub struct RbfSettings {
     pub margin: f32,
     /// Fit to this tolerance through greedily chosen centres (FastRBF's
     /// "fit to an accuracy", [`Centres::Greedy`]) instead of interpolating
-    /// every constraint: relative to the normal constraints' value, 1e-3 to
-    /// 1. With it, `points` may go up to 250000 per shape. Default `None`
-    /// (exact).
+    /// every constraint: relative to the normal constraints' value, from
+    /// 1e-3 to 1. With it, `points` may go up to 250000 per shape. Default
+    /// `None` (exact).
     pub tolerance: Option<f64>,
 }
 
