@@ -761,6 +761,185 @@ mod tests {
         assert_eq!(again.threshold(), 0.4);
     }
 
+    fn ron(text: &str) -> BlobTree {
+        BlobTree::from_ron(text).unwrap_or_else(|e| panic!("{text}: {e}"))
+    }
+
+    /// The tagged format reads RON through `deserialize_any`: integers and
+    /// floats, tuples, bare and `Some(..)` optional fields, every `p` and
+    /// `frame` form read as they did, and JSON gives the same trees.
+    #[test]
+    fn numbers_tuples_options_and_frames_read_as_before() {
+        let float = ron(r#"(root: (kind: "point", vertices: [(0.0, 0.0, 0.0)], radius: 1.0))"#);
+        let int = ron(r#"(root: (kind: "point", vertices: [(0, 0, 0)], radius: 1))"#);
+        assert_eq!(float.root(), int.root());
+        let Node::Primitive(p) = int.root() else { panic!("a primitive") };
+        assert_eq!((p.kernel, p.p, p.frame), (Kernel::new(1.0, 1.0, 1.0), 2.0, Affine3A::IDENTITY));
+        // Optional fields: bare, `Some(..)`, or absent (defaults).
+        let bare = ron(
+            r#"(root: (kind: "segment", vertices: [(0,0,0), (1,0,0)], radius: 1, intensity: 2, stiffness: 0.5, p: 3))"#,
+        );
+        let some = ron(
+            r#"(root: (kind: "segment", vertices: [(0,0,0), (1,0,0)], radius: 1, intensity: Some(2), stiffness: Some(0.5), p: Some(3)))"#,
+        );
+        assert_eq!(bare.root(), some.root());
+        let Node::Primitive(p) = bare.root() else { panic!("a primitive") };
+        assert_eq!((p.kernel, p.p), (Kernel::new(2.0, 1.0, 0.5), 3.0));
+        for inf in [r#""inf""#, r#""Infinity""#, "inf"] {
+            let t = ron(&format!(r#"(root: (kind: "box", half: (1, 2, 3), radius: 1, p: {inf}))"#));
+            let Node::Primitive(p) = t.root() else { panic!("a primitive") };
+            assert_eq!(p.p, f32::INFINITY);
+            assert_eq!(p.skeleton, Skeleton::cuboid(Vec3::new(1.0, 2.0, 3.0)));
+        }
+        let (_, e) = problem(r#"(root: (kind: "point", vertices: [(0,0,0)], radius: 1, p: "big"))"#);
+        assert_eq!(e, NodeProblem::NotFinite("p"));
+        // Frames: translate · rotate · scale, or a matrix; `()` is the identity.
+        let trs = ron(r#"(root: (kind: "point", vertices: [(0,0,0)], radius: 1,
+                frame: (translate: (1, 0, 0), rotate: (axis: (0, 0, 2), degrees: 90), scale: (2, 2, 2))))"#);
+        let Node::Primitive(p) = trs.root() else { panic!("a primitive") };
+        let expected = Affine3A::from_scale_rotation_translation(
+            Vec3::splat(2.0),
+            Quat::from_axis_angle(Vec3::Z, 90f32.to_radians()),
+            Vec3::X,
+        );
+        assert_eq!(p.frame, expected);
+        let mut cols = [0.0; 12];
+        expected.write_cols_to_slice(&mut cols);
+        let m = cols.map(|c| c.to_string()).join(", ");
+        let matrix = ron(&format!(
+            r#"(root: (kind: "point", vertices: [(0,0,0)], radius: 1, frame: (matrix: ({m}))))"#
+        ));
+        assert_eq!(matrix.root(), trs.root());
+        for empty in ["()", "(translate: None)"] {
+            let t = ron(&format!(
+                r#"(root: (kind: "affine", frame: {empty}, children: [(kind: "point", vertices: [(0,0,0)], radius: 1)]))"#
+            ));
+            assert!(matches!(t.root(), Node::Warp { warp: Warp::Affine(m), .. } if *m == Affine3A::IDENTITY));
+        }
+        // The same scenes as JSON.
+        let json = |text: &str| BlobTree::from_json(text).unwrap_or_else(|e| panic!("{text}: {e}"));
+        assert_eq!(
+            json(r#"{"root": {"kind": "point", "vertices": [[0, 0, 0]], "radius": 1}}"#).root(),
+            int.root()
+        );
+        assert_eq!(
+            json(r#"{"root": {"kind": "segment", "vertices": [[0,0,0], [1,0,0]], "radius": 1, "intensity": 2, "stiffness": 0.5, "p": 3, "frame": null}}"#)
+                .root(),
+            bare.root()
+        );
+        assert_eq!(
+            json(&format!(r#"{{"root": {{"kind": "point", "vertices": [[0,0,0]], "radius": 1, "frame": {{"matrix": [{m}]}}}}}}"#))
+                .root(),
+            trs.root()
+        );
+        let t = json(
+            r#"{"root": {"kind": "affine", "frame": {}, "children": [{"kind": "point", "vertices": [[0,0,0]], "radius": 1}]}}"#,
+        );
+        assert!(matches!(t.root(), Node::Warp { warp: Warp::Affine(m), .. } if *m == Affine3A::IDENTITY));
+        // Defaults of operators: a difference's level is the threshold, a bend's centre 0.
+        let t = ron(
+            r#"(threshold: 0.4, root: (kind: "bend", rate: 1, min: -1, max: 1, children: [(kind: "difference", children: [
+                (kind: "point", vertices: [(0,0,0)], radius: 1), (kind: "point", vertices: [(1,0,0)], radius: 1)])]))"#,
+        );
+        let Node::Warp { warp, child } = t.root() else { panic!("a warp") };
+        assert_eq!(*warp, Warp::Bend { rate: 1.0, centre: 0.0, min: -1.0, max: 1.0 });
+        assert!(matches!(**child, Node::Difference { level, .. } if level == 0.4));
+    }
+
+    /// Fields a kind does not have (misspelled, or another kind's), repeated
+    /// fields and non-string kinds are refused with the node's path.
+    #[test]
+    fn unknown_and_repeated_fields_are_clear_errors() {
+        let parse = |r: Result<BlobTree, BlobError>| match r {
+            Err(BlobError::Parse { format, message, .. }) => (format, message),
+            other => panic!("expected a parse error, got {other:?}"),
+        };
+        let (f, m) = parse(BlobTree::from_ron(
+            r#"(root: (kind: "blend", children: [(kind: "point", vertices: [(0,0,0)], radius: 1),
+                (kind: "point", vertices: [(0,0,0)], radius: 1, stifness: 2)]))"#,
+        ));
+        assert_eq!(f, "RON");
+        assert_eq!(
+            m,
+            "node root/1: a `point` node has no field `stifness` (its fields: `vertices`, `radius`, \
+             `intensity`, `stiffness`, `p`, `frame`)"
+        );
+        let (f, m) = parse(BlobTree::from_json(
+            r#"{"root": {"kind": "taper", "slope": 0.1, "min": 0, "children": [{"kind": "point", "vertices": [[0,0,0]], "radius": 1}]}}"#,
+        ));
+        assert_eq!(f, "JSON");
+        assert!(m.starts_with("node root: a `taper` node has no field `min`"), "{m}");
+        let (_, m) = parse(BlobTree::from_ron(
+            r#"(root: (kind: "point", vertices: [(0,0,0)], radius: 1, half: (1,1,1)))"#,
+        ));
+        assert!(m.starts_with("node root: a `point` node has no field `half`"), "{m}");
+        let (_, m) = parse(BlobTree::from_ron(
+            r#"(root: (kind: "point", vertices: [(0,0,0)], radius: 1, children: []))"#,
+        ));
+        assert!(m.contains("has no field `children`"), "{m}");
+        let (_, m) = parse(BlobTree::from_ron(
+            r#"(root: (kind: "point", vertices: [(0,0,0)], radius: 1, radius: 2))"#,
+        ));
+        assert!(m.contains("duplicate field `radius`"), "{m}");
+        let (_, m) = parse(BlobTree::from_json(
+            r#"{"root": {"kind": "point", "vertices": [[0,0,0]], "radius": 1, "radius": 2}}"#,
+        ));
+        assert!(m.contains("duplicate field `radius`"), "{m}");
+        let (_, m) =
+            parse(BlobTree::from_ron(r#"(root: (kind: "union", children: [(kind: 1, radius: 1)]))"#));
+        assert!(m.starts_with("node root/0: `kind` must be a string"), "{m}");
+        let (_, m) =
+            parse(BlobTree::from_ron(r#"(root: (kind: "point", vertices: [(0,0,0)], radius: "big"))"#));
+        assert!(m.starts_with("node root: "), "{m}");
+        let (_, m) = parse(BlobTree::from_ron(
+            r#"(root: (kind: "point", vertices: [(0,0,0)], radius: 1), colour: 2)"#,
+        ));
+        assert!(m.contains("colour"), "{m}");
+        assert_eq!(problem(r#"(root: (radius: 1))"#), (vec![], NodeProblem::MissingField("kind")));
+        assert_eq!(
+            problem(r#"(root: (kind: "union", children: [(kind: "taper", children: [])]))"#),
+            (vec![0], NodeProblem::MissingField("slope"))
+        );
+        assert_eq!(
+            BlobTree::from_json(r#"{"root": {"kind": "union", "children": [{"kind": "Point"}]}}"#)
+                .unwrap_err()
+                .to_string(),
+            r#"node root/0: unknown kind "Point""#
+        );
+    }
+
+    /// Every built-in scene is written and read back to the same tree.
+    #[test]
+    fn built_in_scenes_round_trip_exactly() {
+        for name in crate::scenes::NAMES {
+            let tree = crate::scenes::load(name).unwrap();
+            let again = BlobTree::from_ron(&tree.to_ron().unwrap()).unwrap();
+            assert_eq!(again.root(), tree.root(), "{name} through RON");
+            assert_eq!(again.threshold(), tree.threshold());
+            let again = BlobTree::from_json(&tree.to_json().unwrap()).unwrap();
+            assert_eq!(again.root(), tree.root(), "{name} through JSON");
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+        /// Random trees of every node kind are written and read back to
+        /// the same tree, through RON and JSON.
+        #[test]
+        fn random_trees_round_trip_exactly(node in crate::testutil::tree()) {
+            let Ok(tree) = BlobTree::new(node, 0.5) else { return Ok(()) };
+            if tree.root().peak_bound() <= 0.5 {
+                return Ok(());
+            }
+            let ron_text = tree.to_ron().unwrap();
+            let again = BlobTree::from_ron(&ron_text).unwrap();
+            proptest::prop_assert_eq!(again.root(), tree.root(), "{}", ron_text);
+            let json_text = tree.to_json().unwrap();
+            let again = BlobTree::from_json(&json_text).unwrap();
+            proptest::prop_assert_eq!(again.root(), tree.root(), "{}", json_text);
+        }
+    }
+
     /// Finite but absurd magnitudes (which used to polygonize to nothing, or
     /// to a NaN grid) are refused up front, naming the node and the field.
     #[test]
