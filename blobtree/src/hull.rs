@@ -9,7 +9,7 @@ use glam::{DVec2, DVec3};
 
 /// The combinatorial structure of a convex hull, as indices into the input.
 #[derive(Debug, Clone, PartialEq)]
-pub enum HullShape {
+pub(crate) enum HullShape {
     /// All points coincide.
     Point(usize),
     /// All points on a line: the two extreme points.
@@ -30,7 +30,7 @@ pub enum HullShape {
 
 impl HullShape {
     /// The indices of the hull's vertices (sorted, unique).
-    pub fn vertices(&self) -> Vec<usize> {
+    pub(crate) fn vertices(&self) -> Vec<usize> {
         let mut v: Vec<usize> = match self {
             HullShape::Point(i) => vec![*i],
             HullShape::Segment(i, j) => vec![*i, *j],
@@ -43,7 +43,8 @@ impl HullShape {
     }
 
     /// The affine dimension (0 to 3).
-    pub fn dimension(&self) -> usize {
+    #[cfg(test)]
+    fn dimension(&self) -> usize {
         match self {
             HullShape::Point(_) => 0,
             HullShape::Segment(..) => 1,
@@ -55,7 +56,7 @@ impl HullShape {
 
 /// The convex hull of `points` (must be non-empty and finite). Points within
 /// `1e-6 ×` (about ten f32 roundings) the set's diameter of a lower-dimensional flat are treated as lying on it.
-pub fn convex_hull(points: &[DVec3]) -> HullShape {
+pub(crate) fn convex_hull(points: &[DVec3]) -> HullShape {
     let far_from = |q: DVec3| -> (usize, f64) {
         points
             .iter()

@@ -11,18 +11,63 @@
 //! vary with time: `C(0) ≡ A`, `C(1) ≡ B` ([`BlobMorph`] implements
 //! [`isomorph_common::Morph`]).
 //!
-//! # Paper sections → modules
+//! # Paper sections → API
 //!
-//! | paper | module |
+//! Everything is at the crate root except the built-in scenes, which are
+//! the [`scenes`] namespace (`scenes::load`, `scenes::demo`, …).
+//!
+//! | paper | items |
 //! |---|---|
-//! | §2 Blanc–Schlick field function `g(r)` (`I`, `R`, `k`) | [`kernel`] |
-//! | §2 convex skeletons, L^p distances | [`skeleton`], [`hull`] |
-//! | §2 blend, union (max), intersection (min), difference, super-elliptic blend, warps `f ∘ w⁻¹` | [`node`], [`warp`], [`tree`] |
-//! | scene files (RON / JSON) | [`scene`] |
-//! | §3.1–3.3, §4.1–4.3 correspondence, decomposition, phantoms | [`correspond`] |
-//! | §3.4.1 Minkowski-sum skeleton interpolation, generic topology | [`minkowski`] |
-//! | §3.4.2–3.5, §4.4 generic elements and nodes, frames, speed `s(t)`, `T(t)` | [`generic`] |
+//! | §2 Blanc–Schlick field function `g(r)` (`I`, `R`, `k`) | [`Kernel`] |
+//! | §2 convex skeletons, L^p distances | [`Skeleton`], [`Polytope`], [`lp_norm`] |
+//! | §2 blend, union (max), intersection (min), difference, super-elliptic blend, warps `f ∘ w⁻¹` | [`Node`], [`NaryOp`], [`Primitive`], [`Warp`], [`BlobTree`] |
+//! | scene files (RON / JSON, below) | [`BlobTree::from_ron`], [`BlobTree::from_json`], [`BlobTree::to_ron`], [`BlobTree::to_json`], [`scenes::load`] |
+//! | §3.1–3.3, §4.1–4.3 correspondence, decomposition, phantoms | [`decompose`], [`Correspondence`], [`Pair`], [`Link`], [`Heuristic`], [`split`] |
+//! | §3.4.1 Minkowski-sum skeleton interpolation, generic topology | [`MinkowskiPath`] |
+//! | §3.4.2–3.5, §4.4 generic elements and nodes, frames, speed `s(t)`, `T(t)` | [`GenericTree`], [`BlobMorph`], [`MorphSpec`], [`SpeedCurve`], [`Trajectory`] |
 //! | §5 sequences (cube → pierced sphere, sphere → propeller, rook → queen, bear → bird) | [`scenes`] |
+//!
+//! # Scene files
+//!
+//! A scene is `(threshold: 0.5, root: (...))` in RON, or the same as JSON
+//! (`{"threshold": 0.5, "root": {...}}`); `threshold` is optional (0.5).
+//! Every node is a record with a `kind` and exactly the fields that kind
+//! uses (any other field is an error naming the node):
+//!
+//! | kind | fields |
+//! |---|---|
+//! | `point`, `segment`, `polygon`, `polyhedron` | `vertices` (1, 2, 3 to 32 coplanar, 4 to 32), `radius`, optional `intensity` (1), `stiffness` (1), `p` (2; a number ≥ 1 or `"inf"`), `frame` |
+//! | `box` | `half` (half extents) instead of `vertices`; a polyhedron skeleton |
+//! | `blend`, `union`, `intersection` | `children` (≥ 1) |
+//! | `superblend` | `n` (≥ 1), `children` |
+//! | `difference` | `children` (2: left, right), optional `level` (the threshold) |
+//! | `twist`, `taper` | `rate` / `slope`, `children` (1) |
+//! | `bend` | `rate`, optional `centre` (0), `min`, `max`, `children` (1) |
+//! | `affine` | `frame`, `children` (1) |
+//!
+//! A `frame` is `(translate: (x, y, z), rotate: (axis: (x, y, z), degrees: a), scale: (x, y, z))`
+//! (all optional; applied as translate · rotate · scale) or `(matrix: (...12 numbers...))`,
+//! column-major 3×4. Numbers may be written as integers; in JSON, points
+//! and matrices are arrays. Errors name the node by its path of child
+//! indices (`node root/0: …`):
+//!
+//! ```
+//! use isomorph_blobtree::BlobTree;
+//! use isomorph_common::Field3;
+//!
+//! let scene = r#"(threshold: 0.5, root: (kind: "blend", children: [
+//!     (kind: "point", vertices: [(0, 0, 0)], radius: 1.0),
+//!     (kind: "segment", vertices: [(0.5, 0, 0), (1, 0, 0)], radius: 0.8, p: "inf"),
+//! ]))"#;
+//! let tree = BlobTree::from_ron(scene)?;
+//! assert!(tree.value(glam::Vec3::ZERO) > 0.0);
+//! let bad = r#"(root: (kind: "blend", children: [(kind: "point", vertices: [(0, 0, 0)], radius: -1)]))"#;
+//! let err = BlobTree::from_ron(bad).unwrap_err();
+//! assert_eq!(err.to_string(), "node root/0: radius of influence must be positive, got -1");
+//! let typo = r#"(root: (kind: "point", vertices: [(0, 0, 0)], radius: 1, stifness: 2))"#;
+//! assert!(BlobTree::from_ron(typo).unwrap_err().to_string().contains("node root: a `point` node has no field `stifness`"));
+//! # Ok::<(), isomorph_blobtree::BlobError>(())
+//! ```
 //!
 //! # Choices where the paper leaves details open
 //!
@@ -34,7 +79,7 @@
 //!   node and scales with it, so `αN` is exactly `α` times `N` (§4.2).
 //! - **L^p distance** `min_q ‖x − q‖_p` is exact for every skeleton kind
 //!   (oblique polygons and polyhedra by a closed-form per-face plane solve
-//!   plus exact edge minimization, see [`skeleton`]), so iso-surfaces of a
+//!   plus exact edge minimization, see [`Polytope::lp_distance`]), so iso-surfaces of a
 //!   primitive are `S ⊕ B_p(r)`. The L^p axes are the primitive's local axes. `p` is interpolated linearly (§3.4.3), or
 //!   through `1/p` when an end is `p = ∞`.
 //! - **Super-elliptic blend of a split child**: copies are weighted
@@ -57,15 +102,15 @@
 //! - Invalid input — bad scene files, NaN, negative radii, `p < 1`, links
 //!   breaking the hierarchy, bad speed curves — is a typed error, never a panic.
 //! - Hostile sizes are refused up front with a typed error naming the node
-//!   and field: magnitudes beyond [`node::MAX_MAGNITUDE`] (`1e6`; radii also
-//!   below `1e-6`), support boxes beyond [`node::MAX_SUPPORT`], skeletons
-//!   with more than [`skeleton::MAX_VERTICES`] vertices, scene files nested
-//!   deeper than [`scene::MAX_DEPTH`] nodes, scenes whose potential cannot
+//!   and field: magnitudes beyond [`MAX_MAGNITUDE`] (`1e6`; radii also
+//!   below `1e-6`), support boxes beyond [`MAX_SUPPORT`], skeletons
+//!   with more than [`MAX_VERTICES`] vertices, scene files nested
+//!   deeper than [`MAX_DEPTH`] nodes, scenes whose potential cannot
 //!   reach the threshold, and correspondences needing more than
-//!   [`correspond::MAX_PAIRS`] node pairs or [`correspond::MAX_VERTEX_PAIRS`]
+//!   [`MAX_PAIRS`] node pairs or [`MAX_VERTEX_PAIRS`]
 //!   skeleton vertex pairs (the all-children heuristic on wide nodes).
 //!   Matching is otherwise near-linear (k-d tree for nearest centres);
-//!   scene and links files are read up to [`scene::MAX_FILE_BYTES`].
+//!   scene and links files are read up to [`MAX_FILE_BYTES`].
 //!
 //! Not guaranteed: intermediate shapes keep the topology of either end
 //! (they do for the built-in rook → queen, which is tested); gradients under
@@ -117,28 +162,31 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-pub mod correspond;
-pub mod error;
-pub mod generic;
-pub mod hull;
-pub mod kernel;
-pub mod minkowski;
-pub mod node;
-pub mod scene;
+mod correspond;
+mod error;
+mod generic;
+mod hull;
+mod kernel;
+mod minkowski;
+mod node;
+mod scene;
 pub mod scenes;
-pub mod skeleton;
-pub mod tree;
-pub mod warp;
+mod skeleton;
+mod tree;
+mod warp;
 
-pub use correspond::{Correspondence, Heuristic, Link, Origin, Pair, decompose};
+pub use correspond::{
+    Correspondence, Heuristic, Link, MAX_PAIRS, MAX_VERTEX_PAIRS, Origin, Pair, decompose, split,
+};
 pub use error::{BlobError, BlobMorphError, NodePath, NodeProblem, Side};
 pub use generic::{BlobMorph, BlobSettings, GenericTree, MorphSpec, Speed, SpeedCurve, Trajectory};
 pub use kernel::Kernel;
 pub use minkowski::MinkowskiPath;
-pub use node::{NaryOp, Node, Primitive};
-pub use skeleton::{Polytope, Skeleton};
+pub use node::{MAX_MAGNITUDE, MAX_SUPPORT, NaryOp, Node, Primitive};
+pub use scene::{MAX_DEPTH, MAX_FILE_BYTES};
+pub use skeleton::{MAX_VERTICES, Polytope, Skeleton, lp_norm};
 pub use tree::BlobTree;
-pub use warp::Warp;
+pub use warp::{TAPER_MIN_SCALE, Warp};
 
 #[cfg(test)]
 mod testutil;

@@ -2,11 +2,15 @@
 //!
 //! All scenes use `I = 1` and `T = 0.5`, so an isolated primitive's surface
 //! lies at distance `R/2` from its skeleton (the Blanc–Schlick midpoint).
+//! The scenes `sphere` and `torus` are the analytic reference shapes
+//! (`isomorph_common::models::{sphere, torus}`: radius 0.3; ring 0.3, tube
+//! 0.12) so that `isomorph compare --source sphere --target torus` gives the
+//! BlobTree method the same pair as the other methods.
 //!
 //! | demo | source → target | what it exercises |
 //! |---|---|---|
 //! | `cube_sphere` | rounded cube → sphere minus three axis-aligned boxes (Fig. 17) | primitive ↔ difference: a difference with a phantom subtrahend is inserted; L^∞ box holes; change of genus |
-//! | `sphere_propeller` | sphere → twisted blend of two rounded rods (Fig. 19) | identity twist inserted, sphere split into two α-weighted copies |
+//! | `sphere_propeller` | sphere (radius 0.6) → twisted blend of two rounded rods (Fig. 19) | identity twist inserted, sphere split into two α-weighted copies |
 //! | `rook_queen` | rook → queen (Fig. 21) | difference ↔ difference (each slot linked to four of the eight spherical carvings, replicated under the union), identity taper inserted, polygon ↔ point skeletons, per-node speed curves |
 //! | `bear_bird` | blob bear → blob bird (Fig. 2) | nearest-centre matching of many blended primitives, segments ↔ polygons |
 
@@ -74,15 +78,28 @@ pub fn demo_spec(source: &str, target: &str) -> Option<MorphSpec> {
     DEMOS.contains(&name).then(|| demo(name).map(|(_, _, spec)| spec)).flatten()
 }
 
-/// A torus around z (ring radius 0.55, surface 0.2 from the ring): the
-/// union of 24 segments along the ring, so joints do not bulge.
+/// The analytic reference torus' BlobTree (`isomorph_common::models::torus`:
+/// ring radius 0.3 around z, tube radius 0.12): the union of 24 segments
+/// along the ring with `R = 0.24`, so joints do not bulge and the surface
+/// lies `R/2 = 0.12` from the segments. The segments' ends sit slightly
+/// outside the ring (radius `0.3 · 2 / (1 + cos 7.5°)`) so that their
+/// distance from the axis stays within ±0.0013 of 0.3 along each segment.
 pub fn torus() -> BlobTree {
+    let half_step = std::f32::consts::PI / TORUS_SEGMENTS as f32;
+    let ends = TORUS_RING * 2.0 / (1.0 + half_step.cos());
     let ring = |i: usize| {
-        let a = std::f32::consts::TAU * i as f32 / 24.0;
-        Vec3::new(0.55 * a.cos(), 0.55 * a.sin(), 0.0)
+        let a = 2.0 * half_step * i as f32;
+        Vec3::new(ends * a.cos(), ends * a.sin(), 0.0)
     };
-    tree(Node::union((0..24).map(|i| seg(ring(i), ring(i + 1), 0.4)).collect()))
+    tree(Node::union((0..TORUS_SEGMENTS).map(|i| seg(ring(i), ring(i + 1), 2.0 * TORUS_TUBE)).collect()))
 }
+
+/// Segments along the built-in torus' ring.
+const TORUS_SEGMENTS: usize = 24;
+/// Ring radius of the built-in torus (as `isomorph_common::models::torus`).
+const TORUS_RING: f32 = 0.3;
+/// Tube radius of the built-in torus (as `isomorph_common::models::torus`).
+const TORUS_TUBE: f32 = 0.12;
 
 fn prim(skeleton: Skeleton, radius: f32, at: Vec3) -> Node {
     Node::Primitive(
@@ -140,8 +157,15 @@ pub fn pierced_sphere() -> BlobTree {
     ))
 }
 
-/// A sphere of radius 0.6.
+/// The analytic reference sphere's BlobTree (`isomorph_common::models::sphere`):
+/// one point primitive with `R = 0.6`, its surface at radius 0.3.
 pub fn sphere() -> BlobTree {
+    tree(ball(Vec3::ZERO, 0.6))
+}
+
+/// The sphere → propeller demo's sphere (radius 0.6, the propeller's size;
+/// twice [`sphere`]).
+fn propeller_sphere() -> BlobTree {
     tree(ball(Vec3::ZERO, 1.2))
 }
 
@@ -221,7 +245,7 @@ pub fn bird() -> BlobTree {
 pub fn demo(name: &str) -> Option<(BlobTree, BlobTree, MorphSpec)> {
     let (a, b) = match name {
         "cube_sphere" => (rounded_cube(), pierced_sphere()),
-        "sphere_propeller" => (sphere(), propeller()),
+        "sphere_propeller" => (propeller_sphere(), propeller()),
         "rook_queen" => (rook(), queen()),
         "bear_bird" => (bear(), bird()),
         _ => return None,
@@ -297,6 +321,64 @@ mod tests {
             let t = k as f32 / 40.0;
             assert_eq!(components(&m, t, 40), 1, "frame t = {t}");
         }
+    }
+
+    /// The first point of the zero set along `from + t·dir`, `t` in
+    /// `(0, reach]` (inside at `t = 0`), by bisection.
+    fn surface_along(tree: &BlobTree, from: Vec3, dir: Vec3, reach: f32) -> Vec3 {
+        assert!(tree.value(from) > 0.0 && tree.value(from + dir * reach) < 0.0, "{from} {dir}");
+        let (mut lo, mut hi) = (0.0f32, reach);
+        for _ in 0..40 {
+            let mid = 0.5 * (lo + hi);
+            if tree.value(from + dir * mid) > 0.0 { lo = mid } else { hi = mid }
+        }
+        from + dir * (0.5 * (lo + hi))
+    }
+
+    /// The built-in `sphere` and `torus` are the analytic reference shapes:
+    /// points of their zero sets lie within 5% of the tube radius (0.006)
+    /// of the analytic surfaces, sampled all around.
+    #[test]
+    fn sphere_and_torus_match_the_analytic_shapes() {
+        let (sphere, reference) = (super::sphere(), isomorph_common::models::sphere());
+        let mut worst = 0.0f32;
+        for i in 0..200 {
+            // Fibonacci directions.
+            let z = 1.0 - 2.0 * (i as f32 + 0.5) / 200.0;
+            let a = i as f32 * 2.399_963;
+            let dir = Vec3::new((1.0 - z * z).sqrt() * a.cos(), (1.0 - z * z).sqrt() * a.sin(), z);
+            let p = surface_along(&sphere, Vec3::ZERO, dir, 0.6);
+            worst = worst.max(reference.distance(p).abs());
+        }
+        assert!(worst < 1e-4, "sphere: surface {worst} from radius 0.3");
+        let (torus, reference) = (super::torus(), isomorph_common::models::torus());
+        let (mut worst, mut sum, mut n) = (0.0f32, 0.0f32, 0);
+        for i in 0..96 {
+            let phi = std::f32::consts::TAU * (i as f32 + 0.37) / 96.0;
+            let radial = Vec3::new(phi.cos(), phi.sin(), 0.0);
+            for j in 0..24 {
+                let theta = std::f32::consts::TAU * j as f32 / 24.0;
+                let dir = radial * theta.cos() + Vec3::Z * theta.sin();
+                let p = surface_along(&torus, radial * 0.3, dir, 0.25);
+                let d = reference.distance(p).abs();
+                worst = worst.max(d);
+                sum += (p - radial * 0.3).length();
+                n += 1;
+            }
+        }
+        let mean_tube = sum / n as f32;
+        assert!(worst < 0.05 * 0.12, "torus: surface up to {worst} from the analytic torus");
+        assert!((mean_tube - 0.12).abs() < 0.01 * 0.12, "torus: mean tube radius {mean_tube}");
+        println!("torus: worst distance to the analytic torus {worst:.5}, mean tube radius {mean_tube:.5}");
+        assert!(torus.value(Vec3::ZERO) < 0.0, "the hole is empty");
+    }
+
+    /// The sphere → propeller demo keeps its sphere of radius 0.6.
+    #[test]
+    fn the_propeller_demo_keeps_its_large_sphere() {
+        let (a, _, _) = demo("sphere_propeller").unwrap();
+        let p = surface_along(&a, Vec3::ZERO, Vec3::X, 1.2);
+        assert!((p.x - 0.6).abs() < 1e-4, "{p}");
     }
 
     /// An endless stream is refused after MAX_FILE_BYTES instead of filling
