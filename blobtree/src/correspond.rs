@@ -1,37 +1,6 @@
 //! Correspondence and decomposition (§3.1–3.3, §4.2–4.3): turning two
 //! BlobTrees `A`, `B` into equivalent trees `A'`, `B'` that *overlap*
 //! (their nodes and leaves match bijectively).
-//!
-//! Starting from the roots, each matched pair of nodes gets links between
-//! its children — the animator's [`Link`]s when given for that pair,
-//! otherwise a [`Heuristic`] — and the children are decomposed so that the
-//! links become a bijection:
-//!
-//! - **commutative ↔ commutative** (`∪ ∩ + ` super-blend): a child with
-//!   `m` links is split into `m` copies: replicated under union and
-//!   intersection, `α`-weighted copies with `α = 1/m` (a partition of unity)
-//!   under a blend, and `α^{1/n}`-weighted under a super-elliptic blend of
-//!   order `n` (`Σ (α^{1/n} f)^n = f^n`). Unlinked children get a *phantom*
-//!   partner (§3.3: null intensity, skeleton, `R`, `k` copied) — except
-//!   under an intersection, where a null field is not neutral, so they are
-//!   linked to the nearest child instead.
-//! - **primitive ↔ commutative**: the primitive becomes the only child of a
-//!   node of the partner's operator (a one-child node equals its child), then
-//!   as above (the sphere of "sphere → propeller" splits into two).
-//! - **difference ↔ difference**: left ↔ left, right ↔ right.
-//! - **difference ↔ other**: a difference is inserted above the other node,
-//!   with a phantom of the partner's right child (Fig. 14).
-//! - **warp ↔ warp** of one kind: child ↔ child; of different kinds, each side
-//!   gets the identity of the other's kind (Fig. 16); **warp ↔ other**: the
-//!   identity warp of the same kind is inserted above the other (Fig. 15).
-//!
-//! Inputs are user trees; an instantiated [`Node::Mix`] (a frame of another
-//! morph) is matched as its dominant operator, so for such inputs `A'` is
-//! only approximately `A`.
-//!
-//! Links are only followed under matched parents (§4: "nodes at a given
-//! level should not be matched unless their ancestor nodes have also been
-//! paired"); a link that is never reachable is an error.
 
 use crate::error::{BlobMorphError, NodePath, Side};
 use crate::node::{NaryOp, Node, Primitive};
@@ -254,6 +223,37 @@ impl Ctx<'_> {
 
 /// Matches and decomposes `a` (threshold `ta`) and `b` (threshold `tb`) into
 /// a pair tree whose two sides overlap.
+///
+/// Starting from the roots, each matched pair of nodes gets links between
+/// its children — the animator's [`Link`]s when given for that pair,
+/// otherwise a [`Heuristic`] — and the children are decomposed so that the
+/// links become a bijection:
+///
+/// - **commutative ↔ commutative** (`∪ ∩ + ` super-blend): a child with
+///   `m` links is split into `m` copies: replicated under union and
+///   intersection, `α`-weighted copies with `α = 1/m` (a partition of unity)
+///   under a blend, and `α^{1/n}`-weighted under a super-elliptic blend of
+///   order `n` (`Σ (α^{1/n} f)^n = f^n`). Unlinked children get a *phantom*
+///   partner (§3.3: null intensity, skeleton, `R`, `k` copied) — except
+///   under an intersection, where a null field is not neutral, so they are
+///   linked to the nearest child instead.
+/// - **primitive ↔ commutative**: the primitive becomes the only child of a
+///   node of the partner's operator (a one-child node equals its child), then
+///   as above (the sphere of "sphere → propeller" splits into two).
+/// - **difference ↔ difference**: left ↔ left, right ↔ right.
+/// - **difference ↔ other**: a difference is inserted above the other node,
+///   with a phantom of the partner's right child (Fig. 14).
+/// - **warp ↔ warp** of one kind: child ↔ child; of different kinds, each side
+///   gets the identity of the other's kind (Fig. 16); **warp ↔ other**: the
+///   identity warp of the same kind is inserted above the other (Fig. 15).
+///
+/// Inputs are user trees; an instantiated [`Node::Mix`] (a frame of another
+/// morph) is matched as its dominant operator, so for such inputs `A'` is
+/// only approximately `A`.
+///
+/// Links are only followed under matched parents (§4: "nodes at a given
+/// level should not be matched unless their ancestor nodes have also been
+/// paired"); a link that is never reachable is an error.
 ///
 /// Near-linear in the sizes of the trees and of the result (nearest
 /// centres through a k-d tree, links and degrees through hash maps).

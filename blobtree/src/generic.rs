@@ -1,28 +1,4 @@
 //! The generic BlobTree `C(t)` (§4.4) and its [`Morph`] implementation.
-//!
-//! Built from the overlapping pair tree of [`crate::decompose`]; every pair
-//! of nodes `N_A →s(t) N_B` becomes a time-varying node with its own speed
-//! curve `s(t)`:
-//!
-//! - same operator: kept;
-//! - blend ↔ union ↔ super-elliptic blend: one super-elliptic blend whose
-//!   `1/n` moves linearly from `1/n_A` to `1/n_B` (blend: `n = 1`, union:
-//!   `n = ∞`, reached exactly at `s = 1`);
-//! - other commutative pairs: `(1 − s) N_A + s N_B` on the shared children ([`Node::Mix`]);
-//! - difference → difference with interpolated reference level;
-//! - warps of one kind: interpolated parameters, affine maps as translation ·
-//!   slerped rotation · stretch ([`isomorph_common::AffineParts::lerp`]);
-//!   different kinds were already split into two warps through the identity (Fig. 16);
-//! - leaves: skeleton `(1 − s) S_A ⊕ s S_B` in the time-varying local frame
-//!   (origin on a cubic Bézier curve — uniform straight motion unless the
-//!   animator gives handles — orientation by quaternion slerp, stretch
-//!   linearly), generic topology built once ([`MinkowskiPath`]); `I, R, k`
-//!   linear; the L^p exponent linear (§3.4.3), or `1/p` linear when one end
-//!   is `p = ∞`.
-//!
-//! The threshold is `T(t) = (1 − t) T_A + t T_B`. At `t = 0` every node is
-//! exactly its source node and at `t = 1` its target node, so `C(0) ≡ A` and
-//! `C(1) ≡ B`.
 
 use crate::correspond::{Correspondence, Heuristic, Link, Origin, Pair, decompose};
 use crate::error::{BlobMorphError, NodePath};
@@ -170,6 +146,30 @@ struct GNode {
 }
 
 /// The generic BlobTree: one fixed structure whose parameters depend on `t`.
+///
+/// Built from the overlapping pair tree of [`crate::decompose`]; every pair
+/// of nodes `N_A →s(t) N_B` becomes a time-varying node with its own speed
+/// curve `s(t)`:
+///
+/// - same operator: kept;
+/// - blend ↔ union ↔ super-elliptic blend: one super-elliptic blend whose
+///   `1/n` moves linearly from `1/n_A` to `1/n_B` (blend: `n = 1`, union:
+///   `n = ∞`, reached exactly at `s = 1`);
+/// - other commutative pairs: `(1 − s) N_A + s N_B` on the shared children ([`Node::Mix`]);
+/// - difference → difference with interpolated reference level;
+/// - warps of one kind: interpolated parameters, affine maps as translation ·
+///   slerped rotation · stretch ([`isomorph_common::AffineParts::lerp`]);
+///   different kinds were already split into two warps through the identity (Fig. 16);
+/// - leaves: skeleton `(1 − s) S_A ⊕ s S_B` in the time-varying local frame
+///   (origin on a cubic Bézier curve — uniform straight motion unless the
+///   animator gives handles — orientation by quaternion slerp, stretch
+///   linearly), generic topology built once ([`MinkowskiPath`]); `I, R, k`
+///   linear; the L^p exponent linear (§3.4.3), or `1/p` linear when one end
+///   is `p = ∞`.
+///
+/// The threshold is `T(t) = (1 − t) T_A + t T_B`. At `t = 0` every node is
+/// exactly its source node and at `t = 1` its target node, so `C(0) ≡ A` and
+/// `C(1) ≡ B`.
 #[derive(Debug, Clone)]
 pub struct GenericTree {
     root: GNode,

@@ -1,23 +1,23 @@
 //! The Blanc–Schlick field function (§2): piecewise rational in `r²`, with
 //! maximum intensity `I`, radius of influence `R` and stiffness `k`.
-//!
-//! With `x = (d / R)²` the normalized squared distance,
-//!
-//! ```text
-//! g(x) = 1 − 9x² / (k + (9/2 − 4k) x)          0 ≤ x ≤ 1/4
-//! g(x) = (1 − x)² / (3/4 − k + (3/2 + 4k) x)    1/4 ≤ x ≤ 1
-//! g(x) = 0                                     x ≥ 1
-//! f(d) = I · g((d / R)²)
-//! ```
-//!
-//! The pieces meet at `x = 1/4` with value 1/2 and equal slope `−2 − 16k/9`;
-//! `g(0) = 1`, `g(1) = 0`, `g'(0) = g'(1) = 0` in `d`, and `g` decreases
-//! monotonically for every `k ≥ 0` (denominators stay positive). Negative `k`
-//! puts a pole in the first piece, so scenes reject it.
 
 use serde::{Deserialize, Serialize};
 
 /// Field-function parameters of one skeletal primitive.
+///
+/// With `x = (d / R)²` the normalized squared distance,
+///
+/// ```text
+/// g(x) = 1 − 9x² / (k + (9/2 − 4k) x)          0 ≤ x ≤ 1/4
+/// g(x) = (1 − x)² / (3/4 − k + (3/2 + 4k) x)    1/4 ≤ x ≤ 1
+/// g(x) = 0                                     x ≥ 1
+/// f(d) = I · g((d / R)²)
+/// ```
+///
+/// The pieces meet at `x = 1/4` with value 1/2 and equal slope `−2 − 16k/9`;
+/// `g(0) = 1`, `g(1) = 0`, `g'(0) = g'(1) = 0` in `d`, and `g` decreases
+/// monotonically for every `k ≥ 0` (denominators stay positive). Negative `k`
+/// puts a pole in the first piece, so scenes reject it.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Kernel {
     /// Maximum intensity `I` (the value on the skeleton); `0` makes a phantom.

@@ -1,14 +1,5 @@
 //! Minkowski-sum interpolation of convex skeletons (§3.4.1):
 //! `S(t) = (1 − t) S_A ⊕ t S_B`.
-//!
-//! For convex `A`, `B` the face structure of `S(t)` is the same for every
-//! `t ∈ (0, 1)`: each vertex is `(1 − t) a_i + t b_j` for a fixed pair
-//! `(i, j)` (its *parent vertices*). The *generic topology* — the pairs and
-//! the boundary triangles — is built once from the convex hull of the
-//! candidate points `(a_i + b_j) / 2`; each instant only moves vertices.
-//! At `t = 0` and `t = 1` the skeletons `A` and `B` themselves are returned
-//! (the generic faces degenerate there). Intermediate skeletons may have a
-//! higher dimension than both ends (two skew segments sweep a parallelogram).
 
 use crate::hull::convex_hull;
 use crate::skeleton::Polytope;
@@ -16,6 +7,15 @@ use glam::Vec3;
 
 /// The Minkowski interpolation between two convex skeletons, with its
 /// generic topology.
+///
+/// For convex `A`, `B` the face structure of `S(t)` is the same for every
+/// `t ∈ (0, 1)`: each vertex is `(1 − t) a_i + t b_j` for a fixed pair
+/// `(i, j)` (its *parent vertices*). The *generic topology* — the pairs and
+/// the boundary triangles — is built once from the convex hull of the
+/// candidate points `(a_i + b_j) / 2`; each instant only moves vertices.
+/// At `t = 0` and `t = 1` the skeletons `A` and `B` themselves are returned
+/// (the generic faces degenerate there). Intermediate skeletons may have a
+/// higher dimension than both ends (two skew segments sweep a parallelogram).
 #[derive(Debug, Clone, PartialEq)]
 pub struct MinkowskiPath {
     a: Polytope,

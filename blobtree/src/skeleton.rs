@@ -1,77 +1,5 @@
 //! Convex skeletons (§2): points, segments, convex polygons and convex
 //! polyhedra, and the L^p distance to them.
-//!
-//! A [`Skeleton`] is the user's description (vertex lists); a [`Polytope`]
-//! is its evaluable form: the convex hull with its structure. Minkowski
-//! interpolation (§3.4.1) produces polytopes of any dimension directly.
-//!
-//! # Distance
-//!
-//! The distance is the exact `d_p(x, S) = min_{q∈S} ‖x − q‖_p` for every
-//! kind and every `p ∈ [1, ∞]`, the metric axes being the primitive's local
-//! axes. Its sub-level sets are the Minkowski sums `S ⊕ B_p(r)`, which is
-//! what makes a fixed-metric primitive morph as the Minkowski morph of its
-//! two solids. Closed forms:
-//!
-//! - `p = 2`: the Euclidean closest point (Voronoi regions per kind).
-//! - points: `‖x − c‖_p`; axis-aligned boxes: clamping (the problem is
-//!   separable, so the clamp minimizes every coordinate term at once).
-//!
-//! **Segments** `a + t e`: for `p = 1` and `p = ∞` the objective is convex
-//! and piecewise linear in `t`, so its minimum is at an end or a breakpoint
-//! (zero crossings of `r_k`, and for `∞` the crossings `r_i = ±r_j`): all
-//! ≤ 11 candidates are evaluated — exact. Otherwise `φ′(t)` of
-//! `φ = Σ|r_k|^p` is monotone and a safeguarded Newton iteration (bisection
-//! whenever Newton leaves the bracket or does not halve its step) from the
-//! Euclidean parameter finds its root to `1e-11` in `t` (measured: about 8
-//! steps for `1.5 ≤ p ≤ 8`; up to ~35, mostly bisection, near `p = 1` or for
-//! very large `p`, where `φ` is nearly piecewise linear).
-//!
-//! **Polygons and polyhedra** (the choice, instead of a general projected
-//! Newton or Frank–Wolfe solver): in 3D the minimizer lies either in the
-//! relative interior of a planar face or on an edge. Over a *whole plane*
-//! `n·q = c` the problem has a closed form (Hölder's equality case): with
-//! `δ = n·x − c`, `r = x − q = δ w/(n·w)`, `w_k = sign(n_k)|n_k|^{p*−1}`,
-//! and `‖r‖_p = |δ|/‖n‖_{p*}` (`1/p + 1/p* = 1`). So, per face (a polygon,
-//! or each outward triangle of a polyhedron):
-//!
-//! 1. `|δ|/‖n‖_{p*}` is a lower bound for the whole face: skip the face if
-//!    it cannot beat the best candidate so far;
-//! 2. if the plane minimizer lies in the face, it is the face's minimum;
-//! 3. otherwise the face's minimum is on its boundary (the minimizer set is
-//!    convex: if it meets the face but misses its boundary it lies inside,
-//!    so this also holds for the non-unique minimizers of `p = 1, ∞`):
-//!    minimize over its edges with the exact segment routine, skipping an
-//!    edge when `c_p·|x − q₂(edge)|` (`‖v‖_p ≥ c_p‖v‖₂`) cannot beat the
-//!    best.
-//!
-//! For a polyhedron only faces whose plane has `x` in front are visited
-//! (the optimality condition puts `∇‖r‖_p` in the normal cone at `q*`, and
-//! `∇‖r‖_p · r > 0`), and `x` inside gives 0. The search starts from the
-//! L^p length of the Euclidean residual (the old approximation, an upper
-//! bound), so the pruning is effective. The result is exact up to
-//! floating-point rounding (computed in `f64`, returned as `f32`; tested
-//! against brute force and by a duality-gap certificate below `1e-5`
-//! relative). Cost: a few closed-form plane solves plus, measured on random
-//! 8-point polyhedra and 6-point polygons, 2.5–5 segment solves per query;
-//! no allocation.
-//!
-//! # Gradient
-//!
-//! By the envelope theorem `∂d_p/∂x_k = sign(r_k)|r_k|^{p−1}/‖r‖_p^{p−1}`
-//! with `r = x − q*` (unique for `1 < p < ∞`); it is also the dual optimum
-//! `u*` of `d_p = max_{‖u‖_{p*} ≤ 1} u·x − h_S(u)`. For `p = 1` and `p = ∞`
-//! the distance has kinks and the returned vector is a subgradient chosen so:
-//! face optimum → the face's dual normal `n/‖n‖_{p*}` (the exact gradient
-//! there, used for every `p` as it is better conditioned than the formula
-//! above); edge optimum → among the tied components of `r` (`p = ∞`: the
-//! components achieving the max; `p = 1`: the zero components) the
-//! subgradient orthogonal to the edge when one exists; otherwise (vertex
-//! optimum, or no orthogonal choice) equal weights over the tied
-//! components. Away from kinks this is the gradient; in tests the returned
-//! vector is a dual certificate (`u·x − h_S(u)` meets `d_p` to `1e-5`) for
-//! every `p`. For `p` near 1 the edge formula is ill-conditioned in
-//! components `r_k ≈ 0`; those are likewise set orthogonal to the edge.
 
 use crate::hull::{HullShape, convex_hull};
 use glam::{DVec3, Vec3};
@@ -83,6 +11,78 @@ use glam::{DVec3, Vec3};
 pub const MAX_VERTICES: usize = 32;
 
 /// A convex skeleton in its primitive's local frame.
+///
+/// A [`Skeleton`] is the user's description (vertex lists); a [`Polytope`]
+/// is its evaluable form: the convex hull with its structure. Minkowski
+/// interpolation (§3.4.1) produces polytopes of any dimension directly.
+///
+/// # Distance
+///
+/// The distance is the exact `d_p(x, S) = min_{q∈S} ‖x − q‖_p` for every
+/// kind and every `p ∈ [1, ∞]`, the metric axes being the primitive's local
+/// axes. Its sub-level sets are the Minkowski sums `S ⊕ B_p(r)`, which is
+/// what makes a fixed-metric primitive morph as the Minkowski morph of its
+/// two solids. Closed forms:
+///
+/// - `p = 2`: the Euclidean closest point (Voronoi regions per kind).
+/// - points: `‖x − c‖_p`; axis-aligned boxes: clamping (the problem is
+///   separable, so the clamp minimizes every coordinate term at once).
+///
+/// **Segments** `a + t e`: for `p = 1` and `p = ∞` the objective is convex
+/// and piecewise linear in `t`, so its minimum is at an end or a breakpoint
+/// (zero crossings of `r_k`, and for `∞` the crossings `r_i = ±r_j`): all
+/// ≤ 11 candidates are evaluated — exact. Otherwise `φ′(t)` of
+/// `φ = Σ|r_k|^p` is monotone and a safeguarded Newton iteration (bisection
+/// whenever Newton leaves the bracket or does not halve its step) from the
+/// Euclidean parameter finds its root to `1e-11` in `t` (measured: about 8
+/// steps for `1.5 ≤ p ≤ 8`; up to ~35, mostly bisection, near `p = 1` or for
+/// very large `p`, where `φ` is nearly piecewise linear).
+///
+/// **Polygons and polyhedra** (the choice, instead of a general projected
+/// Newton or Frank–Wolfe solver): in 3D the minimizer lies either in the
+/// relative interior of a planar face or on an edge. Over a *whole plane*
+/// `n·q = c` the problem has a closed form (Hölder's equality case): with
+/// `δ = n·x − c`, `r = x − q = δ w/(n·w)`, `w_k = sign(n_k)|n_k|^{p*−1}`,
+/// and `‖r‖_p = |δ|/‖n‖_{p*}` (`1/p + 1/p* = 1`). So, per face (a polygon,
+/// or each outward triangle of a polyhedron):
+///
+/// 1. `|δ|/‖n‖_{p*}` is a lower bound for the whole face: skip the face if
+///    it cannot beat the best candidate so far;
+/// 2. if the plane minimizer lies in the face, it is the face's minimum;
+/// 3. otherwise the face's minimum is on its boundary (the minimizer set is
+///    convex: if it meets the face but misses its boundary it lies inside,
+///    so this also holds for the non-unique minimizers of `p = 1, ∞`):
+///    minimize over its edges with the exact segment routine, skipping an
+///    edge when `c_p·|x − q₂(edge)|` (`‖v‖_p ≥ c_p‖v‖₂`) cannot beat the
+///    best.
+///
+/// For a polyhedron only faces whose plane has `x` in front are visited
+/// (the optimality condition puts `∇‖r‖_p` in the normal cone at `q*`, and
+/// `∇‖r‖_p · r > 0`), and `x` inside gives 0. The search starts from the
+/// L^p length of the Euclidean residual (the old approximation, an upper
+/// bound), so the pruning is effective. The result is exact up to
+/// floating-point rounding (computed in `f64`, returned as `f32`; tested
+/// against brute force and by a duality-gap certificate below `1e-5`
+/// relative). Cost: a few closed-form plane solves plus, measured on random
+/// 8-point polyhedra and 6-point polygons, 2.5–5 segment solves per query;
+/// no allocation.
+///
+/// # Gradient
+///
+/// By the envelope theorem `∂d_p/∂x_k = sign(r_k)|r_k|^{p−1}/‖r‖_p^{p−1}`
+/// with `r = x − q*` (unique for `1 < p < ∞`); it is also the dual optimum
+/// `u*` of `d_p = max_{‖u‖_{p*} ≤ 1} u·x − h_S(u)`. For `p = 1` and `p = ∞`
+/// the distance has kinks and the returned vector is a subgradient chosen so:
+/// face optimum → the face's dual normal `n/‖n‖_{p*}` (the exact gradient
+/// there, used for every `p` as it is better conditioned than the formula
+/// above); edge optimum → among the tied components of `r` (`p = ∞`: the
+/// components achieving the max; `p = 1`: the zero components) the
+/// subgradient orthogonal to the edge when one exists; otherwise (vertex
+/// optimum, or no orthogonal choice) equal weights over the tied
+/// components. Away from kinks this is the gradient; in tests the returned
+/// vector is a dual certificate (`u·x − h_S(u)` meets `d_p` to `1e-5`) for
+/// every `p`. For `p` near 1 the edge formula is ill-conditioned in
+/// components `r_k ≈ 0`; those are likewise set orthogonal to the edge.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Skeleton {
     /// A point.

@@ -1,13 +1,5 @@
 //! The evaluable BlobTree: validated, with a bounding box per subtree,
 //! implementing [`Field3`] as `potential − T` (positive inside).
-//!
-//! **Pruning is exact.** Every primitive's field is exactly zero at distance
-//! ≥ `R` from its skeleton (the L^p ball of radius `R` lies in the L^∞ box
-//! of half-size `R`), every operator maps all-zero children to zero, so a
-//! subtree contributes exactly `0.0` outside its box and skipping it never
-//! changes a value ([`BlobTree::set_pruning`] switches it off for comparison).
-//! Boxes: union/blend of children, intersection of children for `∩`, the
-//! left child's for a difference, the image box for a warp.
 
 use crate::error::{BlobError, NodePath, NodeProblem};
 use crate::kernel::Kernel;
@@ -49,6 +41,14 @@ struct Compiled {
 
 /// An evaluable BlobTree with threshold `T`; its [`Field3`] value is
 /// `potential(p) − T`.
+///
+/// **Pruning is exact.** Every primitive's field is exactly zero at distance
+/// ≥ `R` from its skeleton (the L^p ball of radius `R` lies in the L^∞ box
+/// of half-size `R`), every operator maps all-zero children to zero, so a
+/// subtree contributes exactly `0.0` outside its box and skipping it never
+/// changes a value ([`BlobTree::set_pruning`] switches it off for comparison).
+/// Boxes: union/blend of children, intersection of children for `∩`, the
+/// left child's for a difference, the image box for a warp.
 #[derive(Debug, Clone)]
 pub struct BlobTree {
     root: Node,

@@ -1,10 +1,5 @@
 //! Warps (§2): Barr's twist, taper and bend, and affine maps, evaluated as
 //! `f ∘ w⁻¹` with analytic inverses.
-//!
-//! Twist and taper act about the local z axis, the bend in the y–z plane
-//! (Barr 1984); put the warp under an affine node to choose other axes.
-//! Every warp has an *identity* parameter (rate 0, slope 0, affine identity)
-//! used when a warp is matched with a node of another kind (§4.3, Fig. 15).
 
 use glam::{Affine3A, Mat3, Vec3};
 use isomorph_common::Aabb;
@@ -14,6 +9,11 @@ use isomorph_common::Aabb;
 pub const TAPER_MIN_SCALE: f32 = 0.05;
 
 /// A space warp.
+///
+/// Twist and taper act about the local z axis, the bend in the y–z plane
+/// (Barr 1984); put the warp under an affine node to choose other axes.
+/// Every warp has an *identity* parameter (rate 0, slope 0, affine identity)
+/// used when a warp is matched with a node of another kind (§4.3, Fig. 15).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Warp {
     /// Twist about z: a point at height `z` turns by `rate · z` radians.
