@@ -18,9 +18,9 @@
 //! | §3.2 initial fit, eq. 3–4 | [`fit`], [`FitSettings`], [`FitReport`] (`fit.rs`, sparse normal equations in `lsq.rs`, faer sparse Cholesky) |
 //! | §3.2 final refinement | [`FitSettings::refinement`], [`Refinement`], [`FitReport::rounds`], [`TMesh::refined`] |
 //! | §3.3 evolution, eq. 5–9, speed eq. 8 | [`evolve`], [`EvolveSettings`], [`Speed`], [`Evolution`] (`evolution.rs`; zero-set samples by marching cubes + Newton projection in `sampling.rs`) |
-//! | §4.2 alignment | [`TsplineSettings::align`] (moments from `isomorph_common::alignment`) |
+//! | §4.2 alignment | [`TsplineSettings::align`], [`Align`]: moments (`isomorph_common::alignment`) or a user's map; the T-mesh is built on the aligned shapes |
 //! | §4.3 projection frames, eq. 10 | [`morph`] (`morph.rs`) |
-//! | §4.4 combined alignment transforms, eq. 11 | [`TsplineMorph::frame_transform`] |
+//! | §4.4 combined alignment transforms, eq. 11 | [`TsplineMorph::placement`] (`W(u)`: translation and stretch linear, rotation slerped), [`TsplineMorph::frame_transform`], `tests/alignment.rs` |
 //! | §3.3 Fig. 2–3 | [`demo::corner_source`], [`demo::corner_target`], `tests/corner.rs` ("┌" → "┐", the shapes of the paper's text); [`demo::letter_t`], [`demo::letter_c`], `tests/t_to_c.rs` ("T" → "C", its captions) |
 //! | §5 examples | [`demo::holed_cube`], [`demo::petal_torus`] |
 //!
@@ -151,6 +151,6 @@ pub use basis::Eval;
 pub use error::TsplineError;
 pub use evolution::{Evolution, EvolveSettings, Outcome, Speed, StepStats, evolve};
 pub use fit::{FitReport, FitRound, FitSettings, Refinement, fit};
-pub use morph::{FrameField, TsplineMorph, TsplineSettings, morph};
+pub use morph::{Align, FrameField, TsplineMorph, TsplineSettings, morph};
 pub use tmesh::{MAX_DEPTH, TMesh, TMeshSettings};
 pub use tspline::TSpline;
