@@ -47,7 +47,24 @@
 //! bench and `isomorph demo` therefore use the note's [`Speed::Robust`]
 //! (`v = clamp(d_B, ±0.2) + β (1 − λ) κ`, `β` a finest cell or less).
 //! [`Speed::Distance`] (`λ ≡ 1`) is Breen & Whitaker's speed, for the
-//! paper's Fig. 2 comparison.
+//! paper's Fig. 2 comparison. With [`TsplineMorph`]'s defaults otherwise,
+//! the paper's speed converges for sphere → torus, holed cube, C and cube,
+//! and stalls for sphere → chain (18 steps), sphere → mug and ball → C
+//! (measured 2026-11 with `isomorph morph --speed paper`); a stall ends as
+//! [`Outcome::Stalled`] with a report warning naming the step, the error
+//! and the robust speed, which the command line prints.
+//!
+//! # Alignment and placement (§4.2, §4.4)
+//! [`TsplineSettings::align`] places the source on the target (moments, or
+//! a user's map `T`); the T-mesh, the fit and the evolution all work on
+//! `T(source)` and the target in the target's world space. Frame `i` is
+//! placed in the world by [`TsplineMorph::placement`]`(u_i)`, eq. 11's
+//! `W(u)`: `T⁻¹` at `u = 0`, the identity at `u = 1`, the source centroid's
+//! translation and the stretch linear and the rotation slerped in between.
+//! The working space is the target's world space, not a principal frame:
+//! a target turned off the axes gets an axis-aligned T-mesh around its
+//! larger box (Example 2 with the cube turned needs depth 4 where the
+//! upright cube converges at depth 3; `tests/example2_aligned.rs`).
 //!
 //! # Guarantees and limits
 //! - `f` is C² (cubic blending functions, `Σ B_i > 0` on `D`); evaluation
