@@ -8,10 +8,11 @@ use clap::{ArgMatches, Args, ValueEnum};
 use isomorph_blobtree::MorphSpec;
 use isomorph_cli::methods::{Method, Settings};
 use isomorph_cli::parse::{parse_pair, read_map};
+use isomorph_common::alignment::AlignMode;
 use isomorph_common::glam::Vec3;
 use isomorph_levelset::{Align, LevelSetSettings, SolverKind};
 use isomorph_rbf::{Kernel, RbfSettings};
-use isomorph_tspline::{Speed, TsplineSettings};
+use isomorph_tspline::{Align as TsplineAlign, Speed, TsplineSettings};
 use isomorph_warp::{WarpMorphSettings, WarpSpec};
 use std::path::PathBuf;
 
@@ -20,6 +21,7 @@ use std::path::PathBuf;
 pub struct MethodArgs {
     /// Alignment of the source onto the target before evolving: `auto`
     /// (moments), `none`, or a JSON map file as `isomorph align` prints it.
+    /// Also for the T-spline method, whose frames undo it gradually (eq. 11).
     #[arg(long, help_heading = "Level set (Breen & Whitaker)", value_parser = parse_align, default_value = "none")]
     pub align: AlignArg,
     /// The level-set solver.
@@ -70,8 +72,27 @@ pub struct MethodArgs {
     #[arg(long, help_heading = "T-spline (Yang & Jüttler)", default_value_t = TsplineSettings::default().tmesh.max_samples_per_cell)]
     pub nt: usize,
     /// Maximum octree depth (1–7).
-    #[arg(long, help_heading = "T-spline (Yang & Jüttler)", default_value_t = TsplineSettings::default().tmesh.max_depth)]
+    #[arg(long, help_heading = "T-spline (Yang & Jüttler)", default_value_t = TsplineSettings::default().tmesh.max_depth, value_parser = clap::value_parser!(u32).range(1..=i64::from(isomorph_tspline::MAX_DEPTH)))]
     pub depth: u32,
+    /// Minimum octree depth: every cell is split at least this deep (0 to
+    /// --depth) [default: 2, or --depth when that is lower].
+    #[arg(long, help_heading = "T-spline (Yang & Jüttler)")]
+    pub min_depth: Option<u32>,
+    /// Spacing of the surface samples that drive the octree (units of the
+    /// [−1, 1]³ domain, 1e-4 to 2).
+    #[arg(long, help_heading = "T-spline (Yang & Jüttler)", default_value_t = TsplineSettings::default().tmesh.sample_spacing)]
+    pub sample_spacing: f64,
+    /// Most evolution steps (0 keeps the initial fit).
+    #[arg(long, help_heading = "T-spline (Yang & Jüttler)", default_value_t = TsplineSettings::default().evolve.max_steps)]
+    pub max_steps: usize,
+    /// Weight of the distance-field constraint |∇f| = 1 (0 to 1e6; lower
+    /// lets narrow features open).
+    #[arg(long, help_heading = "T-spline (Yang & Jüttler)", default_value_t = TsplineSettings::default().evolve.distance_weight)]
+    pub distance_weight: f64,
+    /// Leave out the projection frames (§4.3) at both ends: the sequence
+    /// then starts and ends on the fitted level sets, not on the inputs.
+    #[arg(long, help_heading = "T-spline (Yang & Jüttler)")]
+    pub no_projection_frames: bool,
     /// Morph step size h (units of the [−1, 1]³ domain; automatic when not
     /// given).
     #[arg(long, help_heading = "T-spline (Yang & Jüttler)")]
@@ -98,7 +119,7 @@ pub struct MethodArgs {
 
 /// Which options belong to which method (by their argument ids).
 const OWNERS: &[(&str, &[Method])] = &[
-    ("align", &[Method::LevelSet]),
+    ("align", &[Method::LevelSet, Method::Tspline]),
     ("solver", &[Method::LevelSet]),
     ("curvature", &[Method::LevelSet]),
     ("max_iterations", &[Method::LevelSet]),
@@ -112,6 +133,11 @@ const OWNERS: &[(&str, &[Method])] = &[
     ("speed", &[Method::Tspline]),
     ("nt", &[Method::Tspline]),
     ("depth", &[Method::Tspline]),
+    ("min_depth", &[Method::Tspline]),
+    ("sample_spacing", &[Method::Tspline]),
+    ("max_steps", &[Method::Tspline]),
+    ("distance_weight", &[Method::Tspline]),
+    ("no_projection_frames", &[Method::Tspline]),
     ("step", &[Method::Tspline]),
     ("margin", &[Method::Tspline]),
     ("refine", &[Method::Tspline]),
@@ -186,6 +212,16 @@ impl MethodArgs {
         let t = &mut settings.tspline;
         t.tmesh.max_samples_per_cell = self.nt;
         t.tmesh.max_depth = self.depth;
+        t.tmesh.min_depth = self.min_depth.unwrap_or(t.tmesh.min_depth.min(self.depth));
+        t.tmesh.sample_spacing = self.sample_spacing;
+        t.evolve.max_steps = self.max_steps;
+        t.evolve.distance_weight = self.distance_weight;
+        t.projection_frames = !self.no_projection_frames;
+        t.align = match &self.align {
+            AlignArg::None => TsplineAlign::None,
+            AlignArg::Auto => TsplineAlign::Moments(AlignMode::Affine),
+            AlignArg::File(path) => TsplineAlign::Map(read_map(path)?),
+        };
         t.evolve.step = self.step;
         t.margin = self.margin;
         t.evolve.speed = match self.speed {

@@ -71,7 +71,7 @@ pub struct EvolveSettings {
     /// Morph step size `h` of `Δτ = min(1, h / max |v|)` (domain units);
     /// `None` uses half the finest cell size.
     pub step: Option<f64>,
-    /// Step cap.
+    /// Step cap (0–1 000 000; 0 keeps the initial fit only).
     pub max_steps: usize,
     /// Stop when the RMS distance between the zero set and the target
     /// (both ways) is below this (domain units) and no zero-set sample is
@@ -132,7 +132,8 @@ impl EvolveSettings {
         if let Some(t) = self.tolerance {
             check_range("tolerance", t, 1e-9, 2.0, "(0, 2]")?;
         }
-        check_range("distance_weight", self.distance_weight, 0.0, 1e6, ">= 0")?;
+        check_range("max_steps", self.max_steps as f64, 0.0, 1e6, "0..=1000000")?;
+        check_range("distance_weight", self.distance_weight, 0.0, 1e6, "0..=1e6")?;
         check_range("relaxation", self.relaxation, 1e-6, 1e6, "> 0")?;
         check_range("tikhonov", self.tikhonov, 1e-14, 1.0, "1e-14..=1")?;
         check_range("far_field_weight", self.far_field_weight, 0.0, 1e6, ">= 0")?;

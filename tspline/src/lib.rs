@@ -18,9 +18,9 @@
 //! | §3.2 initial fit, eq. 3–4 | [`fit`], [`FitSettings`], [`FitReport`] (`fit.rs`, sparse normal equations in `lsq.rs`, faer sparse Cholesky) |
 //! | §3.2 final refinement | [`FitSettings::refinement`], [`Refinement`], [`FitReport::rounds`], [`TMesh::refined`] |
 //! | §3.3 evolution, eq. 5–9, speed eq. 8 | [`evolve`], [`EvolveSettings`], [`Speed`], [`Evolution`] (`evolution.rs`; zero-set samples by marching cubes + Newton projection in `sampling.rs`) |
-//! | §4.2 alignment | [`TsplineSettings::align`] (moments from `isomorph_common::alignment`) |
+//! | §4.2 alignment | [`TsplineSettings::align`], [`Align`]: moments (`isomorph_common::alignment`) or a user's map; the T-mesh is built on the aligned shapes |
 //! | §4.3 projection frames, eq. 10 | [`morph`] (`morph.rs`) |
-//! | §4.4 combined alignment transforms, eq. 11 | [`TsplineMorph::frame_transform`] |
+//! | §4.4 combined alignment transforms, eq. 11 | [`TsplineMorph::placement`] (`W(u)`: translation and stretch linear, rotation slerped), [`TsplineMorph::frame_transform`], `tests/alignment.rs` |
 //! | §3.3 Fig. 2–3 | [`demo::corner_source`], [`demo::corner_target`], `tests/corner.rs` ("┌" → "┐", the shapes of the paper's text); [`demo::letter_t`], [`demo::letter_c`], `tests/t_to_c.rs` ("T" → "C", its captions) |
 //! | §5 examples | [`demo::holed_cube`], [`demo::petal_torus`] |
 //!
@@ -47,7 +47,24 @@
 //! bench and `isomorph demo` therefore use the note's [`Speed::Robust`]
 //! (`v = clamp(d_B, ±0.2) + β (1 − λ) κ`, `β` a finest cell or less).
 //! [`Speed::Distance`] (`λ ≡ 1`) is Breen & Whitaker's speed, for the
-//! paper's Fig. 2 comparison.
+//! paper's Fig. 2 comparison. With [`TsplineMorph`]'s defaults otherwise,
+//! the paper's speed converges for sphere → torus, holed cube, C and cube,
+//! and stalls for sphere → chain (18 steps), sphere → mug and ball → C
+//! (measured 2026-11 with `isomorph morph --speed paper`); a stall ends as
+//! [`Outcome::Stalled`] with a report warning naming the step, the error
+//! and the robust speed, which the command line prints.
+//!
+//! # Alignment and placement (§4.2, §4.4)
+//! [`TsplineSettings::align`] places the source on the target (moments, or
+//! a user's map `T`); the T-mesh, the fit and the evolution all work on
+//! `T(source)` and the target in the target's world space. Frame `i` is
+//! placed in the world by [`TsplineMorph::placement`]`(u_i)`, eq. 11's
+//! `W(u)`: `T⁻¹` at `u = 0`, the identity at `u = 1`, the source centroid's
+//! translation and the stretch linear and the rotation slerped in between.
+//! The working space is the target's world space, not a principal frame:
+//! a target turned off the axes gets an axis-aligned T-mesh around its
+//! larger box (Example 2 with the cube turned needs depth 4 where the
+//! upright cube converges at depth 3; `tests/example2_aligned.rs`).
 //!
 //! # Guarantees and limits
 //! - `f` is C² (cubic blending functions, `Σ B_i > 0` on `D`); evaluation
@@ -151,6 +168,6 @@ pub use basis::Eval;
 pub use error::TsplineError;
 pub use evolution::{Evolution, EvolveSettings, Outcome, Speed, StepStats, evolve};
 pub use fit::{FitReport, FitRound, FitSettings, Refinement, fit};
-pub use morph::{FrameField, TsplineMorph, TsplineSettings, morph};
+pub use morph::{Align, FrameField, TsplineMorph, TsplineSettings, morph};
 pub use tmesh::{MAX_DEPTH, TMesh, TMeshSettings};
 pub use tspline::TSpline;

@@ -9,15 +9,31 @@ use crate::fit::{FitReport, FitSettings, fit};
 use crate::sampling::project;
 use crate::tmesh::{TMesh, TMeshSettings};
 use crate::tspline::TSpline;
-use glam::{Affine3A, DVec3, Vec3};
-use isomorph_common::alignment::{AlignMode, Alignment, Moments, align};
+use glam::{Affine3A, DVec3, Mat3, Vec3};
+use isomorph_common::alignment::{AlignMode, Moments, align};
 use isomorph_common::marching_cubes::marching_cubes;
 use isomorph_common::mesh::distance::surface_samples;
 use isomorph_common::sdf::MeshSdf;
-use isomorph_common::{Aabb, Field3, Frame, Grid3, Morph, TriMesh};
+use isomorph_common::{Aabb, AffineParts, Field3, Frame, Grid3, Morph, TriMesh};
 use isomorph_common::{Control, MorphError, MorphReport, Residual, Solid, Stages, check, check_time};
 use rayon::prelude::*;
 use std::sync::Arc;
+
+/// How the source is placed on the target before the T-mesh is built (paper
+/// §4.2); the frames undo the placement gradually (§4.4, eq. 11).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Align {
+    /// Both shapes where they are (no transformation to interpolate).
+    #[default]
+    None,
+    /// Automatic alignment by moments (centroids, principal axes and, for
+    /// [`AlignMode::Affine`], a scale per axis: the paper's §4.2 after
+    /// Breen & Whitaker's Appendix).
+    Moments(AlignMode),
+    /// A user's affine map from source space to target space (the paper's
+    /// interactive alignment); it must preserve orientation (no mirror).
+    Map(Affine3A),
+}
 
 /// Settings of [`TsplineMorph::new`] and [`morph`].
 #[derive(Debug, Clone, PartialEq)]
@@ -28,9 +44,9 @@ pub struct TsplineSettings {
     pub fit: FitSettings,
     /// The evolution (speed, step size, stopping).
     pub evolve: EvolveSettings,
-    /// Moment alignment of the source onto the target before the morph
-    /// (paper §4.2); `None` morphs the shapes where they are.
-    pub align: Option<AlignMode>,
+    /// Placement of the source on the target before the morph (paper
+    /// §4.2); [`Align::None`] morphs the shapes where they are.
+    pub align: Align,
     /// Empty margin around the aligned shapes inside the domain, as a
     /// fraction of their half size.
     pub margin: f64,
@@ -56,7 +72,7 @@ impl Default for TsplineSettings {
                 speed: crate::Speed::Robust { v_max: 0.2, beta_cells: 1.0 },
                 ..EvolveSettings::default()
             },
-            align: None,
+            align: Align::None,
             margin: 0.2,
             projection_frames: true,
             surface_resolution: 64,
@@ -72,6 +88,12 @@ impl TsplineSettings {
     pub fn validate(&self) -> Result<(), TsplineError> {
         check_range("margin", self.margin, 0.0, 10.0, "0..=10")?;
         check::count("surface_resolution", u64::from(self.surface_resolution), 8, 1024)?;
+        if let Align::Map(m) = self.align
+            && !(m.is_finite() && m.matrix3.determinant() > 1e-12)
+        {
+            let expected = "a finite, invertible, orientation-preserving map";
+            return Err(MorphError::bad_setting("align", format!("{m:?}"), expected).into());
+        }
         self.tmesh.validate()?;
         self.fit.validate()?;
         self.evolve.validate()
@@ -127,8 +149,8 @@ pub struct TsplineMorph {
     target_frames: usize,
     /// Domain → working space (the target's world space).
     denormalize: Affine3A,
-    /// Working space → source world space and the alignment path.
-    alignment: Option<(Alignment, Affine3A)>,
+    /// The alignment and its eq. 11 path (`None` without alignment).
+    placement: Option<Placement>,
     world: Aabb,
     report: MorphReport,
 }
@@ -171,14 +193,39 @@ impl TsplineMorph {
         TSpline::new(self.mesh.clone(), c.clone())
     }
 
-    /// Domain coordinates → world coordinates of frame `i` (eq. 11: the
-    /// alignment undone gradually, translation and stretch linearly,
-    /// rotation by slerp).
+    /// The sequence parameter `u = i / (m_A + n_l + m_B − 1)` of frame `i`
+    /// (eq. 11; 0 for a single frame).
+    pub fn frame_u(&self, i: usize) -> f32 {
+        if self.frames.len() > 1 { i as f32 / (self.frames.len() - 1) as f32 } else { 0.0 }
+    }
+
+    /// Domain coordinates → world coordinates of frame `i`:
+    /// [`TsplineMorph::placement`] at [`TsplineMorph::frame_u`] after the
+    /// domain's denormalization.
     pub fn frame_transform(&self, i: usize) -> Affine3A {
-        let u = if self.frames.len() > 1 { i as f32 / (self.frames.len() - 1) as f32 } else { 0.0 };
-        match &self.alignment {
-            Some((al, inverse)) => al.at(u) * *inverse * self.denormalize,
-            None => self.denormalize,
+        self.placement(self.frame_u(i)) * self.denormalize
+    }
+
+    /// The source-to-target map `T` the shapes were aligned with (§4.2;
+    /// `None` without alignment): the T-mesh is built on `T(source)` and the
+    /// target, both in the target's world space.
+    pub fn alignment_map(&self) -> Option<Affine3A> {
+        self.placement.as_ref().map(|p| p.map)
+    }
+
+    /// Eq. 11: the map `W(u)` from the aligned working space (the target's
+    /// world space) to the world placement of the sequence at
+    /// `u ∈ [0, 1]` (clamped; NaN counts as 0). `W(0) = T⁻¹` puts frames
+    /// back on the source, `W(1)` is the identity; in between the
+    /// translation (of the source's centroid) and the stretch are
+    /// interpolated linearly and the rotation by quaternion slerp, so
+    /// [`AffineParts::from_affine`] of `W(u)` gives
+    /// `slerp(R(T⁻¹), I, u)` and `(1 − u) S(T⁻¹) + u I`. The identity
+    /// without alignment.
+    pub fn placement(&self, u: f32) -> Affine3A {
+        match &self.placement {
+            Some(p) => p.at(u),
+            None => Affine3A::IDENTITY,
         }
     }
 
@@ -270,19 +317,25 @@ fn morph_on_pool(
         }
     }
     // §4.2: the source is mapped into the target's frame.
-    let alignment = match settings.align {
-        Some(mode) => {
-            let al = align(&Moments::from_mesh(source)?, &Moments::from_mesh(target)?, mode)?;
-            let inverse = al.map.inverse();
-            if !inverse.is_finite() {
-                return Err(TsplineError::NonFinite("alignment"));
-            }
-            Some((al, inverse))
+    let placement = match settings.align {
+        Align::None => None,
+        Align::Moments(mode) => {
+            let source_moments = Moments::from_mesh(source)?;
+            let al = align(&source_moments, &Moments::from_mesh(target)?, mode)?;
+            Some(Placement::new(al.map, al.parts(), source_moments.centroid.as_vec3())?)
         }
-        None => None,
+        Align::Map(map) => {
+            // Turn and stretch about the source's centroid (its box centre
+            // for a mesh that is not closed), as the moments' path does.
+            let centre = Moments::from_mesh(source)
+                .map(|m| m.centroid.as_vec3())
+                .unwrap_or_else(|_| source.bounds().center());
+            let parts = AffineParts::from_affine(&map)?;
+            Some(Placement::new(map, parts, centre)?)
+        }
     };
-    let aligned = match &alignment {
-        Some((al, _)) => source.transformed(&al.map),
+    let aligned = match &placement {
+        Some(p) => source.transformed(&p.map),
         None => source.clone(),
     };
     // §3.2: normalize into D = [−1, 1]³ with a margin.
@@ -341,7 +394,23 @@ fn morph_on_pool(
         frames.extend(end.into_iter().map(|m| FrameKind::Mesh(Arc::new(m))));
     }
     stages.lap("projection frames");
-    let report = report(&evolution, &fit_report, &frames, stages);
+    let mut report = report(&evolution, &fit_report, &frames, stages, settings);
+    if let Some(p) = &placement {
+        let parts = p.parts;
+        let (axis, angle) = parts.rotation.to_axis_angle();
+        let kind = match settings.align {
+            Align::Moments(mode) => format!("moments ({mode:?})").to_lowercase(),
+            _ => "map".to_string(),
+        };
+        report = report
+            .with_detail("alignment", kind)
+            .with_detail("alignment_rotation_degrees", f64::from(angle.to_degrees()))
+            .with_detail("alignment_rotation_axis", format!("{:.4} {:.4} {:.4}", axis.x, axis.y, axis.z))
+            .with_detail(
+                "alignment_scale",
+                format!("{:.4} {:.4} {:.4}", parts.scale().x, parts.scale().y, parts.scale().z),
+            );
+    }
     let mut morph = TsplineMorph {
         mesh,
         evolution,
@@ -350,7 +419,7 @@ fn morph_on_pool(
         source_frames,
         target_frames,
         denormalize,
-        alignment,
+        placement,
         world: Aabb::EMPTY,
         report,
     };
@@ -360,7 +429,13 @@ fn morph_on_pool(
 }
 
 /// The contract's report of a finished morph.
-fn report(evolution: &Evolution, fit: &FitReport, frames: &[FrameKind], stages: Stages) -> MorphReport {
+fn report(
+    evolution: &Evolution,
+    fit: &FitReport,
+    frames: &[FrameKind],
+    stages: Stages,
+    settings: &TsplineSettings,
+) -> MorphReport {
     use crate::evolution::Outcome as Stop;
     use isomorph_common::Outcome;
     let outcome = match evolution.outcome {
@@ -390,8 +465,28 @@ fn report(evolution: &Evolution, fit: &FitReport, frames: &[FrameKind], stages: 
         .with_detail("fit_max_surface_error", fit.max_surface_error)
         .with_detail("level_sets", evolution.frames.len())
         .with_detail("frames", frames.len());
-    if evolution.outcome == Stop::Vanished {
-        report = report.with_warnings(["the zero set vanished during the evolution".to_string()]);
+    let steps = evolution.steps.len();
+    let warning = match evolution.outcome {
+        Stop::Vanished => Some("the zero set vanished during the evolution".to_string()),
+        Stop::Stalled => Some(format!(
+            "the T-spline evolution stalled after {steps} steps: its two-sided RMS distance to the target \
+             ({:.4} domain units) did not drop by 1 % over {} steps{}",
+            evolution.final_error,
+            settings.evolve.stall_steps,
+            if settings.evolve.speed == crate::Speed::Paper {
+                "; the paper's speed (eq. 8) lets curvature dominate far from the target, try the robust speed"
+            } else {
+                ""
+            }
+        )),
+        Stop::StepLimit => Some(format!(
+            "the T-spline evolution reached its step cap ({}) at a two-sided RMS distance of {:.4} domain units",
+            settings.evolve.max_steps, evolution.final_error
+        )),
+        Stop::Converged => None,
+    };
+    if let Some(w) = warning {
+        report = report.with_warnings([w]);
     }
     report
 }
@@ -463,4 +558,40 @@ fn projection_frames(mesh: &TriMesh, spline: &TSpline, h: f64) -> Vec<TriMesh> {
         frames.push(current.clone());
     }
     frames
+}
+
+/// The alignment `T` (source → target) and its eq. 11 path: `W(u) = A(u) T⁻¹`
+/// with `A(u): x ↦ c(u) + L(u) (x − c_A)`, `c(u)` the source centroid `c_A`
+/// moved linearly to `T(c_A)`, and `L(u) = slerp(I, R, u) ((1 − u) I + u S)`
+/// for `T`'s linear part `R S`. Then `W(u)` has the rotation
+/// `slerp(R⁻¹, I, u)` and the stretch `(1 − u) S(T⁻¹) + u I` of eq. 11.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Placement {
+    /// Source → target.
+    map: Affine3A,
+    /// Target → source.
+    inverse: Affine3A,
+    /// `T`'s rotation and stretch (the translation is unused).
+    parts: AffineParts,
+    /// The source point turned and stretched about (its centroid).
+    centre: Vec3,
+}
+
+impl Placement {
+    fn new(map: Affine3A, parts: AffineParts, centre: Vec3) -> Result<Self, TsplineError> {
+        let inverse = map.inverse();
+        if !(inverse.is_finite() && centre.is_finite()) {
+            return Err(TsplineError::NonFinite("alignment"));
+        }
+        Ok(Self { map, inverse, parts, centre })
+    }
+
+    /// `W(u)` (see the type's docs).
+    fn at(&self, u: f32) -> Affine3A {
+        let u = if u.is_nan() { 0.0 } else { u.clamp(0.0, 1.0) };
+        let linear = AffineParts { translation: Vec3::ZERO, ..self.parts };
+        let m = Mat3::from(AffineParts::IDENTITY.lerp(&linear, u).to_affine().matrix3);
+        let centre = self.centre.lerp(self.map.transform_point3(self.centre), u);
+        Affine3A::from_mat3_translation(m, centre - m * self.centre) * self.inverse
+    }
 }
