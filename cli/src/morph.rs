@@ -200,8 +200,11 @@ pub fn morph(method: Method, io: &Io, settings: &Settings, out: &Path) -> anyhow
         eprintln!("warning: {warning}");
     }
     if !report.morph.converged {
-        let off = report.endpoints.target.map_or(String::new(), |e| {
-            format!(" (its last frame is {:.2} voxels off the target, Hausdorff)", e.hausdorff_voxels)
+        let off = report.endpoints.target.map_or(String::new(), |e| match e.hausdorff_voxels {
+            h if h < 0.5 => {
+                format!(" (its last frame still matches the target within {h:.2} voxels, Hausdorff)")
+            }
+            h => format!(" (its last frame is {h:.2} voxels off the target, Hausdorff)"),
         });
         eprintln!(
             "warning: the {} morph did not reach its goal ({:?}){off}; see report.json",
