@@ -253,8 +253,7 @@ fn evolve_on_pool(
         SolverKind::Dense => Box::new(DenseSolver::new(source)?),
     };
     let overlap = check_overlap(source, speed, settings.max_unreached_share)?;
-    let lattice = Lattice::new(source.dims());
-    let mut frames = vec![BandFrame::capture(solver.embedding(), &lattice, 0, 0.0)];
+    let mut frames = vec![solver.capture(0, 0.0)];
     let mut stats = Vec::new();
     let (mut time, mut last_kept_time) = (0.0f64, 0.0f64);
     let mut converged = false;
@@ -279,7 +278,7 @@ fn evolve_on_pool(
             FrameSchedule::EveryTime(dt) => time - last_kept_time >= dt,
         };
         if due || done || iteration == settings.max_iterations {
-            frames.push(BandFrame::capture(solver.embedding(), &lattice, iteration, time));
+            frames.push(solver.capture(iteration, time));
             last_kept_time = time;
         }
         if done {
