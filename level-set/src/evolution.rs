@@ -127,7 +127,8 @@ impl Overlap {
     /// Share of the target's inside nodes in parts the source misses, in
     /// `[0, 1]`.
     pub fn unreached_share(&self) -> f32 {
-        self.missed.iter().map(|p| p.share).sum()
+        // A fold from +0 (an empty f32 sum is −0).
+        self.missed.iter().fold(0.0, |sum, p| sum + p.share)
     }
 
     /// A sentence for the report when some part is missed.
