@@ -101,7 +101,7 @@ fn step(c: &mut Criterion) {
 /// polygonized, measured and written with the contact sheet and report.
 fn cli(c: &mut Criterion) {
     let mut group = c.benchmark_group("cli/sphere_torus");
-    group.sample_size(10).measurement_time(Duration::from_secs(30));
+    group.sample_size(10).measurement_time(Duration::from_secs(45));
     let res = 128;
     let control = Control::new();
     let out = std::env::temp_dir().join(format!("isomorph-bench-cli-{}", std::process::id()));
