@@ -4,14 +4,18 @@
 //!
 //! `cargo bench -p isomorph-benches --bench levelset -- morph/sphere_torus/sparse/128`
 //! `cargo bench -p isomorph-benches --bench levelset -- step/sphere_torus`
+//! `cargo bench -p isomorph-benches --bench levelset -- cli/sphere_torus/128`
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use isomorph_cli::methods::{Method, Settings, build, load_input};
 use isomorph_common::{Aabb, Control, Grid3, Shape};
+use isomorph_io::export::{ExportSettings, export_sequence};
 use isomorph_levelset::{
     DenseSolver, EvolveSettings, FrameSchedule, Placement, Response, Solver, SolverKind, SparseFieldSolver,
     SpeedGrid, StepParams, evolve,
 };
 use std::hint::black_box;
+use std::time::Duration;
 
 /// Source distance grid and target speed of the reference case.
 fn case(n: u32) -> (Grid3<f32>, SpeedGrid) {
@@ -90,5 +94,39 @@ fn step(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, morph, step);
+/// The whole `isomorph morph --method level-set --source sphere --target
+/// torus --res 128 --frames 8` through the library, as the command runs it:
+/// the inputs' reference surfaces for the endpoint distances, both distance
+/// volumes, the evolution keeping a frame per iteration, and the 8 frames
+/// polygonized, measured and written with the contact sheet and report.
+fn cli(c: &mut Criterion) {
+    let mut group = c.benchmark_group("cli/sphere_torus");
+    group.sample_size(10).measurement_time(Duration::from_secs(45));
+    let res = 128;
+    let control = Control::new();
+    let out = std::env::temp_dir().join(format!("isomorph-bench-cli-{}", std::process::id()));
+    group.bench_function(BenchmarkId::from_parameter(res), |b| {
+        b.iter(|| {
+            let method = Method::LevelSet;
+            let source = load_input(method, "sphere", &Default::default()).expect("built-in");
+            let target = load_input(method, "torus", &Default::default()).expect("built-in");
+            let settings = Settings::default().with_resolution(res);
+            let morph = build(method, &source, &target, &settings, &control).expect("morphs");
+            let reference = (2 * res).min(256);
+            let export = ExportSettings {
+                frames: 8,
+                resolution: res,
+                out_dir: out.clone(),
+                source_reference: Some(source.surface(reference, &control).expect("a surface").into_owned()),
+                target_reference: Some(target.surface(reference, &control).expect("a surface").into_owned()),
+                ..ExportSettings::default()
+            };
+            black_box(export_sequence(&*morph, &export, &control).expect("exports").report.frames.len())
+        })
+    });
+    group.finish();
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+criterion_group!(benches, morph, step, cli);
 criterion_main!(benches);

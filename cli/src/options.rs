@@ -34,6 +34,11 @@ pub struct MethodArgs {
     /// Most evolution iterations.
     #[arg(long, help_heading = "Level set (Breen & Whitaker)", default_value_t = LevelSetSettings::default().max_iterations)]
     pub max_iterations: usize,
+    /// Largest share (0–1) of the target's inside that may lie in parts the
+    /// source does not overlap: the morph goes on without them and warns up
+    /// to it, and is refused above it.
+    #[arg(long, help_heading = "Level set (Breen & Whitaker)", default_value_t = LevelSetSettings::default().max_unreached_share)]
+    pub max_unreached: f32,
 
     /// Surface points per shape (each a boundary and a normal constraint).
     #[arg(long, help_heading = "RBF (Turk & O'Brien)", default_value_t = RbfSettings::default().points)]
@@ -123,6 +128,7 @@ const OWNERS: &[(&str, &[Method])] = &[
     ("solver", &[Method::LevelSet]),
     ("curvature", &[Method::LevelSet]),
     ("max_iterations", &[Method::LevelSet]),
+    ("max_unreached", &[Method::LevelSet]),
     ("points", &[Method::Rbf]),
     ("separation", &[Method::Rbf]),
     ("kernel", &[Method::Rbf]),
@@ -193,6 +199,7 @@ impl MethodArgs {
         };
         l.curvature = self.curvature;
         l.max_iterations = self.max_iterations;
+        l.max_unreached_share = self.max_unreached;
 
         let r = &mut settings.rbf;
         r.points = self.points;

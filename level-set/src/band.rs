@@ -30,7 +30,8 @@ pub struct BandFrame {
 }
 
 impl BandFrame {
-    /// Captures the frame of the embedding `u` (voxel units).
+    /// Captures the frame of the embedding `u` (voxel units) by a scan of
+    /// the whole grid (`O(volume)`; the dense solver's capture).
     pub(crate) fn capture(u: &[f32], lattice: &Lattice, iteration: usize, time: f64) -> Self {
         let plane = lattice.dims()[0] * lattice.dims()[1];
         let band: Vec<(u32, f32)> = u
@@ -53,6 +54,47 @@ impl BandFrame {
                 flips.push(n as u32);
             }
         }
+        Self { band, flips, first_inside, iteration, time }
+    }
+
+    /// Captures the frame of the embedding `u` (voxel units) in `O(surface)`
+    /// work, knowing that every node on the zero set is in one of `near`,
+    /// sorted node lists (the sparse field's layers `L−1`, `L0`, `L+1`):
+    /// equal to [`Self::capture`] of the same `u`.
+    ///
+    /// Sign flips between consecutive nodes of a row are between face
+    /// neighbours, so both are band nodes; only the flips from one row's
+    /// last node to the next row's first are read from the grid (a read per
+    /// row).
+    pub(crate) fn capture_near(
+        u: &[f32],
+        lattice: &Lattice,
+        near: [&[u32]; 3],
+        iteration: usize,
+        time: f64,
+    ) -> Self {
+        let on_band = |list: &[u32]| -> Vec<(u32, f32)> {
+            list.par_iter()
+                .filter(|&&n| lattice.on_zero_set(u, n as usize))
+                .map(|&n| (n, u[n as usize]))
+                .collect()
+        };
+        let [a, b, c] = near;
+        let ((a, b), c) = rayon::join(|| rayon::join(|| on_band(a), || on_band(b)), || on_band(c));
+        let by_node = |e: &(u32, f32)| e.0;
+        let band = merge(&merge(&a, &b, by_node), &c, by_node);
+        let inside = |n: usize| u[n] > 0.0;
+        let nx = lattice.dims()[0];
+        let within: Vec<u32> = band
+            .iter()
+            .map(|&(n, _)| n as usize)
+            .filter(|&n| n % nx != 0 && inside(n) != inside(n - 1))
+            .map(|n| n as u32)
+            .collect();
+        let across: Vec<u32> =
+            (nx..u.len()).step_by(nx).filter(|&n| inside(n) != inside(n - 1)).map(|n| n as u32).collect();
+        let flips = merge(&within, &across, |&n| n);
+        let first_inside = u.first().is_some_and(|&v| v > 0.0);
         Self { band, flips, first_inside, iteration, time }
     }
 
@@ -82,6 +124,25 @@ impl BandFrame {
     pub fn stored_bytes(&self) -> usize {
         self.band.len() * std::mem::size_of::<(u32, f32)>() + self.flips.len() * 4
     }
+}
+
+/// The union of two lists sorted by `node`, holding no node in common, in
+/// node order.
+fn merge<T: Copy>(a: &[T], b: &[T], node: impl Fn(&T) -> u32) -> Vec<T> {
+    let mut out = Vec::with_capacity(a.len() + b.len());
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() && j < b.len() {
+        if node(&a[i]) <= node(&b[j]) {
+            out.push(a[i]);
+            i += 1;
+        } else {
+            out.push(b[j]);
+            j += 1;
+        }
+    }
+    out.extend_from_slice(&a[i..]);
+    out.extend_from_slice(&b[j..]);
+    out
 }
 
 #[cfg(test)]

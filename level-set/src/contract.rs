@@ -45,6 +45,11 @@ pub struct LevelSetSettings {
     /// Keep a frame every this many iterations (default 1: every iteration,
     /// each costs memory ∝ the surface).
     pub keep_every: usize,
+    /// Largest share of the target's inside (0–1) that may lie in parts the
+    /// (aligned) source does not overlap, which the evolution never reaches:
+    /// up to it the morph runs and its report warns, above it the morph is
+    /// refused with [`MorphError::NoOverlap`] (default 0.05).
+    pub max_unreached_share: f32,
 }
 
 impl Default for LevelSetSettings {
@@ -57,6 +62,7 @@ impl Default for LevelSetSettings {
             curvature: None,
             max_iterations: 20_000,
             keep_every: 1,
+            max_unreached_share: 0.05,
         }
     }
 }
@@ -71,6 +77,7 @@ impl LevelSetSettings {
         check::range("padding", f64::from(self.padding), 0.0, 2.0)?;
         check::count("max_iterations", self.max_iterations as u64, 1, 10_000_000)?;
         check::count("keep_every", self.keep_every as u64, 1, 10_000_000)?;
+        check::range("max_unreached_share", f64::from(self.max_unreached_share), 0.0, 1.0)?;
         if let Some(w) = self.curvature {
             check::range("curvature", f64::from(w), 0.0, 100.0)?;
         }
@@ -93,8 +100,9 @@ impl LevelSetMorph {
     ///
     /// # Errors
     /// [`MorphError::BadSetting`], the solids' conversion errors,
-    /// [`MorphError::Alignment`], [`MorphError::NoOverlap`] when a part of
-    /// the target does not overlap the (aligned) source,
+    /// [`MorphError::Alignment`], [`MorphError::NoOverlap`] when parts of
+    /// the target that the (aligned) source does not overlap hold more than
+    /// [`LevelSetSettings::max_unreached_share`] of it,
     /// [`MorphError::Cancelled`], and [`evolve`]'s errors.
     pub fn new(
         source: &Solid,
@@ -154,6 +162,7 @@ impl LevelSetMorph {
                 .curvature
                 .map(|weight| Curvature { weight, length: 0.5 * bounds.size().max_element() }),
             frames: FrameSchedule::EveryIterations(settings.keep_every),
+            max_unreached_share: settings.max_unreached_share,
             ..EvolveSettings::default()
         };
         let mut morph = evolve(&embedding, &speed, placement, &evolve_settings, control)?;

@@ -4,7 +4,7 @@
 
 use crate::solver::{Solver, StepParams, StepStats, node_rate, stable_time_step};
 use crate::stencil::{Lattice, speed_at_zero_crossing};
-use crate::{LevelSetError, SpeedGrid};
+use crate::{BandFrame, LevelSetError, SpeedGrid};
 use isomorph_common::Grid3;
 use rayon::prelude::*;
 
@@ -66,5 +66,9 @@ impl Solver for DenseSolver {
 
     fn embedding(&self) -> &[f32] {
         &self.u
+    }
+
+    fn capture(&self, iteration: usize, time: f64) -> BandFrame {
+        BandFrame::capture(&self.u, &self.lattice, iteration, time)
     }
 }

@@ -64,6 +64,12 @@ pub struct EvolveSettings {
     /// cannot resolve) can leave the surface oscillating a hundredth of a
     /// voxel above the thresholds forever. Default 500.
     pub stall_iterations: usize,
+    /// Largest share of the target's inside (`[0, 1]`) that may lie in parts
+    /// the source does not overlap: such parts are never reached, and the
+    /// evolution runs with a warning in its report while their share is at
+    /// most this, or is refused with [`MorphError::NoOverlap`] (see
+    /// [`check_overlap`]). Default 0.05.
+    pub max_unreached_share: f32,
 }
 
 impl Default for EvolveSettings {
@@ -78,6 +84,7 @@ impl Default for EvolveSettings {
             curvature: None,
             end_time: f64::INFINITY,
             stall_iterations: 500,
+            max_unreached_share: 0.05,
         }
     }
 }
@@ -99,37 +106,89 @@ pub struct LevelSetMorph {
     report: MorphReport,
 }
 
-/// Whether the target's inside overlaps the source's in every connected
-/// component of the target (Breen & Whitaker §4: a target component that
-/// the source does not touch is never reached).
+/// Target nodes within this distance (voxels) outside the target join its
+/// parts: a thin feature sampled between nodes, or two parts less than about
+/// two voxels apart, stays one part (Breen & Whitaker §4 is about the
+/// continuous target, not the pieces its sampling falls into).
+const JOIN_VOXELS: f32 = 1.0;
+
+/// How the source overlaps the target's parts ([`check_overlap`]).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Overlap {
+    /// Connected parts of the target: its inside nodes, joined through nodes
+    /// less than a voxel outside it.
+    pub parts: usize,
+    /// The parts whose inside the source's inside does not overlap, largest
+    /// first: the evolution never reaches them.
+    pub missed: Vec<MissedPart>,
+}
+
+impl Overlap {
+    /// Share of the target's inside nodes in parts the source misses, in
+    /// `[0, 1]`.
+    pub fn unreached_share(&self) -> f32 {
+        // A fold from +0 (an empty f32 sum is −0).
+        self.missed.iter().fold(0.0, |sum, p| sum + p.share)
+    }
+
+    /// A sentence for the report when some part is missed.
+    pub fn warning(&self) -> Option<String> {
+        let largest = self.missed.first()?;
+        Some(format!(
+            "{} of {} target part(s) do not overlap the source and are not reached ({:.2} % of the \
+             target's inside; the largest, {:.2} %, spans {:.3?} .. {:.3?}): the morph ends without them",
+            self.missed.len(),
+            self.parts,
+            100.0 * self.unreached_share(),
+            100.0 * largest.share,
+            largest.min.to_array(),
+            largest.max.to_array(),
+        ))
+    }
+}
+
+/// Whether the source's inside overlaps every connected part of the
+/// target's inside (Breen & Whitaker §4: a target part that the source does
+/// not touch is never reached). Parts are judged on the target, not on its
+/// sampling: inside nodes joined through nodes less than a voxel outside the
+/// target are one part, so a thin feature whose nodes fall outside it does
+/// not split the target. Missed parts are accepted while their share of the
+/// target's inside nodes is at most `max_unreached_share`.
 ///
 /// # Errors
-/// [`MorphError::NoOverlap`] with every missed component's size, share of
-/// the target's inside and box (world units), largest first.
-pub fn check_overlap(source: &Grid3<f32>, speed: &SpeedGrid) -> Result<(), LevelSetError> {
+/// [`MorphError::NoOverlap`] with every missed part's size, share of the
+/// target's inside and box (world units), largest first, when their total
+/// share is over `max_unreached_share`.
+pub fn check_overlap(
+    source: &Grid3<f32>,
+    speed: &SpeedGrid,
+    max_unreached_share: f32,
+) -> Result<Overlap, LevelSetError> {
     let lattice = Lattice::new(source.dims());
     let (u, v) = (source.data(), speed.values());
+    let joined = |m: usize| v[m] > -JOIN_VOXELS;
     let mut seen = vec![false; v.len()];
-    let (mut total, mut inside) = (0, 0usize);
+    let (mut parts, mut inside) = (0, 0usize);
     let mut missed = Vec::new();
     let mut stack = Vec::new();
     for start in 0..v.len() {
         if seen[start] || v[start] <= 0.0 {
             continue;
         }
-        total += 1;
+        parts += 1;
         let (mut overlaps, mut nodes) = (false, 0usize);
-        let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+        let (mut lo, mut hi) = (UVec3::MAX, UVec3::ZERO);
         seen[start] = true;
         stack.push(start);
         while let Some(n) = stack.pop() {
-            overlaps |= u[n] > 0.0;
-            nodes += 1;
-            let c = source.node_of(n);
-            let p = source.position(c.x, c.y, c.z);
-            (lo, hi) = (lo.min(p), hi.max(p));
+            if v[n] > 0.0 {
+                overlaps |= u[n] > 0.0;
+                nodes += 1;
+                let c = source.node_of(n);
+                (lo, hi) = (lo.min(c), hi.max(c));
+            }
             for m in lattice.neighbours(n).into_iter().flatten() {
-                if !seen[m] && v[m] > 0.0 {
+                if !seen[m] && joined(m) {
                     seen[m] = true;
                     stack.push(m);
                 }
@@ -137,17 +196,20 @@ pub fn check_overlap(source: &Grid3<f32>, speed: &SpeedGrid) -> Result<(), Level
         }
         inside += nodes;
         if !overlaps {
-            missed.push(MissedPart { nodes, share: 0.0, min: lo, max: hi });
+            let (min, max) = (source.position(lo.x, lo.y, lo.z), source.position(hi.x, hi.y, hi.z));
+            missed.push(MissedPart { nodes, share: 0.0, min, max });
         }
-    }
-    if missed.is_empty() {
-        return Ok(());
     }
     for part in &mut missed {
         part.share = part.nodes as f32 / inside as f32;
     }
     missed.sort_by_key(|p| std::cmp::Reverse(p.nodes));
-    Err(MorphError::NoOverlap { missed, total }.into())
+    let overlap = Overlap { parts, missed };
+    if overlap.unreached_share() > max_unreached_share {
+        let Overlap { parts: total, missed } = overlap;
+        return Err(MorphError::NoOverlap { missed, total, allowed: max_unreached_share }.into());
+    }
+    Ok(overlap)
 }
 
 /// Evolves the source surface (a signed distance grid, world units,
@@ -162,8 +224,9 @@ pub fn check_overlap(source: &Grid3<f32>, speed: &SpeedGrid) -> Result<(), Level
 /// cancellation; the solvers run on its threads.
 ///
 /// # Errors
-/// Input errors of the solvers, [`MorphError::NoOverlap`] when a target
-/// component does not overlap the source, [`MorphError::BadSetting`],
+/// Input errors of the solvers, [`MorphError::NoOverlap`] when target parts
+/// the source does not overlap hold more than
+/// [`EvolveSettings::max_unreached_share`] of the target, [`MorphError::BadSetting`],
 /// [`MorphError::Grid`] when `speed` lies on another lattice,
 /// [`MorphError::Cancelled`].
 pub fn evolve(
@@ -190,9 +253,8 @@ fn evolve_on_pool(
         SolverKind::SparseField => Box::new(SparseFieldSolver::new(source)?),
         SolverKind::Dense => Box::new(DenseSolver::new(source)?),
     };
-    check_overlap(source, speed)?;
-    let lattice = Lattice::new(source.dims());
-    let mut frames = vec![BandFrame::capture(solver.embedding(), &lattice, 0, 0.0)];
+    let overlap = check_overlap(source, speed, settings.max_unreached_share)?;
+    let mut frames = vec![solver.capture(0, 0.0)];
     let mut stats = Vec::new();
     let (mut time, mut last_kept_time) = (0.0f64, 0.0f64);
     let mut converged = false;
@@ -217,7 +279,7 @@ fn evolve_on_pool(
             FrameSchedule::EveryTime(dt) => time - last_kept_time >= dt,
         };
         if due || done || iteration == settings.max_iterations {
-            frames.push(BandFrame::capture(solver.embedding(), &lattice, iteration, time));
+            frames.push(solver.capture(iteration, time));
             last_kept_time = time;
         }
         if done {
@@ -252,7 +314,10 @@ fn evolve_on_pool(
         .with_detail("final_rms_change_voxels", f64::from(last.rms_change))
         .with_detail("final_surface_nodes", last.surface_nodes)
         .with_detail("kept_frames", frames.len())
-        .with_detail("placement", placement.kind());
+        .with_detail("placement", placement.kind())
+        .with_detail("target_parts", overlap.parts)
+        .with_detail("unreached_share", f64::from(overlap.unreached_share()))
+        .with_warnings(overlap.warning());
     let field = source.bounds();
     let world = placed_box(&field, &placement);
     Ok(LevelSetMorph {
@@ -300,6 +365,7 @@ fn check_settings(s: &EvolveSettings) -> Result<(), MorphError> {
     check::count("max_iterations", s.max_iterations as u64, 1, u64::MAX)?;
     check::positive("max_time_step", f64::from(s.max_time_step))?;
     check::count("stall_iterations", s.stall_iterations as u64, 1, u64::MAX)?;
+    check::range("max_unreached_share", f64::from(s.max_unreached_share), 0.0, 1.0)?;
     for (name, v) in [("rms_distance", f64::from(s.rms_distance)), ("rms_change", f64::from(s.rms_change))] {
         if v.is_nan() {
             return Err(MorphError::bad_setting(name, v, "a threshold (not NaN)"));

@@ -36,9 +36,12 @@
 //! - Frame 0 is the source's distance volume and the last frame the
 //!   converged evolution; every frame mesh is closed and outward, and the
 //!   same for any thread count.
-//! - A part of the target the source does not overlap is a
+//! - Parts of the target the source does not overlap (judged on the target:
+//!   a thin feature its sampling splits stays one part) are never silently
+//!   dropped: up to [`LevelSetSettings::max_unreached_share`] of the target
+//!   they are named in the report's warnings, above it they are a
 //!   [`MorphError::NoOverlap`](isomorph_common::MorphError::NoOverlap)
-//!   error naming each part, never a silent partial morph.
+//!   error naming each part and its share.
 //! - Cost per sparse-field iteration grows with the surface, not the volume
 //!   (measurements in `docs/EXPERIMENTS.md`).
 //!
@@ -84,7 +87,9 @@ pub use band::BandFrame;
 pub use contract::{Align, LevelSetSettings};
 pub use dense::DenseSolver;
 pub use error::LevelSetError;
-pub use evolution::{EvolveSettings, FrameSchedule, LevelSetMorph, SolverKind, check_overlap, evolve};
+pub use evolution::{
+    EvolveSettings, FrameSchedule, LevelSetMorph, Overlap, SolverKind, check_overlap, evolve,
+};
 pub use placement::{Placement, Warp};
 pub use solver::{Curvature, Solver, StepParams, StepStats};
 pub use sparse_field::SparseFieldSolver;

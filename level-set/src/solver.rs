@@ -1,8 +1,8 @@
 //! What both solvers share: the [`Solver`] interface and per-iteration
 //! statistics.
 
-use crate::SpeedGrid;
 use crate::stencil::{Lattice, upwind_norm};
+use crate::{BandFrame, SpeedGrid};
 
 /// Statistics of one solver iteration; distances in voxels.
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
@@ -100,4 +100,9 @@ pub trait Solver: Send {
     /// its sign and the values next to the zero set are meaningful for the
     /// sparse-field solver.
     fn embedding(&self) -> &[f32];
+
+    /// The current embedding as a kept frame, stamped with the `iteration`
+    /// and evolution `time` reached (`O(surface)` work for the sparse
+    /// field).
+    fn capture(&self, iteration: usize, time: f64) -> BandFrame;
 }

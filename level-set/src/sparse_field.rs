@@ -34,7 +34,7 @@
 
 use crate::solver::{Curvature, Solver, StepParams, StepStats, node_rate, stable_time_step};
 use crate::stencil::{Lattice, speed_at_zero_crossing};
-use crate::{LevelSetError, SpeedGrid};
+use crate::{BandFrame, LevelSetError, SpeedGrid};
 use isomorph_common::Grid3;
 use rayon::prelude::*;
 
@@ -345,6 +345,15 @@ impl Solver for SparseFieldSolver {
     fn embedding(&self) -> &[f32] {
         &self.u
     }
+
+    /// From the layer lists: every node with a face neighbour of the other
+    /// sign is in `L−1`, `L0` or `L+1` (positive nodes are in `L0` or
+    /// above, negative ones in `L0` or below, and face neighbours' layers
+    /// differ by at most one).
+    fn capture(&self, iteration: usize, time: f64) -> BandFrame {
+        let near = [&self.layers[slot(-1)][..], &self.layers[slot(0)], &self.layers[slot(1)]];
+        BandFrame::capture_near(&self.u, &self.lattice, near, iteration, time)
+    }
 }
 
 #[cfg(test)]
@@ -357,6 +366,37 @@ mod tests {
         assert_eq!(merge_sorted(&[1, 4, 9], &[2, 4, 4, 10]), vec![1, 2, 4, 9, 10]);
         assert_eq!(merge_sorted(&[], &[3, 3]), vec![3]);
         assert_eq!(merge_sorted(&[7], &[]), vec![7]);
+    }
+
+    /// The capture from the layer lists equals the scan of the whole grid at
+    /// every iteration: growth, shrinking, splitting and merging surfaces.
+    #[test]
+    fn capture_from_the_layers_equals_the_full_scan() {
+        use isomorph_common::glam::Vec3;
+        use isomorph_common::models;
+        let two = Shape::sphere(0.15)
+            .translated(Vec3::new(-0.22, 0.0, 0.0))
+            .union(Shape::sphere(0.15).translated(Vec3::new(0.22, 0.0, 0.0)));
+        let cases = [
+            (Shape::sphere(0.3), Shape::torus(0.3, 0.12), 28),
+            (models::ball(), models::c_shape(), 30),
+            (models::mug(), models::chain(), 26),
+            // Splits in two, and the reverse merges.
+            (Shape::cuboid(Vec3::new(0.4, 0.08, 0.08)), two.clone(), 27),
+            (two, Shape::cuboid(Vec3::new(0.4, 0.1, 0.1)), 25),
+        ];
+        for (from, to, n) in cases {
+            let source = Grid3::sample_box(&from, &Aabb::cube(0.5), n).unwrap();
+            let speed = SpeedGrid::sample(&source, &to, |x| x, crate::Response::Identity).unwrap();
+            let mut solver = SparseFieldSolver::new(&source).unwrap();
+            for i in 0..120 {
+                if i > 0 {
+                    solver.step(&speed, &StepParams::default());
+                }
+                let fast = solver.capture(i, 0.5);
+                assert_eq!(fast, BandFrame::capture(&solver.u, &solver.lattice, i, 0.5), "iteration {i}");
+            }
+        }
     }
 
     #[test]

@@ -45,7 +45,7 @@ fn alignment_makes_a_distant_pair_morph() {
     let target = Solid::shape(torus.clone());
     let plain = LevelSetSettings { resolution: 48, ..Default::default() };
     match LevelSetMorph::new(&source, &target, &plain, &Control::new()) {
-        Err(LevelSetError::Morph(MorphError::NoOverlap { missed, total })) => {
+        Err(LevelSetError::Morph(MorphError::NoOverlap { missed, total, .. })) => {
             assert_eq!((missed.len(), total), (1, 1));
             assert!((missed[0].share - 1.0).abs() < 1e-6 && missed[0].nodes > 0, "{missed:?}");
         }

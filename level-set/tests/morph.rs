@@ -117,7 +117,7 @@ fn bad_inputs_are_typed_errors() {
     let none = Control::new();
     assert!(matches!(
         evolve(&source, &speed, Placement::Identity, &settings, &none),
-        Err(LevelSetError::Morph(MorphError::NoOverlap { ref missed, total: 1 })) if missed.len() == 1 && missed[0].share == 1.0
+        Err(LevelSetError::Morph(MorphError::NoOverlap { ref missed, total: 1, .. })) if missed.len() == 1 && missed[0].share == 1.0
     ));
     let empty = source.map(|_| -1.0f32).unwrap();
     assert!(matches!(

@@ -99,16 +99,21 @@ pub enum MorphError {
     /// Parts of the target that the source does not overlap, which a method
     /// that grows the source cannot reach (Breen & Whitaker §4).
     #[error(
-        "{} of {total} target part(s) do not overlap the source ({:.1} % of the target's inside); align \
-         the shapes (e.g. moment alignment) or move them together",
+        "{} of {total} target part(s) do not overlap the source ({:.1} % of the target's inside, more \
+         than the {:.1} % allowed); align the shapes (e.g. moment alignment), move them together, or \
+         allow a larger unreached share (max_unreached_share)",
         missed.len(),
-        100.0 * missed.iter().map(|p| p.share).sum::<f32>()
+        100.0 * missed.iter().map(|p| p.share).sum::<f32>(),
+        100.0 * allowed
     )]
     NoOverlap {
         /// The parts not reached, largest first.
         missed: Vec<MissedPart>,
         /// All connected parts of the target.
         total: usize,
+        /// The largest share of the target's inside the method lets go
+        /// unreached (0 when every part must be reached).
+        allowed: f32,
     },
     /// The method cannot take this kind of input.
     #[error("the {method} method cannot take the {side} input ({kind}): {hint}")]
