@@ -33,7 +33,7 @@ use isomorph_rbf::Kernel;
 use isomorph_tspline::{Refinement, Speed, TsplineSettings};
 use isomorph_warp::WarpSpec;
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods};
-use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
+use pyo3::exceptions::{PyRuntimeError, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
 use std::fmt::Write as _;
@@ -153,8 +153,12 @@ where
     let start = Instant::now();
     let limit = timeout.map(Duration::from_secs_f64);
     let mut interrupt = None;
+    let mut rx = rx;
     loop {
-        match py.detach(|| rx.recv_timeout(POLL)) {
+        // The receiver is Send but not Sync: it moves into the GIL-free wait and back.
+        let (received, back) = py.detach(move || (rx.recv_timeout(POLL), rx));
+        rx = back;
+        match received {
             Ok(()) | Err(RecvTimeoutError::Disconnected) => break,
             Err(RecvTimeoutError::Timeout) => {}
         }
