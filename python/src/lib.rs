@@ -32,7 +32,9 @@ use isomorph_levelset::{Align, SolverKind};
 use isomorph_rbf::Kernel;
 use isomorph_tspline::{Refinement, Speed, TsplineSettings};
 use isomorph_warp::WarpSpec;
-use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods};
+use numpy::{
+    PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods,
+};
 use pyo3::exceptions::{PyRuntimeError, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
@@ -171,8 +173,9 @@ where
             }
         }
     }
-    let result =
-        py.detach(|| handle.join()).map_err(|_| PyRuntimeError::new_err("the isomorph worker thread panicked"))?;
+    let result = py
+        .detach(|| handle.join())
+        .map_err(|_| PyRuntimeError::new_err("the isomorph worker thread panicked"))?;
     match interrupt {
         Some(e) => Err(e),
         None => Ok(result),
@@ -320,7 +323,8 @@ fn input_from(py: Python<'_>, obj: &Bound<'_, PyAny>, side: &str) -> PyResult<In
     }
     let mesh = |m: TriMesh| -> PyResult<Input> {
         let name = format!("mesh ({} vertices, {} triangles)", m.positions.len(), m.triangles.len());
-        let solid = Solid::mesh(m).map_err(|e| error(py, Kind::Input, format!("{side}: {}", error_chain(&e))))?;
+        let solid =
+            Solid::mesh(m).map_err(|e| error(py, Kind::Input, format!("{side}: {}", error_chain(&e))))?;
         Ok(Input::Solid(solid, name))
     };
     if let Ok(t) = obj.cast::<PyTuple>() {
@@ -339,7 +343,10 @@ fn input_from(py: Python<'_>, obj: &Bound<'_, PyAny>, side: &str) -> PyResult<In
     if attr(obj, "values").is_some() {
         let solid = volume_from(py, obj)?;
         let dims = solid.bounds();
-        return Ok(Input::Solid(solid, format!("volume {:?}..{:?}", dims.min.to_array(), dims.max.to_array())));
+        return Ok(Input::Solid(
+            solid,
+            format!("volume {:?}..{:?}", dims.min.to_array(), dims.max.to_array()),
+        ));
     }
     Err(PyTypeError::new_err(format!(
         "{side}: expected a shape name or file path (str), a mesh as (vertices, faces) or an object with \
@@ -405,14 +412,20 @@ fn number<'py, T: FromPyObjectOwned<'py> + PartialOrd + std::fmt::Display + Copy
         setting_error(py, name, format!("expected {what}, got {shown}"))
     })?;
     if !(v >= range.0 && v <= range.1) {
-        return Err(setting_error(py, name, format!("{v} is out of range: expected {} to {}", range.0, range.1)));
+        return Err(setting_error(
+            py,
+            name,
+            format!("{v} is out of range: expected {} to {}", range.0, range.1),
+        ));
     }
     Ok(v)
 }
 
 fn choice(name: &str, value: &Bound<'_, PyAny>, choices: &[&str]) -> PyResult<String> {
     let py = value.py();
-    let expected = || format!("expected one of {}", choices.iter().map(|c| format!("'{c}'")).collect::<Vec<_>>().join(", "));
+    let expected = || {
+        format!("expected one of {}", choices.iter().map(|c| format!("'{c}'")).collect::<Vec<_>>().join(", "))
+    };
     let s: String = value.extract().map_err(|_| setting_error(py, name, expected()))?;
     if choices.contains(&s.as_str()) {
         Ok(s)
@@ -476,7 +489,8 @@ fn apply_settings(
                     Ok(a) if a == "none" => Align::None,
                     Ok(a) if a == "auto" => Align::Auto,
                     Ok(a) if a.ends_with(".json") => Align::Map(
-                        read_map(std::path::Path::new(&a)).map_err(|e| setting_error(py, &name, format!("{e:#}")))?,
+                        read_map(std::path::Path::new(&a))
+                            .map_err(|e| setting_error(py, &name, format!("{e:#}")))?,
                     ),
                     _ => {
                         return Err(setting_error(
@@ -493,8 +507,12 @@ fn apply_settings(
                     _ => SolverKind::SparseField,
                 }
             }
-            "curvature" => s.level_set.curvature = optional(v, |v| number(&name, v, "a number", (0.0f32, 100.0)))?,
-            "max_iterations" => s.level_set.max_iterations = number(&name, v, "an integer", (1usize, 10_000_000))?,
+            "curvature" => {
+                s.level_set.curvature = optional(v, |v| number(&name, v, "a number", (0.0f32, 100.0)))?
+            }
+            "max_iterations" => {
+                s.level_set.max_iterations = number(&name, v, "an integer", (1usize, 10_000_000))?
+            }
             "points" => s.rbf.points = number(&name, v, "an integer", (1usize, 1_000_000))?,
             "separation" => s.rbf.separation = number(&name, v, "a number", (f32::MIN_POSITIVE, 1e6))?,
             "kernel" => {
@@ -531,8 +549,13 @@ fn apply_settings(
             }
             "control_spacing" => s.warp.control_spacing = number(&name, v, "an integer", (1u32, 1024))?,
             "depth" => s.tspline.tmesh.max_depth = number(&name, v, "an integer", (1u32, 7))?,
-            "nt" => s.tspline.tmesh.max_samples_per_cell = number(&name, v, "an integer", (1usize, 1_000_000))?,
-            "step" => s.tspline.evolve.step = optional(v, |v| number(&name, v, "a number", (f64::MIN_POSITIVE, 1e3)))?,
+            "nt" => {
+                s.tspline.tmesh.max_samples_per_cell = number(&name, v, "an integer", (1usize, 1_000_000))?
+            }
+            "step" => {
+                s.tspline.evolve.step =
+                    optional(v, |v| number(&name, v, "a number", (f64::MIN_POSITIVE, 1e3)))?
+            }
             "margin" => s.tspline.margin = number(&name, v, "a number", (0.0f64, 10.0))?,
             "speed" => {
                 s.tspline.evolve.speed = match choice(&name, v, &["paper", "distance", "robust"])?.as_str() {
@@ -549,9 +572,11 @@ fn apply_settings(
                     v.extract().map_err(|_| setting_error(py, &name, "expected True or False"))?
             }
             "links" => {
-                let path: PathBuf = v.extract().map_err(|_| setting_error(py, &name, "expected a file path"))?;
-                s.blobtree.spec = MorphSpec::load(&path)
-                    .map_err(|e| setting_error(py, &name, format!("{}: {}", path.display(), error_chain(&e))))?;
+                let path: PathBuf =
+                    v.extract().map_err(|_| setting_error(py, &name, "expected a file path"))?;
+                s.blobtree.spec = MorphSpec::load(&path).map_err(|e| {
+                    setting_error(py, &name, format!("{}: {}", path.display(), error_chain(&e)))
+                })?;
             }
             other => unreachable!("setting {other} is listed but not applied"),
         }
@@ -602,7 +627,9 @@ fn default_of<'py>(py: Python<'py>, name: &str, s: &Settings, method: Method) ->
         "max_steps" => s.tspline.evolve.max_steps.into_pyobject(py)?.into_any(),
         "refine" => py.None().into_bound(py),
         "refine_rounds" => 3usize.into_pyobject(py)?.into_any(),
-        "projection_frames" => pyo3::types::PyBool::new(py, s.tspline.projection_frames).to_owned().into_any(),
+        "projection_frames" => {
+            pyo3::types::PyBool::new(py, s.tspline.projection_frames).to_owned().into_any()
+        }
         "links" => py.None().into_bound(py),
         _ => py.None().into_bound(py),
     })
@@ -652,7 +679,13 @@ fn mesh_format(py: Python<'_>, format: &str) -> PyResult<MeshFormat> {
         "ply" => MeshFormat::PlyBinaryLittleEndian,
         "obj" => MeshFormat::Obj,
         "stl" => MeshFormat::StlBinary,
-        other => return Err(setting_error(py, "format", format!("'{other}' is not valid: expected 'ply', 'obj' or 'stl'"))),
+        other => {
+            return Err(setting_error(
+                py,
+                "format",
+                format!("'{other}' is not valid: expected 'ply', 'obj' or 'stl'"),
+            ));
+        }
     })
 }
 
@@ -666,7 +699,11 @@ fn check_resolution(py: Python<'_>, name: &str, res: u32) -> PyResult<u32> {
 
 /// The reference surfaces of a morph's inputs for the endpoint distances
 /// (the CLI's: twice the frame resolution, at most 256).
-fn references(inputs: &(Solid, Solid), res: u32, control: &Control) -> Result<(TriMesh, TriMesh), MorphError> {
+fn references(
+    inputs: &(Solid, Solid),
+    res: u32,
+    control: &Control,
+) -> Result<(TriMesh, TriMesh), MorphError> {
     let r = (2 * res).min(256);
     Ok((inputs.0.surface(r, control)?.into_owned(), inputs.1.surface(r, control)?.into_owned()))
 }
@@ -776,7 +813,12 @@ impl PyMorph {
     /// side, with `resolution` nodes along the longest edge (default: the
     /// morph's `resolution`, else 64).
     #[pyo3(signature = (t, resolution = None))]
-    fn frame_volume<'py>(&self, py: Python<'py>, t: f32, resolution: Option<u32>) -> PyResult<Bound<'py, PyAny>> {
+    fn frame_volume<'py>(
+        &self,
+        py: Python<'py>,
+        t: f32,
+        resolution: Option<u32>,
+    ) -> PyResult<Bound<'py, PyAny>> {
         let res = self.frame_res(py, resolution)?;
         let morph = self.morph.clone();
         let control = self.control.clone();
@@ -787,14 +829,18 @@ impl PyMorph {
                 let margin = Vec3::splat(0.05 * b.size().max_element());
                 let bounds = Aabb { min: b.min - margin, max: b.max + margin };
                 let (dims, origin, spacing) = lattice_for_box(&bounds, res).map_err(MorphError::from)?;
-                let placed = Placed { field: &frame.field, inverse: frame.transform.inverse(), iso: frame.iso };
+                let placed =
+                    Placed { field: &frame.field, inverse: frame.transform.inverse(), iso: frame.iso };
                 Ok(Grid3::sample(&placed, dims, origin, spacing).map_err(MorphError::from)?)
             })
         });
         let grid = grid.map_err(|e| morph_error(py, &e))?;
         let (dims, origin, spacing) = (grid.dims(), grid.origin(), grid.spacing());
-        let values =
-            PyArray1::from_vec(py, grid.into_data()).reshape([dims.z as usize, dims.y as usize, dims.x as usize])?;
+        let values = PyArray1::from_vec(py, grid.into_data()).reshape([
+            dims.z as usize,
+            dims.y as usize,
+            dims.x as usize,
+        ])?;
         py.import("isomorph")?.getattr("Volume")?.call1((values, origin.to_array(), spacing))
     }
 
@@ -980,14 +1026,17 @@ fn compare<'py>(
             std::env::temp_dir().join(format!(
                 "isomorph-compare-{}-{}",
                 std::process::id(),
-                std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos())
+                std::time::SystemTime::now()
+                    .duration_since(std::time::UNIX_EPOCH)
+                    .map_or(0, |d| d.as_nanos())
             )),
         ),
     };
     let out_dir = dir.clone();
     let result = run_blocking(py, &token, timeout, move || -> Result<Comparison, (Kind, String)> {
         // The shared references: the inputs as the non-BlobTree methods read them.
-        let shared = match (source.load(Method::Baseline, &options), target.load(Method::Baseline, &options)) {
+        let shared = match (source.load(Method::Baseline, &options), target.load(Method::Baseline, &options))
+        {
             (Ok(s), Ok(t)) => (s, t),
             _ => (source.load(Method::Blobtree, &options)?, target.load(Method::Blobtree, &options)?),
         };
@@ -1019,7 +1068,9 @@ fn compare<'py>(
             let settings = settings.clone();
             candidates.push(Candidate {
                 name,
-                build: Ok(Box::new(move |control: &Control| build(method, &inputs.0, &inputs.1, &settings, control))),
+                build: Ok(Box::new(move |control: &Control| {
+                    build(method, &inputs.0, &inputs.1, &settings, control)
+                })),
                 references,
             });
         }
