@@ -327,15 +327,15 @@ fn input_from(py: Python<'_>, obj: &Bound<'_, PyAny>, side: &str) -> PyResult<In
             Solid::mesh(m).map_err(|e| error(py, Kind::Input, format!("{side}: {}", error_chain(&e))))?;
         Ok(Input::Solid(solid, name))
     };
-    if let Ok(t) = obj.cast::<PyTuple>() {
-        if t.len() == 2 {
-            return mesh(mesh_from(py, &t.get_item(0)?, &t.get_item(1)?)?);
-        }
+    if let Ok(t) = obj.cast::<PyTuple>()
+        && t.len() == 2
+    {
+        return mesh(mesh_from(py, &t.get_item(0)?, &t.get_item(1)?)?);
     }
-    if let Ok(l) = obj.cast::<PyList>() {
-        if l.len() == 2 {
-            return mesh(mesh_from(py, &l.get_item(0)?, &l.get_item(1)?)?);
-        }
+    if let Ok(l) = obj.cast::<PyList>()
+        && l.len() == 2
+    {
+        return mesh(mesh_from(py, &l.get_item(0)?, &l.get_item(1)?)?);
     }
     if let (Some(v), Some(f)) = (attr(obj, "vertices"), attr(obj, "faces")) {
         return mesh(mesh_from(py, &v, &f)?);
@@ -765,9 +765,9 @@ impl PyMorph {
     /// A box in world space containing every frame mesh: `((xmin, ymin,
     /// zmin), (xmax, ymax, zmax))`.
     #[getter]
-    fn world_bounds(&self) -> ([f32; 3], [f32; 3]) {
+    fn world_bounds(&self) -> ((f32, f32, f32), (f32, f32, f32)) {
         let b = self.morph.world_bounds();
-        (b.min.to_array(), b.max.to_array())
+        ((b.min.x, b.min.y, b.min.z), (b.max.x, b.max.y, b.max.z))
     }
 
     /// The source and target as given (names, paths or a short description
@@ -939,10 +939,10 @@ fn morph(
     settings: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyMorph> {
     let method = method_from(py, method)?;
-    if let Some(r) = resolution {
-        if !(8..=1024).contains(&r) {
-            return Err(setting_error(py, "resolution", format!("{r} is out of range: expected 8 to 1024")));
-        }
+    if let Some(r) = resolution
+        && !(8..=1024).contains(&r)
+    {
+        return Err(setting_error(py, "resolution", format!("{r} is out of range: expected 8 to 1024")));
     }
     check_timeout(py, timeout)?;
     let source = input_from(py, source, "source")?;
@@ -1001,10 +1001,10 @@ fn compare<'py>(
     if list.is_empty() {
         return Err(setting_error(py, "methods", "expected at least one method"));
     }
-    if let Some(r) = resolution {
-        if !(8..=1024).contains(&r) {
-            return Err(setting_error(py, "resolution", format!("{r} is out of range: expected 8 to 1024")));
-        }
+    if let Some(r) = resolution
+        && !(8..=1024).contains(&r)
+    {
+        return Err(setting_error(py, "resolution", format!("{r} is out of range: expected 8 to 1024")));
     }
     if !(2..=1000).contains(&frames) {
         return Err(setting_error(py, "frames", format!("{frames} is out of range: expected 2 to 1000")));
