@@ -53,7 +53,9 @@ class Morph:
         timeout: Optional[float] = None,
     ) -> Dict[str, Any]:
         """Writes what ``isomorph morph --out DIR`` writes (``frame_NNN.ply``/``.obj``/``.stl``,
-        ``contact_sheet.png``, ``report.json``) and returns ``report.json`` as a dict."""
+        or with ``format="usd"`` one USD stage ``morph.usda`` holding every frame as a time
+        sample; ``contact_sheet.png``, ``preview.gif``, ``report.json``) and returns
+        ``report.json`` as a dict."""
 
 def morph(
     source: Input,

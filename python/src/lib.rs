@@ -674,16 +674,19 @@ fn load_options(fit: bool, iso: Option<f32>) -> LoadOptions {
     LoadOptions { fit, iso, raw: None }
 }
 
-fn mesh_format(py: Python<'_>, format: &str) -> PyResult<MeshFormat> {
+/// The frame file format and whether the sequence is one USD stage
+/// instead (`"usd"`: `morph.usda`, no frame files).
+fn mesh_format(py: Python<'_>, format: &str) -> PyResult<(MeshFormat, bool)> {
     Ok(match format {
-        "ply" => MeshFormat::PlyBinaryLittleEndian,
-        "obj" => MeshFormat::Obj,
-        "stl" => MeshFormat::StlBinary,
+        "ply" => (MeshFormat::PlyBinaryLittleEndian, false),
+        "obj" => (MeshFormat::Obj, false),
+        "stl" => (MeshFormat::StlBinary, false),
+        "usd" => (MeshFormat::PlyBinaryLittleEndian, true),
         other => {
             return Err(setting_error(
                 py,
                 "format",
-                format!("'{other}' is not valid: expected 'ply', 'obj' or 'stl'"),
+                format!("'{other}' is not valid: expected 'ply', 'obj', 'stl' or 'usd'"),
             ));
         }
     })
@@ -862,7 +865,7 @@ impl PyMorph {
         timeout: Option<f64>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let res = self.frame_res(py, resolution)?;
-        let format = mesh_format(py, format)?;
+        let (format, usd) = mesh_format(py, format)?;
         check_timeout(py, timeout)?;
         if !(2..=1000).contains(&frames) {
             return Err(setting_error(py, "frames", format!("{frames} is out of range: expected 2 to 1000")));
@@ -877,6 +880,8 @@ impl PyMorph {
                 resolution: res,
                 out_dir: dir,
                 format,
+                frame_files: !usd,
+                usd,
                 source_reference: Some(source),
                 target_reference: Some(target),
                 ..ExportSettings::default()
@@ -1010,7 +1015,7 @@ fn compare<'py>(
         return Err(setting_error(py, "frames", format!("{frames} is out of range: expected 2 to 1000")));
     }
     check_timeout(py, timeout)?;
-    let format = mesh_format(py, format)?;
+    let (format, usd) = mesh_format(py, format)?;
     let source = input_from(py, source, "source")?;
     let target = input_from(py, target, "target")?;
     let names = (source.name().to_string(), target.name().to_string());
@@ -1046,6 +1051,8 @@ fn compare<'py>(
             resolution: res,
             out_dir,
             format,
+            frame_files: !usd,
+            usd,
             source_reference: Some(src_ref),
             target_reference: Some(tgt_ref),
             ..ExportSettings::default()

@@ -220,3 +220,21 @@ def test_threads_do_not_change_results():
     assert np.array_equal(va, vb) and np.array_equal(fa, fb)
     with pytest.raises(ValueError, match="threads"):
         isomorph.morph("sphere", "torus", method="baseline", threads=0)
+
+
+def test_usd_export_opens_in_usd_core(morphs, tmp_path):
+    pytest.importorskip("pxr", reason="usd-core is not installed (pip install usd-core)")
+    from pxr import Usd, UsdGeom
+
+    report = built(morphs, "baseline").export(tmp_path, frames=3, resolution=32, format="usd")
+    assert [f["file"] for f in report["frames"]] == ["morph.usda@0", "morph.usda@1", "morph.usda@2"]
+    assert not (tmp_path / "frame_000.ply").exists()
+    stage = Usd.Stage.Open(str(tmp_path / "morph.usda"))
+    assert (stage.GetStartTimeCode(), stage.GetEndTimeCode()) == (0, 2)
+    assert UsdGeom.GetStageUpAxis(stage) == "Y" and UsdGeom.GetStageMetersPerUnit(stage) == 1.0
+    mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/morph/surface"))
+    assert list(mesh.GetPointsAttr().GetTimeSamples()) == [0.0, 1.0, 2.0]
+    assert mesh.GetNormalsInterpolation() == "vertex"
+    for t, frame in enumerate(report["frames"]):
+        assert len(mesh.GetPointsAttr().Get(t)) == frame["vertices"]
+        assert len(mesh.GetFaceVertexCountsAttr().Get(t)) == frame["triangles"]
