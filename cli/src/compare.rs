@@ -10,6 +10,7 @@ use clap::{ArgMatches, Args};
 use isomorph_cli::methods::{Method, build};
 use isomorph_common::Control;
 use isomorph_io::compare::{Candidate, Comparison, Status, compare};
+use isomorph_io::export::reference_surfaces;
 use std::path::PathBuf;
 
 /// Arguments of `isomorph compare`.
@@ -93,8 +94,7 @@ fn candidate(
         Err(e) => return Ok(Candidate { name, build: Err(format!("{e:#}")), references: None }),
     };
     let references = if method == Method::Blobtree {
-        let res = (2 * args.io.resolution()).min(256);
-        Some((inputs.0.surface(res, control)?.into_owned(), inputs.1.surface(res, control)?.into_owned()))
+        Some(reference_surfaces(&inputs.0, &inputs.1, args.io.resolution(), control)?)
     } else {
         None
     };

@@ -7,7 +7,7 @@ use anyhow::Context;
 use clap::{ArgMatches, Args, ValueEnum};
 use isomorph_cli::methods::{Method, Settings, build, load_input_with_warnings};
 use isomorph_common::{Control, Solid};
-use isomorph_io::export::{ExportSettings, Report, export_sequence};
+use isomorph_io::export::{ExportSettings, Report, export_sequence, reference_surfaces};
 use isomorph_io::inputs::LoadOptions;
 use isomorph_io::mesh::MeshFormat;
 use std::path::{Path, PathBuf};
@@ -127,7 +127,7 @@ impl Io {
         inputs: &(Solid, Solid),
         control: &Control,
     ) -> anyhow::Result<ExportSettings> {
-        let reference = (2 * self.resolution()).min(256);
+        let (source, target) = reference_surfaces(&inputs.0, &inputs.1, self.resolution(), control)?;
         Ok(ExportSettings {
             frames: self.frames as usize,
             resolution: self.resolution(),
@@ -136,8 +136,8 @@ impl Io {
             frame_files: self.format != Format::Usd,
             usd: self.format == Format::Usd,
             preview: !self.no_preview,
-            source_reference: Some(inputs.0.surface(reference, control)?.into_owned()),
-            target_reference: Some(inputs.1.surface(reference, control)?.into_owned()),
+            source_reference: Some(source),
+            target_reference: Some(target),
             ..ExportSettings::default()
         })
     }

@@ -31,7 +31,7 @@ use crate::mesh::{MeshFormat, write_mesh};
 use crate::render::{Camera, Image, RenderSettings, contact_sheet, render, write_gif};
 use crate::usd::{UsdSettings, write_usda};
 use isomorph_common::mesh::distance::{SurfaceDistance, surface_distance};
-use isomorph_common::{Aabb, Control, Morph, MorphError, TriMesh};
+use isomorph_common::{Aabb, Control, Morph, MorphError, Solid, TriMesh};
 use isomorph_common::{BoxedError, MorphReport};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -379,25 +379,35 @@ fn export_on_pool<M: Morph + ?Sized>(
     control.check()?;
     control.progress("metrics", None, String::new);
     let voxel = world_voxel(&morph.world_bounds(), settings.resolution);
-    let steps: Vec<Option<f32>> = (1..total)
-        .into_par_iter()
-        .map(|i| {
-            surface_distance(&meshes[i - 1], &meshes[i], settings.step_samples).ok().map(|d| d.hausdorff)
-        })
-        .collect();
-    for (frame, step) in frames.iter_mut().skip(1).zip(&steps) {
-        frame.step_from_previous = *step;
-    }
-    let largest_step = steps.iter().flatten().copied().reduce(f32::max);
     let endpoint = |reference: &Option<TriMesh>, mesh: &TriMesh| {
         let reference = reference.as_ref()?;
         let d = surface_distance(mesh, reference, settings.distance_samples).ok()?;
         Some(EndpointDistance::new(d, voxel))
     };
-    let endpoints = Endpoints {
-        source: endpoint(&settings.source_reference, &meshes[0]),
-        target: endpoint(&settings.target_reference, &meshes[total - 1]),
-    };
+    // The steps and both endpoints at once, so that every core stays busy
+    // (an endpoint's reference mesh is the largest of all).
+    let (steps, (source, target)) = rayon::join(
+        || {
+            (1..total)
+                .into_par_iter()
+                .map(|i| {
+                    let d = surface_distance(&meshes[i - 1], &meshes[i], settings.step_samples);
+                    d.ok().map(|d| d.hausdorff)
+                })
+                .collect::<Vec<Option<f32>>>()
+        },
+        || {
+            rayon::join(
+                || endpoint(&settings.source_reference, &meshes[0]),
+                || endpoint(&settings.target_reference, &meshes[total - 1]),
+            )
+        },
+    );
+    for (frame, step) in frames.iter_mut().skip(1).zip(&steps) {
+        frame.step_from_previous = *step;
+    }
+    let largest_step = steps.iter().flatten().copied().reduce(f32::max);
+    let endpoints = Endpoints { source, target };
     for (which, end) in [("first", &endpoints.source), ("last", &endpoints.target)] {
         if let Some(e) = end.filter(|e| e.hausdorff_voxels > ENDPOINT_WARNING_VOXELS) {
             let input = if which == "first" { "source" } else { "target" };
@@ -423,6 +433,25 @@ fn export_on_pool<M: Morph + ?Sized>(
     let json = serde_json::to_string_pretty(&report).expect("report serializes");
     std::fs::write(&path, json).map_err(|source| ExportError::Io { path, source })?;
     Ok(Exported { report, meshes })
+}
+
+/// The inputs' surfaces to measure the end frames against
+/// ([`ExportSettings::source_reference`], `target_reference`): polygonized
+/// at twice the frames' `resolution` (at most 256; a mesh input is itself),
+/// both at once.
+///
+/// # Errors
+/// The solids' surface errors, [`MorphError::Cancelled`].
+pub fn reference_surfaces(
+    source: &Solid,
+    target: &Solid,
+    resolution: u32,
+    control: &Control,
+) -> Result<(TriMesh, TriMesh), MorphError> {
+    let res = resolution.saturating_mul(2).min(256);
+    let surface = |solid: &Solid| solid.surface(res, control).map(std::borrow::Cow::into_owned);
+    let (a, b) = rayon::join(|| surface(source), || surface(target));
+    Ok((a?, b?))
 }
 
 /// One world voxel: the longest edge of `bounds` over `resolution − 1`.

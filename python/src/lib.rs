@@ -25,7 +25,7 @@ use isomorph_common::{
     Solid, TriMesh, lattice_for_box,
 };
 use isomorph_io::compare::{Candidate, Comparison, compare as compare_methods};
-use isomorph_io::export::{ExportError, ExportSettings, export_sequence};
+use isomorph_io::export::{ExportError, ExportSettings, export_sequence, reference_surfaces};
 use isomorph_io::inputs::LoadOptions;
 use isomorph_io::mesh::MeshFormat;
 use isomorph_levelset::{Align, SolverKind};
@@ -700,17 +700,6 @@ fn check_resolution(py: Python<'_>, name: &str, res: u32) -> PyResult<u32> {
     }
 }
 
-/// The reference surfaces of a morph's inputs for the endpoint distances
-/// (the CLI's: twice the frame resolution, at most 256).
-fn references(
-    inputs: &(Solid, Solid),
-    res: u32,
-    control: &Control,
-) -> Result<(TriMesh, TriMesh), MorphError> {
-    let r = (2 * res).min(256);
-    Ok((inputs.0.surface(r, control)?.into_owned(), inputs.1.surface(r, control)?.into_owned()))
-}
-
 /// A frame's field placed in the world, minus its iso value.
 struct Placed<'a> {
     field: &'a DynField,
@@ -874,7 +863,8 @@ impl PyMorph {
         let morph = self.morph.clone();
         let inputs = self.inputs.clone();
         let result = run_blocking(py, &token, timeout, move || -> Result<_, (Kind, String)> {
-            let (source, target) = references(&inputs, res, &control).map_err(shared_kind)?;
+            let (source, target) =
+                reference_surfaces(&inputs.0, &inputs.1, res, &control).map_err(shared_kind)?;
             let settings = ExportSettings {
                 frames,
                 resolution: res,
@@ -1045,7 +1035,8 @@ fn compare<'py>(
             (Ok(s), Ok(t)) => (s, t),
             _ => (source.load(Method::Blobtree, &options)?, target.load(Method::Blobtree, &options)?),
         };
-        let (src_ref, tgt_ref) = references(&shared, res, &control).map_err(shared_kind)?;
+        let (src_ref, tgt_ref) =
+            reference_surfaces(&shared.0, &shared.1, res, &control).map_err(shared_kind)?;
         let export = ExportSettings {
             frames,
             resolution: res,
@@ -1068,7 +1059,7 @@ fn compare<'py>(
                 }
             };
             let references = if method == Method::Blobtree {
-                Some(references(&inputs, res, &control).map_err(shared_kind)?)
+                Some(reference_surfaces(&inputs.0, &inputs.1, res, &control).map_err(shared_kind)?)
             } else {
                 None
             };
