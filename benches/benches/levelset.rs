@@ -8,14 +8,31 @@
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use isomorph_cli::methods::{Method, Settings, build, load_input};
-use isomorph_common::{Aabb, Control, Grid3, Shape};
+use isomorph_common::{Aabb, Control, Field3, Grid3, Morph, Shape};
 use isomorph_io::export::{ExportSettings, export_sequence};
 use isomorph_levelset::{
-    DenseSolver, EvolveSettings, FrameSchedule, Placement, Response, Solver, SolverKind, SparseFieldSolver,
-    SpeedGrid, StepParams, evolve,
+    DenseSolver, EvolveSettings, FrameSchedule, LevelSetMorph, Placement, Response, Solver, SolverKind,
+    SparseFieldSolver, SpeedGrid, StepParams, evolve,
 };
 use std::hint::black_box;
 use std::time::Duration;
+
+/// Prints the error of the final surface (marching-cubes vertices) against
+/// the analytic torus, in voxels, with the iterations it took.
+fn print_accuracy(n: u32, morph: &LevelSetMorph, voxel: f32) {
+    let mesh = morph.frame_mesh(1.0, 0).unwrap();
+    let torus = Shape::torus(0.3, 0.12);
+    let errors: Vec<f32> = mesh.positions.iter().map(|&p| torus.value(p).abs() / voxel).collect();
+    let mean = errors.iter().sum::<f32>() / errors.len() as f32;
+    let max = errors.iter().copied().fold(0.0, f32::max);
+    println!(
+        "accuracy/sphere_torus/sparse/{n}: {} iterations (converged: {}), surface error mean {mean:.4}, \
+         max {max:.4} voxels, genus {:?}",
+        morph.stats().len(),
+        morph.converged(),
+        mesh.genus()
+    );
+}
 
 /// Source distance grid and target speed of the reference case.
 fn case(n: u32) -> (Grid3<f32>, SpeedGrid) {
@@ -32,9 +49,8 @@ fn case(n: u32) -> (Grid3<f32>, SpeedGrid) {
 /// whole grid bounds its step by the largest target distance anywhere, so
 /// at 64³ it needs about 600 iterations where the sparse field needs 83; at
 /// 128³ about 2400 (about 2 minutes a run here, so `dense/128` takes some 20
-/// minutes for criterion's ten samples;
-/// `cargo run --release -p isomorph-levelset --example reference_case -- 128 dense`
-/// times one run).
+/// minutes for criterion's ten samples). Before timing, each size prints
+/// the sparse field's final surface error against the analytic torus.
 fn morph(c: &mut Criterion) {
     let mut group = c.benchmark_group("morph/sphere_torus");
     group.sample_size(10);
@@ -43,6 +59,7 @@ fn morph(c: &mut Criterion) {
     for n in [64u32, 128, 256] {
         let (source, speed) = case(n);
         let sparse = evolve(&source, &speed, Placement::Identity, &settings, &Control::new()).unwrap();
+        print_accuracy(n, &sparse, source.spacing());
         group.bench_function(BenchmarkId::new("sparse", n), |b| {
             b.iter(|| {
                 black_box(
