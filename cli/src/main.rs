@@ -118,15 +118,5 @@ fn main() -> ExitCode {
 /// print twice. The libraries' "raise the memory limit" becomes the option
 /// that does it.
 fn message(e: &anyhow::Error) -> String {
-    let mut out = String::new();
-    for cause in e.chain() {
-        let text = cause.to_string();
-        if !out.contains(&text) {
-            if !out.is_empty() {
-                out.push_str(": ");
-            }
-            out.push_str(&text);
-        }
-    }
-    out.replace("raise the memory limit", "raise --max-memory")
+    isomorph_io::compare::error_chain(e.as_ref()).replace("raise the memory limit", "raise --max-memory")
 }

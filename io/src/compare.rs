@@ -276,8 +276,10 @@ fn write(path: &Path, bytes: &[u8]) -> Result<(), CompareError> {
     std::fs::write(path, bytes).map_err(|source| CompareError::Io { path: path.to_path_buf(), source })
 }
 
-/// An error and its causes, as one line.
-fn error_chain(e: &dyn std::error::Error) -> String {
+/// An error and its causes as one line, each cause once (library errors
+/// often repeat their cause in their own message): how the comparison's
+/// notes, the command line and the Python package print errors.
+pub fn error_chain(e: &dyn std::error::Error) -> String {
     let mut text = e.to_string();
     let mut cause = e.source();
     while let Some(c) = cause {

@@ -24,7 +24,7 @@ use isomorph_common::{
     Aabb, BoxedError, BoxedMorph, CancelToken, Control, DynField, Field3, Grid3, MorphError, MorphFailure,
     Solid, TriMesh, lattice_for_box,
 };
-use isomorph_io::compare::{Candidate, Comparison, compare as compare_methods};
+use isomorph_io::compare::{Candidate, Comparison, compare as compare_methods, error_chain};
 use isomorph_io::export::{ExportError, ExportSettings, export_sequence, reference_surfaces};
 use isomorph_io::inputs::LoadOptions;
 use isomorph_io::mesh::MeshFormat;
@@ -38,7 +38,6 @@ use numpy::{
 use pyo3::exceptions::{PyRuntimeError, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
-use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::mpsc::{RecvTimeoutError, channel};
@@ -87,20 +86,6 @@ fn error(py: Python<'_>, kind: Kind, message: impl Into<String>) -> PyErr {
 
 fn setting_error(py: Python<'_>, name: &str, message: impl std::fmt::Display) -> PyErr {
     error(py, Kind::Setting, format!("setting '{name}': {message}"))
-}
-
-/// An error and its causes, as one line (as `isomorph compare` prints them).
-fn error_chain(e: &dyn std::error::Error) -> String {
-    let mut text = e.to_string();
-    let mut cause = e.source();
-    while let Some(c) = cause {
-        let c_text = c.to_string();
-        if !text.contains(&c_text) {
-            let _ = write!(text, ": {c_text}");
-        }
-        cause = c.source();
-    }
-    text
 }
 
 /// The exception kind of a shared morph error.
