@@ -16,6 +16,7 @@ use glam::DVec3;
 use isomorph_benches::data_path;
 use isomorph_common::Control;
 use isomorph_common::marching_cubes::polygonize;
+use isomorph_common::models;
 use isomorph_common::{Aabb, Shape};
 use isomorph_io::mesh::read_mesh;
 use isomorph_tspline::{
@@ -29,7 +30,7 @@ fn morphs(c: &mut Criterion) {
     group.sample_size(10);
     let bounds = Aabb::cube(0.5);
     let sphere = polygonize(&Shape::sphere(0.3), &bounds, 40, 0.0).unwrap();
-    let cube = polygonize(&demo::holed_cube(), &bounds, 64, 0.0).unwrap();
+    let cube = polygonize(&models::holed_cube(), &bounds, 64, 0.0).unwrap();
     let settings = demo::holed_cube_settings();
     group.bench_function("sphere_holed_cube", |b| {
         b.iter(|| black_box(morph(&sphere, &cube, &settings, &Control::new()).unwrap().frame_count()))

@@ -22,7 +22,7 @@
 //! | §4.3 projection frames, eq. 10 | [`morph`] (`morph.rs`) |
 //! | §4.4 combined alignment transforms, eq. 11 | [`TsplineMorph::placement`] (`W(u)`: translation and stretch linear, rotation slerped), [`TsplineMorph::frame_transform`], `tests/alignment.rs` |
 //! | §3.3 Fig. 2–3 | [`demo::corner_source`], [`demo::corner_target`], `tests/corner.rs` ("┌" → "┐", the shapes of the paper's text); [`demo::letter_t`], [`demo::letter_c`], `tests/t_to_c.rs` ("T" → "C", its captions) |
-//! | §5 examples | [`demo::holed_cube`], [`demo::petal_torus`] |
+//! | §5 examples | [`isomorph_common::models::holed_cube`], [`demo::petal_torus`] |
 //!
 //! # Choices where the paper is silent (see the note)
 //! - Anchors at every leaf vertex including hanging ones; local knot vectors

@@ -15,6 +15,7 @@
 use glam::{Affine3A, Quat, Vec3};
 use isomorph_common::marching_cubes::polygonize;
 use isomorph_common::mesh::distance::surface_distance;
+use isomorph_common::models;
 use isomorph_common::{Aabb, AffineParts, Control, Morph, Shape};
 use isomorph_tspline::{Align, Outcome, demo, morph};
 
@@ -31,7 +32,7 @@ fn placement() -> Affine3A {
 #[test]
 fn sphere_becomes_a_turned_holed_cube_with_the_turn_interpolated() {
     let source = polygonize(&Shape::sphere(0.3), &Aabb::cube(0.5), 40, 0.0).unwrap();
-    let cube = demo::holed_cube().transformed(placement());
+    let cube = models::holed_cube().transformed(placement());
     let target = polygonize(&cube, &cube.aabb().padded(0.05), 72, 0.0).unwrap();
     assert_eq!(target.genus(), Some(3));
     let mut settings = demo::holed_cube_settings();

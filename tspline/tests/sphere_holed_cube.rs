@@ -5,6 +5,7 @@
 use isomorph_common::Control;
 use isomorph_common::marching_cubes::polygonize;
 use isomorph_common::mesh::distance::surface_distance;
+use isomorph_common::models;
 use isomorph_common::{Aabb, Morph, Shape};
 use isomorph_tspline::{Outcome, Speed, demo, morph};
 
@@ -12,7 +13,7 @@ use isomorph_tspline::{Outcome, Speed, demo, morph};
 fn sphere_becomes_a_genus_three_holed_cube() {
     let bounds = Aabb::cube(0.5);
     let source = polygonize(&Shape::sphere(0.3), &bounds, 40, 0.0).unwrap();
-    let target = polygonize(&demo::holed_cube(), &bounds, 64, 0.0).unwrap();
+    let target = polygonize(&models::holed_cube(), &bounds, 64, 0.0).unwrap();
     assert_eq!(target.genus(), Some(3));
     let settings = demo::holed_cube_settings();
     let m = morph(&source, &target, &settings, &Control::new()).unwrap();
