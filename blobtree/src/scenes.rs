@@ -323,6 +323,35 @@ mod tests {
         }
     }
 
+    /// The in-betweens the paper shows (Figs. 2, 17, 19): the sphere
+    /// splits into the propeller's rods and the bear becomes the bird in one
+    /// sphere-like piece at every frame; the three tunnels of the pierced
+    /// sphere open together, the genus going from 0 straight to 5 and
+    /// staying there, in one piece.
+    #[test]
+    fn in_betweens_keep_one_piece_and_the_genus_changes_once() {
+        let frames = |name: &str| {
+            let (a, b, spec) = demo(name).unwrap();
+            let m = BlobMorph::from_trees(&a, &b, &spec).unwrap();
+            (0..=20)
+                .map(|k| {
+                    let mesh = m.frame_mesh(k as f32 / 20.0, 48).unwrap();
+                    (mesh.connected_components(), mesh.genus())
+                })
+                .collect::<Vec<_>>()
+        };
+        for name in ["sphere_propeller", "bear_bird"] {
+            let seen = frames(name);
+            assert!(seen.iter().all(|&f| f == (1, Some(0))), "{name}: (components, genus) {seen:?}");
+        }
+        let seen = frames("cube_sphere");
+        assert!(seen.iter().all(|&(c, _)| c == 1), "cube → sphere: {seen:?}");
+        let genus: Vec<Option<i64>> = seen.iter().map(|&(_, g)| g).collect();
+        let first_open = genus.iter().position(|&g| g == Some(5)).expect("the tunnels open");
+        assert!(genus[..first_open].iter().all(|&g| g == Some(0)), "{genus:?}");
+        assert!(genus[first_open..].iter().all(|&g| g == Some(5)), "{genus:?}");
+    }
+
     /// The first point of the zero set along `from + t·dir`, `t` in
     /// `(0, reach]` (inside at `t = 0`), by bisection.
     fn surface_along(tree: &BlobTree, from: Vec3, dir: Vec3, reach: f32) -> Vec3 {
