@@ -118,22 +118,10 @@
 //!
 //! # Performance
 //!
-//! Measured under load (2 cores shared with other jobs, load average ≈ 9),
-//! `cargo bench -p isomorph-benches --bench blobtree -- --warm-up-time 1
-//! --measurement-time 3 --sample-size 10`, on the rook → queen generic tree
-//! at `t = 0.5` (32³ query points per iteration):
-//!
-//! | bench | time | throughput |
-//! |---|---|---|
-//! | `eval/rook_queen/pruned` | 4.5 ms | 7.4 M evaluations/s (one thread) |
-//! | `eval/rook_queen/unpruned` | 32 ms | 1.0 M evaluations/s |
-//! | `eval/rook_queen/parallel` | 3.3 ms | 10 M evaluations/s (rayon; cores busy) |
-//! | `polygonize/rook_queen/128` | 99 ms (81–108) | 128³ samples + marching cubes |
-//!
-//! Bounding-box pruning gains about 7×. At `t = 0.5` the demo's carvings
-//! have already reached their final shape (speed curves end at 0.5); earlier
-//! versions of the demo without speed curves, with larger intermediate
-//! cutters, took about 140 ms for the 128³ frame.
+//! Evaluation prunes every subtree outside its bounding box, exactly (about
+//! 7× faster on the rook → queen demo); batches run in parallel with rayon.
+//! Benches: `cargo bench -p isomorph-benches --bench blobtree`; figures in
+//! the repository's `docs/EXPERIMENTS.md`.
 //!
 //! # Example
 //!
