@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{isomorph, scratch};
+use common::{isomorph, read_json, scratch};
 use std::path::Path;
 
 fn bunny() -> String {
@@ -18,8 +18,7 @@ fn demo_writes_frames_sheet_and_report() {
     for f in ["frame_000.ply", "frame_003.ply", "contact_sheet.png", "report.json"] {
         assert!(dir.join(f).is_file(), "missing {f}");
     }
-    let report: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap();
+    let report: serde_json::Value = read_json(dir.join("report.json"));
     assert_eq!(report["method"], "baseline");
     assert_eq!(report["resolution"], 32);
     let frames = report["frames"].as_array().unwrap();
@@ -36,8 +35,7 @@ fn demo_writes_frames_sheet_and_report() {
         assert!(e["mean_voxels"].as_f64().unwrap() < 0.5, "{end}: {e}");
     }
     // The level-set ball → C stays one piece and ends on the C.
-    let level_set: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("level_set_ball_to_c/report.json")).unwrap()).unwrap();
+    let level_set: serde_json::Value = read_json(out.join("level_set_ball_to_c/report.json"));
     assert_eq!(level_set["method"], "level-set");
     for f in level_set["frames"].as_array().unwrap() {
         assert_eq!(f["components"], 1, "{f}");
@@ -45,16 +43,13 @@ fn demo_writes_frames_sheet_and_report() {
     assert!(level_set["endpoints"]["target"]["mean_voxels"].as_f64().unwrap() < 0.5);
     assert!(out.join("level_set_mug_to_chain/contact_sheet.png").is_file());
     // The rook becomes the queen in one piece (its built-in links and speeds).
-    let blob: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("blobtree_rook_to_queen/report.json")).unwrap())
-            .unwrap();
+    let blob: serde_json::Value = read_json(out.join("blobtree_rook_to_queen/report.json"));
     for f in blob["frames"].as_array().unwrap() {
         assert_eq!(f["components"], 1, "{f}");
     }
     // RBF and T-spline: sphere → torus, genus 0 → 1, ends on the inputs.
     for dir in ["rbf_sphere_to_torus", "tspline_sphere_to_torus"] {
-        let r: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(out.join(dir).join("report.json")).unwrap()).unwrap();
+        let r: serde_json::Value = read_json(out.join(dir).join("report.json"));
         let frames = r["frames"].as_array().unwrap();
         assert_eq!(
             (&frames[0]["genus"], &frames[frames.len() - 1]["genus"]),
@@ -66,9 +61,7 @@ fn demo_writes_frames_sheet_and_report() {
         }
     }
     // Yang & Jüttler's Example 2: the sphere becomes the genus-3 holed cube.
-    let holed: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("tspline_sphere_to_holed_cube/report.json")).unwrap())
-            .unwrap();
+    let holed: serde_json::Value = read_json(out.join("tspline_sphere_to_holed_cube/report.json"));
     let frames = holed["frames"].as_array().unwrap();
     assert_eq!(frames[0]["genus"], 0, "{holed}");
     assert_eq!(frames[frames.len() - 1]["genus"], 3, "{holed}");
@@ -206,8 +199,7 @@ fn sdf_writes_npy_and_sidecar() {
     let o = isomorph(&["sdf", "sphere", "--res", "24", "--pad", "0.1", "--out", npy.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(String::from_utf8_lossy(&o.stdout).contains("24 x 24 x 24 nodes"));
-    let meta: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("sphere.json")).unwrap()).unwrap();
+    let meta: serde_json::Value = read_json(out.join("sphere.json"));
     assert_eq!(meta["sign"], "positive inside");
     assert_eq!(meta["axis_order"], "zyx");
     assert_eq!(meta["dims"], serde_json::json!([24, 24, 24]));
@@ -231,8 +223,7 @@ fn sdf_writes_npy_and_sidecar() {
     let npy = out.join("bunny.npy");
     let o = isomorph(&["sdf", &bunny(), "--res", "16", "--out", npy.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let meta: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("bunny.json")).unwrap()).unwrap();
+    let meta: serde_json::Value = read_json(out.join("bunny.json"));
     let dims: Vec<u64> = meta["dims"].as_array().unwrap().iter().map(|v| v.as_u64().unwrap()).collect();
     assert_eq!(dims[0], 16, "x is the bunny's longest side");
     let (header, values) = read_npy(&npy);
@@ -342,8 +333,7 @@ fn warp_drags_a_sphere_point_and_writes_volume_meshes_and_png() {
     let off_grid = ramp.iter().filter(|v| ((*v * 255.0) - (*v * 255.0).round()).abs() > 1e-3).count();
     assert!(off_grid * 2 > ramp.len(), "{off_grid} of {} ramp values are off the u8 levels", ramp.len());
     // The animation from the identity: frame 0 is the sphere, the last the warp.
-    let report: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("frames/report.json")).unwrap()).unwrap();
+    let report: serde_json::Value = read_json(out.join("frames/report.json"));
     let frames = report["frames"].as_array().unwrap();
     assert_eq!(frames.len(), 3);
     let volume = |i: usize| frames[i]["volume"].as_f64().unwrap();
@@ -448,8 +438,7 @@ fn warp_and_morph_take_npy_and_raw_volumes() {
     let args = [&args[..], &[morphed.to_str().unwrap()]].concat();
     let o = isomorph(&[&args[..], &["--raw-dims", "24,24,24"]].concat());
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let report: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(morphed.join("report.json")).unwrap()).unwrap();
+    let report: serde_json::Value = read_json(morphed.join("report.json"));
     assert_eq!(report["morph"]["converged"], true, "{report}");
     assert!(report["endpoints"]["target"]["mean_voxels"].as_f64().unwrap() < 0.5, "{report}");
     let o = isomorph(&args);
@@ -582,8 +571,7 @@ fn landmarks_warp_the_rbf_transformation() {
     };
     let o = run(&["--out", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let report: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    let report: serde_json::Value = read_json(out.join("report.json"));
     assert_eq!(report["method"], "rbf-warp");
     assert_eq!(report["morph"]["details"]["correspondences"], 8);
     let o = isomorph(&[
@@ -671,8 +659,7 @@ fn usd_format_writes_one_stage_with_a_sample_per_frame() {
     assert!(!out.join("frame_000.ply").exists() && !out.join("preview.gif").exists());
     let text = std::fs::read_to_string(out.join("morph.usda")).unwrap();
     assert!(text.starts_with("#usda 1.0") && text.contains("endTimeCode = 2"), "{}", &text[..300]);
-    let report: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    let report: serde_json::Value = read_json(out.join("report.json"));
     let frames = report["frames"].as_array().unwrap();
     assert_eq!(frames[2]["file"], "morph.usda@2");
     // Each frame's vertex count is its sample's point count.
@@ -693,8 +680,7 @@ fn rbf_tolerance_fits_many_points_through_fewer_centres() {
     let greedy = ["--points", "1500", "--tolerance", "0.05", "--no-preview", "--out", out.to_str().unwrap()];
     let o = isomorph(&[&args[..], &greedy[..]].concat());
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let report: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    let report: serde_json::Value = read_json(out.join("report.json"));
     let morph = &report["morph"];
     assert_eq!(morph["outcome"], "converged", "{morph}");
     let centres = morph["details"]["constraints"].as_u64().unwrap();

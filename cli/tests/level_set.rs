@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{isomorph, scratch};
+use common::{isomorph, read_json, scratch};
 
 #[test]
 fn max_unreached_is_a_checked_level_set_option() {
@@ -21,8 +21,7 @@ fn max_unreached_is_a_checked_level_set_option() {
     // even when nothing may be.
     let o = run(&["--method", "level-set", "--max-unreached", "0"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let report: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    let report: serde_json::Value = read_json(out.join("report.json"));
     let details = &report["morph"]["details"];
     assert_eq!((details["target_parts"].as_u64(), details["unreached_share"].as_f64()), (Some(1), Some(0.0)));
 }

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{isomorph, scratch};
+use common::{isomorph, read_json, scratch};
 use isomorph_common::glam::{Affine3A, Quat, Vec3};
 use isomorph_common::marching_cubes::polygonize;
 use isomorph_common::{Aabb, Shape};
@@ -187,8 +187,7 @@ fn the_paper_speed_stall_is_printed_and_reported() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("stalled") && err.contains("robust speed"), "{err}");
-    let report: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    let report: serde_json::Value = read_json(out.join("report.json"));
     assert_eq!(report["morph"]["outcome"], "stalled", "{}", report["morph"]);
     assert!(format!("{}", report["morph"]["warnings"]).contains("stalled"));
     let _ = std::fs::remove_dir_all(&dir);
