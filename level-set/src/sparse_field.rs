@@ -37,13 +37,12 @@
 //! The paper keeps each layer "one unit from the next layer closest to the
 //! active set" (the city-block distance) and samples the speed by trilinear
 //! interpolation. Both put the converged surface off the target by more
-//! than the grid's own floor (marching cubes of the exact distance): on the
-//! reference case at 128³ (`docs/EXPERIMENTS.md`) the city-block layers
-//! were 0.1 voxel off the true distance on average, 0.4 at most, and the
-//! central gradients of the active points read them, so the active values
-//! (and the polygonized surface, whose edges end in layer points) were off
-//! by up to 0.03 voxel; trilinear interpolation moves a curved target's
-//! zero set by up to 0.01 voxel. Here:
+//! than the grid's own floor (marching cubes of the exact distance;
+//! diagnosis and figures in `docs/EXPERIMENTS.md`): city-block values
+//! overestimate the distance on any front not aligned with the axes, the
+//! active points' central differences read them, and the polygonized
+//! surface's edges end in them; trilinear interpolation pulls a curved
+//! target's zero set inwards where it is convex. Here:
 //! - `L±1` values solve `|∇u| = 1` by the second-order up-wind (Godunov)
 //!   update from the `L0` and same-layer neighbours ([`eikonal_update`]),
 //!   exact for a planar front and second-order accurate on a curved one
@@ -86,8 +85,7 @@ const ACTIVE_MAX: f32 = 0.5;
 /// zero (voxels): `ACTIVE_MAX` plus a margin, so that a point whose
 /// converged value lies just past `ACTIVE_MAX` while its layer value (from
 /// its neighbours) lies just inside it does not leave and rejoin forever
-/// (without the margin the reference case stalls at an RMS distance of
-/// 0.02 voxel).
+/// (without the margin the reference case stalls short of convergence).
 const LEAVE_MAX: f32 = ACTIVE_MAX + 0.05;
 
 /// The sparse-field level-set solver.
@@ -562,8 +560,7 @@ mod tests {
                 }
             }
         }
-        // The paper's city-block update would give d − 0.48 + 1 = d + 0.52
-        // for the third normal; one axis alone gives the same here.
+        // With one axis only, the update is the paper's: the neighbour plus one unit.
         assert!(
             (eikonal_update([(0.3, 1.0), (f32::INFINITY, 1.0), (f32::INFINITY, 1.0)]) - 1.3).abs() < 1e-6
         );

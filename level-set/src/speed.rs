@@ -128,8 +128,8 @@ impl SpeedGrid {
     /// `½ Σᵢ tᵢ(1 − tᵢ) ∂ᵢᵢγ` (cell-local coordinates `t ∈ [0, 1]³`). A
     /// distance bends by the surface's curvature, so on a curved target the
     /// interpolated zero set is pulled inwards on convex parts and outwards
-    /// on concave ones (0.005 voxel on average, 0.010 at most on the torus
-    /// of the reference case at 128³). The correction subtracts that term,
+    /// on concave ones (by a hundredth of a voxel on the reference case;
+    /// `docs/EXPERIMENTS.md`). The correction subtracts that term,
     /// with `∂ᵢᵢγ` the second difference at the cell edge's two ends nearest
     /// `g`, limited by min-mod: the smaller when both have the same sign,
     /// none across a kink of the distance (a medial axis, a CSG edge, a
