@@ -6,10 +6,12 @@ use anyhow::{Context, bail};
 use clap::parser::ValueSource;
 use clap::{ArgMatches, Args, ValueEnum};
 use isomorph_blobtree::MorphSpec;
-use isomorph_cli::methods::{Method, Settings};
+use isomorph_cli::methods::{LandmarkWarp, Method, Settings, landmark_warp};
 use isomorph_cli::parse::{parse_pair, read_map};
+use isomorph_common::Landmarks;
 use isomorph_common::alignment::AlignMode;
 use isomorph_common::glam::Vec3;
+use isomorph_io::compare::error_chain;
 use isomorph_levelset::{Align, LevelSetSettings, SolverKind};
 use isomorph_rbf::{Kernel, RbfSettings};
 use isomorph_tspline::{Align as TsplineAlign, Speed, TsplineSettings};
@@ -34,6 +36,11 @@ pub struct MethodArgs {
     /// Most evolution iterations.
     #[arg(long, help_heading = "Level set (Breen & Whitaker)", default_value_t = LevelSetSettings::default().max_iterations)]
     pub max_iterations: usize,
+    /// Which warp carries the target's distance through the landmarks
+    /// (`--landmarks`/`--landmark`): Breen & Whitaker's generalized warp
+    /// `W` (§6.2), frames placed by `(1 − α) x + α W(x)`.
+    #[arg(long, help_heading = "Level set (Breen & Whitaker)", value_enum, default_value_t = LandmarkWarp::Rbf)]
+    pub landmark_warp: LandmarkWarp,
     /// Largest share (0–1) of the target's inside that may lie in parts the
     /// source does not overlap: the morph goes on without them and warns up
     /// to it, and is refused above it.
@@ -62,10 +69,15 @@ pub struct MethodArgs {
     pub warp_spec: WarpSpecArg,
     /// A correspondence `X,Y,Z:X,Y,Z` (source point : target point, world
     /// units); repeat for several. The volume warp carries the source by
-    /// them; the RBF method warps both shapes half-way by them (at least 4,
-    /// not all on one plane).
+    /// them; the RBF method warps both shapes half-way by them; the level
+    /// set evolves towards the target seen through the warp they define
+    /// (at least 4, not all on one plane).
     #[arg(long = "landmark", help_heading = "Volume warp (True)", value_parser = parse_pair, allow_hyphen_values = true)]
     pub landmarks: Vec<(Vec3, Vec3)>,
+    /// A landmarks file: a JSON list of `{"source": [x, y, z], "target":
+    /// [x, y, z]}` pairs (world units), used as `--landmark` pairs are.
+    #[arg(long = "landmarks", help_heading = "Volume warp (True)")]
+    pub landmarks_file: Option<PathBuf>,
     /// Voxels between B-spline control points.
     #[arg(long, help_heading = "Volume warp (True)", default_value_t = WarpMorphSettings::default().control_spacing)]
     pub control_spacing: u32,
@@ -129,12 +141,14 @@ const OWNERS: &[(&str, &[Method])] = &[
     ("curvature", &[Method::LevelSet]),
     ("max_iterations", &[Method::LevelSet]),
     ("max_unreached", &[Method::LevelSet]),
+    ("landmark_warp", &[Method::LevelSet]),
     ("points", &[Method::Rbf]),
     ("separation", &[Method::Rbf]),
     ("kernel", &[Method::Rbf]),
     ("tolerance", &[Method::Rbf]),
     ("warp_spec", &[Method::Warp]),
-    ("landmarks", &[Method::Warp, Method::Rbf]),
+    ("landmarks", &[Method::Warp, Method::Rbf, Method::LevelSet]),
+    ("landmarks_file", &[Method::Warp, Method::Rbf, Method::LevelSet]),
     ("control_spacing", &[Method::Warp]),
     ("speed", &[Method::Tspline]),
     ("nt", &[Method::Tspline]),
@@ -185,13 +199,21 @@ impl MethodArgs {
     /// inputs, for the BlobTree demo specs).
     ///
     /// # Errors
-    /// An unreadable alignment map or links file.
+    /// An unreadable alignment map, landmarks or links file; landmarks
+    /// together with `--align`.
     pub fn apply(&self, mut settings: Settings, source: &str, target: &str) -> anyhow::Result<Settings> {
+        let landmarks = self.landmark_pairs()?;
         let l = &mut settings.level_set;
-        l.align = match &self.align {
-            AlignArg::None => Align::None,
-            AlignArg::Auto => Align::Auto,
-            AlignArg::File(path) => Align::Map(read_map(path)?),
+        l.align = match (&self.align, &landmarks) {
+            (AlignArg::None, Some(landmarks)) => Align::Warp(
+                landmark_warp(landmarks, self.landmark_warp, self.control_spacing)
+                    .map_err(|e| anyhow::anyhow!(error_chain(&e)))
+                    .context("cannot fit a warp through the landmarks")?,
+            ),
+            (_, Some(_)) => bail!("--align and landmarks both place the source on the target: give one"),
+            (AlignArg::None, None) => Align::None,
+            (AlignArg::Auto, None) => Align::Auto,
+            (AlignArg::File(path), None) => Align::Map(read_map(path)?),
         };
         l.solver = match self.solver {
             SolverArg::Sparse => SolverKind::SparseField,
@@ -206,11 +228,12 @@ impl MethodArgs {
         r.separation = self.separation;
         r.kernel = self.kernel.into();
         r.tolerance = self.tolerance;
-        settings.rbf_correspondences.clone_from(&self.landmarks);
+        let pairs = landmarks.as_ref().map(|l| l.pairs().to_vec()).unwrap_or_default();
+        settings.rbf_correspondences.clone_from(&pairs);
 
         let w = &mut settings.warp;
         w.spec = match self.warp_spec {
-            _ if !self.landmarks.is_empty() => WarpSpec::Landmarks(self.landmarks.clone()),
+            _ if !pairs.is_empty() => WarpSpec::Landmarks(pairs),
             WarpSpecArg::Identity => WarpSpec::Identity,
             WarpSpecArg::Align => WarpSpec::Align,
         };
@@ -247,6 +270,24 @@ impl MethodArgs {
             None => isomorph_blobtree::scenes::demo_spec(source, target).unwrap_or_default(),
         };
         Ok(settings)
+    }
+}
+
+impl MethodArgs {
+    /// The `--landmark` pairs and those of the `--landmarks` file,
+    /// validated together; `None` when neither is given.
+    ///
+    /// # Errors
+    /// An unreadable file or an invalid set ([`Landmarks::new`]).
+    fn landmark_pairs(&self) -> anyhow::Result<Option<Landmarks>> {
+        let mut pairs = self.landmarks.clone();
+        if let Some(path) = &self.landmarks_file {
+            pairs.extend_from_slice(Landmarks::load(path)?.pairs());
+        }
+        if pairs.is_empty() {
+            return Ok(None);
+        }
+        Ok(Some(Landmarks::new(&pairs).context("invalid landmarks")?))
     }
 }
 

@@ -9,12 +9,16 @@ use crate::{BSplineMap, VolumeWarp, WarpError, WarpSettings};
 use glam::{Affine3A, Vec3};
 use isomorph_common::marching_cubes::marching_cubes;
 use isomorph_common::{Aabb, Frame, Grid3, Morph, MorphReport, Outcome, TriMesh, check_time};
+use std::borrow::Cow;
 
 /// A [`BSplineMap`] placed in world space by a source grid's origin and
 /// spacing: `apply(p) = origin + spacing · B((p − origin)/spacing)`.
-#[derive(Debug, Clone, Copy)]
+/// Borrowed from a [`VolumeWarp`] ([`VolumeWarp::world_map`]) or owned
+/// (`WorldMap<'static>`, e.g. [`WorldMap::from_landmarks`], to be moved into
+/// a closure).
+#[derive(Debug, Clone)]
 pub struct WorldMap<'a> {
-    map: &'a BSplineMap,
+    map: Cow<'a, BSplineMap>,
     origin: Vec3,
     spacing: f32,
 }
@@ -22,7 +26,17 @@ pub struct WorldMap<'a> {
 impl<'a> WorldMap<'a> {
     /// `map` placed like a grid with node 0 at `origin` and node `spacing`.
     pub fn new(map: &'a BSplineMap, origin: Vec3, spacing: f32) -> Self {
-        Self { map, origin, spacing }
+        Self { map: Cow::Borrowed(map), origin, spacing }
+    }
+
+    /// Like [`WorldMap::new`], owning `map`.
+    pub fn owned(map: BSplineMap, origin: Vec3, spacing: f32) -> WorldMap<'static> {
+        WorldMap { map: Cow::Owned(map), origin, spacing }
+    }
+
+    /// The underlying map (source voxel coordinates).
+    pub fn map(&self) -> &BSplineMap {
+        &self.map
     }
 
     /// The image of world point `p`.
