@@ -6,12 +6,16 @@ use crate::options::KernelArg;
 use crate::raw::RawArgs;
 use crate::rbf::{self, ContourMethod, ContoursArgs};
 use crate::warp::{self, FilterArg, WarpArgs};
+use anyhow::Context;
 use clap::Args;
-use isomorph_cli::methods::{Method, Settings};
+use isomorph_cli::methods::{LandmarkWarp, Method, Settings, landmark_warp};
 use isomorph_common::glam::Vec3;
+use isomorph_common::{Control, Solid, models};
 use isomorph_io::inputs::BUNNY;
+use isomorph_io::mesh::{MeshFormat, write_mesh};
 use isomorph_levelset::Align;
-use std::path::PathBuf;
+use std::f32::consts::FRAC_PI_2;
+use std::path::{Path, PathBuf};
 
 /// Arguments of `isomorph demo`.
 #[derive(Debug, Args)]
@@ -29,6 +33,23 @@ pub struct DemoArgs {
     /// Threads to use (default: all cores).
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
     threads: Option<u64>,
+}
+
+/// Writes the finned ball with its fin along +x and along +y (meshes) and
+/// the landmarks between them into `dir`; returns the three paths.
+fn fin_inputs(dir: &Path) -> anyhow::Result<(String, String, String)> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let control = Control::new();
+    let path = |name: &str| dir.join(name).to_string_lossy().into_owned();
+    for (angle, name) in [(0.0, "fin_x.ply"), (FRAC_PI_2, "fin_y.ply")] {
+        let mesh = Solid::shape(models::finned_ball(angle)).surface(96, &control)?.into_owned();
+        write_mesh(&mesh, Path::new(&path(name)), MeshFormat::PlyBinaryLittleEndian)
+            .with_context(|| format!("cannot write {}", path(name)))?;
+    }
+    let landmarks = path("fin_landmarks.json");
+    std::fs::write(&landmarks, models::fin_turn_landmarks().to_json())
+        .with_context(|| format!("cannot write {landmarks}"))?;
+    Ok((path("fin_x.ply"), path("fin_y.ply"), landmarks))
 }
 
 /// Runs every demo morph.
@@ -61,13 +82,30 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         (Method::Tspline, "sphere", "torus", &defaults, "tspline_sphere_to_torus"),
         (Method::Tspline, "sphere", "holed-cube", &holed_cube, "tspline_sphere_to_holed_cube"),
     ];
+    // Breen & Whitaker §6.2: a fin that should turn a quarter circle. The
+    // inputs and the landmarks are written as files, as a user gives them.
+    let fins = fin_inputs(&args.out.join("inputs"))?;
+    let fin_guided = {
+        let mut s = defaults.clone();
+        s.level_set.align = Align::Warp(
+            landmark_warp(&models::fin_turn_landmarks(), LandmarkWarp::Rbf, 8)
+                .map_err(|e| anyhow::anyhow!("{e}"))?,
+        );
+        s
+    };
+    let (fin_a, fin_b) = (fins.0.as_str(), fins.1.as_str());
+    let demos = demos.into_iter().chain([
+        (Method::LevelSet, fin_a, fin_b, &defaults, "level_set_fin_without_landmarks"),
+        (Method::LevelSet, fin_a, fin_b, &fin_guided, "level_set_fin_with_landmarks"),
+    ]);
     for (method, source, target, settings, folder) in demos {
         let io = Io {
             source: source.into(),
             target: target.into(),
             res: args.res,
             frames: args.frames,
-            keep_scale: false,
+            // The fin meshes are in the landmarks' coordinates.
+            keep_scale: folder.contains("_fin_"),
             iso: None,
             raw: RawArgs::default(),
             threads: args.threads,
@@ -78,6 +116,12 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         let report = morph(method, &io, settings, &out)?;
         print_summary(&report, &io, &out);
         let most = report.max_components();
+        if folder == "level_set_fin_with_landmarks" {
+            println!(
+                "  note: the fin turns with the landmarks of {}; without them it shrinks and regrows",
+                fins.2
+            );
+        }
         if method == Method::Baseline && most > 1 {
             println!(
                 "  note: up to {most} components in one frame — the distance blend pops pieces of the \

@@ -58,7 +58,8 @@ pub struct Io {
     #[arg(long, default_value_t = 9, value_parser = clap::value_parser!(u32).range(2..=1000))]
     pub frames: u32,
     /// Keep mesh and volume inputs in their own coordinates instead of
-    /// fitting each into the built-in shapes' box (centred, longest side 0.9).
+    /// fitting each into the built-in shapes' box (centred, longest side
+    /// 0.9); implied by landmarks, which are given in those coordinates.
     #[arg(long)]
     pub keep_scale: bool,
     /// The surface level of volume inputs: values above it are inside (the
@@ -101,6 +102,13 @@ impl Io {
             Ok(solid)
         };
         Ok((load(&self.source)?, load(&self.target)?))
+    }
+
+    /// These inputs as `options` need them: landmarks are points in the
+    /// inputs' own coordinates, so with landmarks mesh and volume inputs keep
+    /// their scale (as with `--keep-scale`).
+    pub fn for_options(&self, options: &MethodArgs) -> Io {
+        Io { keep_scale: self.keep_scale || options.has_landmarks(), ..self.clone() }
     }
 
     /// The method settings: the libraries' defaults, `--res` where given,
@@ -169,12 +177,13 @@ pub struct MorphArgs {
 /// options of other methods).
 pub fn run(args: &MorphArgs, matches: &ArgMatches) -> anyhow::Result<()> {
     refuse_foreign(matches, &[args.method])?;
-    let settings = args.io.settings(&args.options)?;
-    let report = morph(args.method, &args.io, &settings, &args.out)?;
+    let io = args.io.for_options(&args.options);
+    let settings = io.settings(&args.options)?;
+    let report = morph(args.method, &io, &settings, &args.out)?;
     if args.report {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
-        print_summary(&report, &args.io, &args.out);
+        print_summary(&report, &io, &args.out);
     }
     Ok(())
 }

@@ -274,6 +274,11 @@ impl MethodArgs {
 }
 
 impl MethodArgs {
+    /// Whether landmark pairs are given (`--landmark` or `--landmarks`).
+    pub fn has_landmarks(&self) -> bool {
+        !self.landmarks.is_empty() || self.landmarks_file.is_some()
+    }
+
     /// The `--landmark` pairs and those of the `--landmarks` file,
     /// validated together; `None` when neither is given.
     ///

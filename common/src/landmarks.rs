@@ -1,7 +1,7 @@
 //! Landmark correspondences between a source and a target shape.
 
 use glam::{DMat3, DVec3, Vec3};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// Fewest pairs a warp through the landmarks needs: four points not on one
@@ -92,7 +92,7 @@ pub struct Landmarks {
 }
 
 /// One pair as written in a landmarks file.
-#[derive(Deserialize)]
+#[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct PairRecord {
     source: [f32; 3],
@@ -150,6 +150,17 @@ impl Landmarks {
         let pairs: Vec<(Vec3, Vec3)> =
             records.iter().map(|r| (Vec3::from_array(r.source), Vec3::from_array(r.target))).collect();
         Self::new(&pairs)
+    }
+
+    /// The pairs as a landmarks file ([`Landmarks::from_json`] reads it
+    /// back).
+    pub fn to_json(&self) -> String {
+        let records: Vec<PairRecord> = self
+            .pairs
+            .iter()
+            .map(|&(p, q)| PairRecord { source: p.to_array(), target: q.to_array() })
+            .collect();
+        serde_json::to_string_pretty(&records).expect("finite numbers always serialize")
     }
 
     /// Reads a landmarks file (see [`Landmarks::from_json`]).
@@ -228,7 +239,9 @@ mod tests {
     #[test]
     fn the_affine_part_of_affine_pairs_is_exact() {
         let pairs = corners();
-        let map = Landmarks::new(&pairs).unwrap().affine();
+        let landmarks = Landmarks::new(&pairs).unwrap();
+        assert_eq!(Landmarks::from_json(&landmarks.to_json()).unwrap(), landmarks);
+        let map = landmarks.affine();
         for (p, q) in pairs {
             assert!(map.transform_point3(p).distance(q) < 1e-5, "{p} -> {q}");
         }

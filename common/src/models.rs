@@ -4,6 +4,7 @@
 //! superellipsoids, cylinders and tori as in the paper's Figs. 4 and 16; their
 //! exact proportions are not given in the paper, so these are our own.
 
+use crate::Landmarks;
 use crate::shape::Shape;
 use glam::{Quat, Vec3};
 use std::f32::consts::FRAC_PI_2;
@@ -97,6 +98,32 @@ pub fn chain() -> Shape {
         t.translated(Vec3::new(0.19 * i as f32, 0.0, 0.0))
     };
     link(-1).union(link(0)).union(link(1))
+}
+
+/// Radius of [`finned_ball`]'s ball.
+pub const FIN_BALL_RADIUS: f32 = 0.25;
+
+/// A ball (radius [`FIN_BALL_RADIUS`]) with a fin reaching to x = 0.58,
+/// turned by `angle` (radians) about z: `finned_ball(0.0)` →
+/// `finned_ball(π/2)` is a part that should travel a quarter circle, the
+/// kind of morph Breen & Whitaker's landmarks exist for (§6.2, the dart's
+/// fins becoming the X-29's wings).
+pub fn finned_ball(angle: f32) -> Shape {
+    let fin = Shape::rounded_cuboid(Vec3::new(0.2, 0.06, 0.06), 0.03).translated(Vec3::new(0.38, 0.0, 0.0));
+    Shape::sphere(FIN_BALL_RADIUS).union(fin).rotated(Quat::from_rotation_z(angle))
+}
+
+/// Landmarks for `finned_ball(0.0)` → `finned_ball(π/2)`: the fin's tip and
+/// a point on its side go round with it, four points of the ball stay.
+pub fn fin_turn_landmarks() -> Landmarks {
+    let turn = Quat::from_rotation_z(FRAC_PI_2);
+    let r = FIN_BALL_RADIUS;
+    let moving = [Vec3::new(0.58, 0.0, 0.0), Vec3::new(0.4, 0.06, 0.0)];
+    let fixed =
+        [Vec3::new(0.0, 0.0, r), Vec3::new(0.0, 0.0, -r), Vec3::new(-r, 0.0, 0.0), Vec3::new(0.0, -r, 0.0)];
+    let pairs: Vec<(Vec3, Vec3)> =
+        moving.iter().map(|&p| (p, turn * p)).chain(fixed.iter().map(|&p| (p, p))).collect();
+    Landmarks::new(&pairs).expect("four ball points off the fin's plane and two fin points")
 }
 
 #[cfg(test)]

@@ -5,37 +5,22 @@
 //! is seen through the warp `W` they define, and the fin travels.
 
 use isomorph_cli::methods::{LandmarkWarp, landmark_warp};
-use isomorph_common::glam::{Quat, Vec3};
+use isomorph_common::glam::Vec3;
 use isomorph_common::mesh::distance::surface_distance;
-use isomorph_common::{Control, Landmarks, Morph, Shape, Solid, TriMesh, Value};
+use isomorph_common::{Control, Landmarks, Morph, Solid, TriMesh, Value, models};
 use isomorph_levelset::{Align, LevelSetMorph, LevelSetSettings};
 use std::f32::consts::FRAC_PI_2;
 
 const RES: u32 = 64;
 const FRAMES: usize = 9;
-const BODY: f32 = 0.25;
+const BODY: f32 = models::FIN_BALL_RADIUS;
 
-/// A ball of radius [`BODY`] with a fin reaching to x = 0.58, turned by
-/// `angle` about z.
 fn finned(angle: f32) -> Solid {
-    let fin = Shape::rounded_cuboid(Vec3::new(0.2, 0.06, 0.06), 0.03).translated(Vec3::new(0.38, 0.0, 0.0));
-    Solid::shape(Shape::sphere(BODY).union(fin).rotated(Quat::from_rotation_z(angle)))
+    Solid::shape(models::finned_ball(angle))
 }
 
-/// The fin's tip and a point on its side go round with it; four points of
-/// the body stay.
 fn landmarks() -> Landmarks {
-    let turn = Quat::from_rotation_z(FRAC_PI_2);
-    let moving = [Vec3::new(0.58, 0.0, 0.0), Vec3::new(0.4, 0.06, 0.0)];
-    let fixed = [
-        Vec3::new(0.0, 0.0, BODY),
-        Vec3::new(0.0, 0.0, -BODY),
-        Vec3::new(-BODY, 0.0, 0.0),
-        Vec3::new(0.0, -BODY, 0.0),
-    ];
-    let pairs: Vec<(Vec3, Vec3)> =
-        moving.iter().map(|&p| (p, turn * p)).chain(fixed.iter().map(|&p| (p, p))).collect();
-    Landmarks::new(&pairs).unwrap()
+    models::fin_turn_landmarks()
 }
 
 fn morph(align: Align) -> LevelSetMorph {
