@@ -410,6 +410,66 @@ mod tests {
         assert!((p.x - 0.6).abs() < 1e-4, "{p}");
     }
 
+    /// The shipped links spec that uses every control of [`MorphSpec`]
+    /// (hand-written, for [`bear`] → [`bird`]).
+    const EVERY_FEATURE: &str = "bear_bird.every_feature.links.ron";
+
+    /// The folder of shipped example files (`blobtree/scenes/`).
+    fn shipped() -> std::path::PathBuf {
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
+    }
+
+    /// Checks `text` against the shipped file `name`, or writes it there when
+    /// `ISOMORPH_BLESS` is set (to regenerate the folder after a change).
+    fn check_shipped(name: &str, text: &str) {
+        let path = shipped().join(name);
+        if std::env::var_os("ISOMORPH_BLESS").is_some() {
+            std::fs::write(&path, text).unwrap();
+            return;
+        }
+        let file = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        assert!(
+            file == text,
+            "{} differs from the built-in; rerun with ISOMORPH_BLESS=1 to regenerate it",
+            path.display()
+        );
+    }
+
+    /// Every built-in scene and built-in links spec ships as a RON file in
+    /// `blobtree/scenes/` that is exactly what `to_ron` writes for it and
+    /// loads back into the same tree; the folder holds nothing else but the
+    /// hand-written example spec.
+    #[test]
+    fn shipped_files_equal_the_built_ins() {
+        let mut expected = vec![EVERY_FEATURE.to_string()];
+        for name in NAMES {
+            let tree = load(name).unwrap();
+            let file = format!("{name}.ron");
+            check_shipped(&file, &tree.to_ron().unwrap());
+            let again = load(shipped().join(&file).to_str().unwrap()).unwrap();
+            assert_eq!(again.root(), tree.root(), "{file}");
+            assert_eq!(again.threshold(), tree.threshold(), "{file}");
+            expected.push(file);
+        }
+        for name in DEMOS {
+            let (_, _, spec) = demo(name).unwrap();
+            if spec == MorphSpec::default() {
+                continue;
+            }
+            let file = format!("{name}.links.ron");
+            check_shipped(&file, &spec.to_ron().unwrap());
+            assert_eq!(MorphSpec::load(&shipped().join(&file)).unwrap(), spec, "{file}");
+            expected.push(file);
+        }
+        let mut present: Vec<String> = std::fs::read_dir(shipped())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        present.sort();
+        expected.sort();
+        assert_eq!(present, expected, "blobtree/scenes/ holds exactly the built-ins and the example spec");
+    }
+
     /// An endless stream is refused after MAX_FILE_BYTES instead of filling
     /// the memory.
     #[cfg(unix)]
