@@ -29,44 +29,104 @@
 //!
 //! # Scene files
 //!
-//! A scene is `(threshold: 0.5, root: (...))` in RON, or the same as JSON
-//! (`{"threshold": 0.5, "root": {...}}`); `threshold` is optional (0.5).
-//! Every node is a record with a `kind` and exactly the fields that kind
-//! uses (any other field is an error naming the node):
+//! Examples of every built-in scene and links spec ship in the crate's
+//! `scenes/` folder (`blobtree/scenes/` in the repository: `rook.ron`,
+//! `queen.ron`, `rounded_cube.ron`, `pierced_sphere.ron`, `propeller.ron`,
+//! `bear.ron`, `bird.ron`, `sphere.ron`, `torus.ron`, the rook → queen
+//! links `rook_queen.links.ron`, and `bear_bird.every_feature.links.ron`,
+//! which uses every control); a test keeps them equal to the built-ins.
+//! `isomorph blob --dump NAME [--format ron|json]` prints any built-in
+//! scene or built-in morph's links spec.
 //!
-//! | kind | fields |
+//! A scene is `(threshold: 0.5, root: (...))` in RON, or the same as JSON
+//! (`{"threshold": 0.5, "root": {...}}`). `threshold` is the iso value `T`
+//! (optional, default 0.5; in `(0, 1e6]`): the surface is where the
+//! potential equals `T`, and the field is `potential − T`, positive
+//! inside. Every node is a record with a `kind` and exactly the fields
+//! that kind uses (any other field is an error naming the node). Lengths
+//! and positions are in scene units (the world units of the meshes); angles
+//! in degrees.
+//!
+//! | kind | fields (defaults in parentheses) |
 //! |---|---|
-//! | `point`, `segment`, `polygon`, `polyhedron` | `vertices` (1, 2, 3 to 32 coplanar, 4 to 32), `radius`, optional `intensity` (1), `stiffness` (1), `p` (2; a number ≥ 1 or `"inf"`), `frame` |
-//! | `box` | `half` (half extents) instead of `vertices`; a polyhedron skeleton |
-//! | `blend`, `union`, `intersection` | `children` (≥ 1) |
-//! | `superblend` | `n` (≥ 1), `children` |
-//! | `difference` | `children` (2: left, right), optional `level` (the threshold) |
-//! | `twist`, `taper` | `rate` / `slope`, `children` (1) |
-//! | `bend` | `rate`, optional `centre` (0), `min`, `max`, `children` (1) |
-//! | `affine` | `frame`, `children` (1) |
+//! | `point`, `segment`, `polygon`, `polyhedron` | `vertices`: the skeleton, in the primitive's local frame (1, 2, 3 to 32 coplanar, 4 to 32 spanning 3D; the convex hull is used); `radius`: `R > 0`, the radius of influence (the field is 0 beyond it; an isolated primitive's surface lies `R/2` from its skeleton when `I = 1, T = 0.5`); `intensity`: `I ≥ 0` (1), the field on the skeleton; `stiffness`: `k ≥ 0` (1), Blanc–Schlick's shape parameter; `p`: the L^p exponent of the distance, a number ≥ 1 or `"inf"` (2, Euclidean; measured along the local axes); `frame`: local → world map (identity) |
+//! | `box` | `half` (half extents) instead of `vertices`; a polyhedron skeleton `[-half, half]`; other fields as above |
+//! | `blend` | `children` (≥ 1): the sum of their fields |
+//! | `union`, `intersection` | `children` (≥ 1): their maximum, minimum |
+//! | `superblend` | `n` (≥ 1): `(Σ f_i^n)^(1/n)` (`n = 1` blend, large `n` → union); `children` (≥ 1) |
+//! | `difference` | `children` (2: left minus right); `level` (the scene's threshold): the reference level `c` (see [`Node::Difference`]) |
+//! | `twist` | `rate`: radians per unit of local z, about the z axis; `children` (1) |
+//! | `taper` | `slope`: scale change per unit of z (the scale is clamped at 0.05); `children` (1) |
+//! | `bend` | `rate`: curvature (1 / units) in the y–z plane; `centre` (0), `min`, `max`: the bent range of y; `children` (1) |
+//! | `affine` | `frame`: the map applied to the child (`()` or `{}`: identity); `children` (1) |
+//! | `mix` | a generic tree's time-varying node at one instant (§4.4), as saved in-betweens contain: `from`, `to`: operators (`"blend"`, `"union"`, `"intersection"`, or a number `n ≥ 1`, a super-elliptic blend's order); `s` in `[0, 1]`: the field is `(1 − s)·from(children) + s·to(children)`; `children` (≥ 1) |
 //!
 //! A `frame` is `(translate: (x, y, z), rotate: (axis: (x, y, z), degrees: a), scale: (x, y, z))`
-//! (all optional; applied as translate · rotate · scale) or `(matrix: (...12 numbers...))`,
-//! column-major 3×4. Numbers may be written as integers; in JSON, points
-//! and matrices are arrays. Errors name the node by its path of child
-//! indices (`node root/0: …`):
+//! (all optional; applied as translate · rotate · scale, so a local point
+//! is scaled, rotated, then moved) or `(matrix: (...12 numbers...))`,
+//! column-major 3×4 (the three axes' images, then the translation).
+//! Numbers may be written as integers; in JSON, points and matrices are
+//! arrays; RON accepts `// comments`.
+//!
+//! **Node paths** name a node by the child indices leading to it from the
+//! root: `[]` is the root, `[1, 0]` the first child of the root's second
+//! child (a difference's left child is 0, its right child 1; a warp's child
+//! 0). They count the nodes as written in the file (consecutive `affine`
+//! nodes stay separate nodes). Errors name the node by its path
+//! (`node root/1/0: …`), and links specs use them.
+//!
+//! **Links specs** (`isomorph morph --method blobtree --links FILE`,
+//! [`MorphSpec`]) hold the animator's controls; every field is optional:
+//!
+//! | field | meaning |
+//! |---|---|
+//! | `links: [(a: PATH, b: PATH), …]` | source node `a` corresponds to target node `b` (§3.1); a node with several links is split (§3.2, §4.2); children of linked nodes without a link get phantom partners (§3.3); links must respect the hierarchy (a link's parents are matched) |
+//! | `heuristic: nearest_centre` or `all_children` | how children of matched nodes without links are paired (default `nearest_centre`) |
+//! | `speeds: [(a: PATH, b: PATH, speed: (start: 0.2, end: 0.8, smooth: true)), …]` | the speed `s(t)` of the generic node made from `a` and `b` (§4.4): 0 before `start`, 1 after `end`, linear or smooth (`3u² − 2u³`) in between (defaults 0, 1, false) |
+//! | `trajectories: [(a: PATH, b: PATH, handles: ((x, y, z), (x, y, z))), …]` | the two inner control points (world units) of the cubic Bézier curve the frame origin of the generic leaf `a → b` follows (default: uniform straight motion) |
+//!
+//! A full scene and a links spec for it, as in the shipped files:
 //!
 //! ```
-//! use isomorph_blobtree::BlobTree;
+//! use isomorph_blobtree::{BlobMorph, BlobTree, MorphSpec, scenes};
 //! use isomorph_common::Field3;
 //!
-//! let scene = r#"(threshold: 0.5, root: (kind: "blend", children: [
-//!     (kind: "point", vertices: [(0, 0, 0)], radius: 1.0),
-//!     (kind: "segment", vertices: [(0.5, 0, 0), (1, 0, 0)], radius: 0.8, p: "inf"),
+//! let scene = r#"(threshold: 0.5, root: (kind: "union", children: [
+//!     (kind: "blend", children: [                                    // root/0
+//!         (kind: "point", vertices: [(0, 0, 0)], radius: 1.0),       // root/0/0
+//!         (kind: "segment", vertices: [(0.5, 0, 0), (1, 0, 0)], radius: 0.8, p: "inf"),
+//!     ]),
+//!     (kind: "difference", level: 0.5, children: [                  // root/1
+//!         (kind: "twist", rate: 0.5, children: [
+//!             (kind: "box", half: (0.2, 0.2, 0.5), radius: 0.4, intensity: 1.2, stiffness: 0.8,
+//!              frame: (translate: (0, 1, 0), rotate: (axis: (1, 0, 0), degrees: 30)))]),
+//!         (kind: "affine", frame: (scale: (1, 2, 1)), children: [
+//!             (kind: "polygon", vertices: [(0, 0.9, 0.5), (0.2, 0.9, 0.5), (0, 1.1, 0.5)], radius: 0.3)]),
+//!     ]),
 //! ]))"#;
-//! let tree = BlobTree::from_ron(scene)?;
-//! assert!(tree.value(glam::Vec3::ZERO) > 0.0);
+//! let a = BlobTree::from_ron(scene)?;
+//! assert!(a.value(glam::Vec3::ZERO) > 0.0);
+//! // The same scene as JSON, written and read back.
+//! assert_eq!(BlobTree::from_json(&a.to_json()?)?.root(), a.root());
+//! let b = scenes::load("rook")?;
+//! let spec = MorphSpec::from_ron(r#"(
+//!     links: [(a: [0], b: [0]), (a: [1], b: [1])],
+//!     heuristic: nearest_centre,
+//!     speeds: [(a: [1], b: [1], speed: (start: 0.2, end: 0.8, smooth: true))],
+//!     trajectories: [(a: [0, 0], b: [0, 1], handles: ((0, 0, 0.3), (0, 0, 0.6)))],
+//! )"#)?;
+//! let morph = BlobMorph::from_trees(&a, &b, &spec)?;
+//! # let _ = morph;
+//! // A shipped file is a scene like any other.
+//! let rook = BlobTree::from_ron(include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/rook.ron")))?;
+//! assert_eq!(rook.root(), b.root());
+//! // Errors name the node by its path.
 //! let bad = r#"(root: (kind: "blend", children: [(kind: "point", vertices: [(0, 0, 0)], radius: -1)]))"#;
 //! let err = BlobTree::from_ron(bad).unwrap_err();
 //! assert_eq!(err.to_string(), "node root/0: radius of influence must be positive, got -1");
 //! let typo = r#"(root: (kind: "point", vertices: [(0, 0, 0)], radius: 1, stifness: 2))"#;
 //! assert!(BlobTree::from_ron(typo).unwrap_err().to_string().contains("node root: a `point` node has no field `stifness`"));
-//! # Ok::<(), isomorph_blobtree::BlobError>(())
+//! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!
 //! # Choices where the paper leaves details open

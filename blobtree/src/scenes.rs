@@ -470,6 +470,28 @@ mod tests {
         assert_eq!(present, expected, "blobtree/scenes/ holds exactly the built-ins and the example spec");
     }
 
+    /// The shipped example spec sets every field of [`MorphSpec`] and
+    /// drives a bear → bird morph that reproduces both ends.
+    #[test]
+    fn the_every_feature_spec_uses_every_control() {
+        let spec = MorphSpec::load(&shipped().join(EVERY_FEATURE)).unwrap();
+        // Every field given (a field added to MorphSpec must be added to the file).
+        let MorphSpec { links, heuristic: _, speeds, trajectories } = &spec;
+        assert!(!links.is_empty() && !speeds.is_empty() && !trajectories.is_empty(), "{spec:?}");
+        let text = std::fs::read_to_string(shipped().join(EVERY_FEATURE)).unwrap();
+        assert!(text.contains("heuristic:"));
+        let (a, b) = (bear(), bird());
+        let m = BlobMorph::from_trees(&a, &b, &spec).unwrap();
+        for i in 0..300 {
+            let p = Vec3::new((i as f32 * 0.37).sin(), (i as f32 * 0.61).cos(), (i as f32 * 0.23).sin());
+            assert!((m.frame(0.0).unwrap().field.value(p) - a.value(p)).abs() < 1e-5, "C(0) at {p}");
+            assert!((m.frame(1.0).unwrap().field.value(p) - b.value(p)).abs() < 1e-5, "C(1) at {p}");
+        }
+        for k in 0..=8 {
+            assert_eq!(components(&m, k as f32 / 8.0, 40), 1, "t = {}", k as f32 / 8.0);
+        }
+    }
+
     /// An endless stream is refused after MAX_FILE_BYTES instead of filling
     /// the memory.
     #[cfg(unix)]
