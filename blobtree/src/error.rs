@@ -274,6 +274,16 @@ pub enum BlobMorphError {
         /// Why (printed as the error's source, not in its message).
         source: TransformError,
     },
+    /// One segment of a morph through key shapes failed to build (segment
+    /// `index` goes from key shape `index` to `index + 1`; the source is
+    /// key 0, the target the last).
+    #[error("segment {index} of the morph (key shape {index} → {next})", next = index + 1)]
+    Segment {
+        /// The segment.
+        index: usize,
+        /// Why (printed as the error's source).
+        source: Box<BlobMorphError>,
+    },
 }
 
 impl From<GridError> for BlobMorphError {
@@ -286,6 +296,7 @@ impl MorphFailure for BlobMorphError {
     fn shared(&self) -> Option<&isomorph_common::MorphError> {
         match self {
             BlobMorphError::Morph(e) => Some(e),
+            BlobMorphError::Segment { source, .. } => source.shared(),
             _ => None,
         }
     }

@@ -436,12 +436,29 @@ impl GenericTree {
     }
 }
 
+/// A key shape a morph passes through (`isomorph morph --via`), with the
+/// links spec of the segment that arrives at it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KeyShape {
+    /// The shape.
+    pub shape: BlobTree,
+    /// The animator's controls of the segment from the previous key shape
+    /// (or the source) to this one; node paths `a` name the previous
+    /// shape's nodes, `b` this one's.
+    pub spec: MorphSpec,
+}
+
 /// Settings of [`BlobMorph::new`]: the animator's controls.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct BlobSettings {
-    /// Links, pairing heuristic, speed curves and trajectories (default: the
-    /// nearest-centre heuristic, no links).
+    /// Links, pairing heuristic, speed curves and trajectories of the
+    /// segment that arrives at the target (the whole morph without `via`;
+    /// default: the nearest-centre heuristic, no links).
     pub spec: MorphSpec,
+    /// Key shapes between the source and the target (default none): the
+    /// morph passes through them in order at evenly spaced times (see
+    /// [`BlobMorph::through`]).
+    pub via: Vec<KeyShape>,
 }
 
 /// The BlobTree metamorphosis as a [`Morph`]: frames are `C(t)` as fields
@@ -460,7 +477,8 @@ pub struct BlobSettings {
 /// ```
 #[derive(Debug, Clone)]
 pub struct BlobMorph {
-    generic: GenericTree,
+    /// The generic trees from each key shape to the next (one without key shapes).
+    segments: Vec<GenericTree>,
     bounds: Aabb,
     report: MorphReport,
 }
@@ -499,16 +517,18 @@ impl BlobMorph {
     ) -> Result<Self, BlobMorphError> {
         let (a, b) = (as_tree(source, Side::Source)?, as_tree(target, Side::Target)?);
         let warnings = isomorph_common::validate_inputs(source, target, control)?;
+        let mut keys = settings.via.clone();
+        keys.push(KeyShape { shape: b.clone(), spec: settings.spec.clone() });
         control.install(|| {
             let mut stages = Stages::start();
             control.progress("correspondence", None, String::new);
             control.check()?;
-            let generic = GenericTree::new(a, b, &settings.spec)?;
+            let segments = Self::segments_of(a, &keys, control)?;
             stages.lap("correspondence");
-            let bounds = Self::support(&generic, control)?;
+            let bounds = Self::support(&segments, control)?;
             stages.lap("bounds");
-            let report = Self::report_of(&generic).with_stages(stages).with_warnings(warnings);
-            Ok(Self { generic, bounds, report })
+            let report = Self::report_of(&segments).with_stages(stages).with_warnings(warnings);
+            Ok(Self { segments, bounds, report })
         })
     }
 
@@ -519,34 +539,102 @@ impl BlobMorph {
     /// As [`GenericTree::new`].
     pub fn from_trees(a: &BlobTree, b: &BlobTree, spec: &MorphSpec) -> Result<Self, BlobMorphError> {
         let generic = GenericTree::new(a, b, spec)?;
-        let bounds = Self::support(&generic, &Control::new())?;
-        let report = Self::report_of(&generic);
-        Ok(Self { generic, bounds, report })
+        let segments = vec![generic];
+        let bounds = Self::support(&segments, &Control::new())?;
+        let report = Self::report_of(&segments);
+        Ok(Self { segments, bounds, report })
     }
 
-    /// The union of the supports of `C(t)` at 33 instants, padded by 5 %
-    /// against motion between samples.
-    fn support(generic: &GenericTree, control: &Control) -> Result<Aabb, BlobMorphError> {
-        let mut bounds = Aabb::EMPTY;
-        for i in 0..BOUND_SAMPLES {
-            let t = i as f32 / (BOUND_SAMPLES - 1) as f32;
-            control.progress("bounds", Some(t), String::new);
+    /// The morph from `source` through the key shapes `keys` (the last is
+    /// the target), built by combining pairwise generic trees (§1, §3:
+    /// "genericity … enables us to combine several interpolations"): the
+    /// generic tree `C_i` of key `i → i + 1` (under key `i + 1`'s spec)
+    /// runs over `t ∈ [i/n, (i + 1)/n]` for `n` segments, so `C(i/n)` is
+    /// exactly key shape `i` and the shape is continuous in `t`. Each
+    /// segment keeps its own correspondence, speed curves and
+    /// trajectories.
+    ///
+    /// # Errors
+    /// [`isomorph_common::MorphError::BadSetting`] without key shapes;
+    /// [`BlobMorphError::Segment`] wrapping the errors of
+    /// [`GenericTree::new`] for the segment that failed.
+    pub fn through(source: &BlobTree, keys: &[KeyShape]) -> Result<Self, BlobMorphError> {
+        let control = Control::new();
+        let segments = Self::segments_of(source, keys, &control)?;
+        let bounds = Self::support(&segments, &control)?;
+        let report = Self::report_of(&segments);
+        Ok(Self { segments, bounds, report })
+    }
+
+    /// The generic tree of every segment `source → keys[0] → keys[1] → …`.
+    fn segments_of(
+        source: &BlobTree,
+        keys: &[KeyShape],
+        control: &Control,
+    ) -> Result<Vec<GenericTree>, BlobMorphError> {
+        if keys.is_empty() {
+            return Err(isomorph_common::MorphError::BadSetting {
+                name: "keys",
+                value: "0".into(),
+                expected: "at least one key shape (the target)".into(),
+            }
+            .into());
+        }
+        let mut from = source;
+        let mut segments = Vec::with_capacity(keys.len());
+        for (index, key) in keys.iter().enumerate() {
             control.check()?;
-            bounds = bounds.union(&generic.at(t)?.support());
+            let segment = GenericTree::new(from, &key.shape, &key.spec)
+                .map_err(|e| BlobMorphError::Segment { index, source: Box::new(e) })?;
+            segments.push(segment);
+            from = &key.shape;
+        }
+        Ok(segments)
+    }
+
+    /// The segment that plays at `t ∈ [0, 1]` and its local time: segment
+    /// `i` covers `[i/n, (i + 1)/n]`, and at a key time `i/n` (computed the
+    /// same way) the local time is exactly 0.
+    fn locate(&self, t: f32) -> (&GenericTree, f32) {
+        let n = self.segments.len();
+        let knot = |i: usize| i as f32 / n as f32;
+        let i = (1..n).rev().find(|&i| t >= knot(i)).unwrap_or(0);
+        let u = ((t - knot(i)) / (knot(i + 1) - knot(i))).clamp(0.0, 1.0);
+        (&self.segments[i], u)
+    }
+
+    /// The union of the supports of `C(t)` at 33 instants per segment,
+    /// padded by 5 % against motion between samples.
+    fn support(segments: &[GenericTree], control: &Control) -> Result<Aabb, BlobMorphError> {
+        let mut bounds = Aabb::EMPTY;
+        for (k, generic) in segments.iter().enumerate() {
+            for i in 0..BOUND_SAMPLES {
+                let t = i as f32 / (BOUND_SAMPLES - 1) as f32;
+                control.progress("bounds", Some((k as f32 + t) / segments.len() as f32), String::new);
+                control.check()?;
+                bounds = bounds.union(&generic.at(t)?.support());
+            }
         }
         Ok(bounds.padded(0.05))
     }
 
-    fn report_of(generic: &GenericTree) -> MorphReport {
-        let leaves = generic.pair().leaf_count();
-        MorphReport::new("blobtree", Outcome::Direct)
+    fn report_of(segments: &[GenericTree]) -> MorphReport {
+        let leaves: usize = segments.iter().map(|g| g.pair().leaf_count()).sum();
+        let report = MorphReport::new("blobtree", Outcome::Direct)
             .with_memory(leaves * size_of::<GLeaf>(), None)
-            .with_detail("generic leaves", leaves)
+            .with_detail("generic leaves", leaves);
+        if segments.len() > 1 { report.with_detail("key shapes", segments.len() + 1) } else { report }
     }
 
-    /// The generic tree.
+    /// The generic tree of the first segment (of the whole morph when it
+    /// has no key shapes in between).
     pub fn generic(&self) -> &GenericTree {
-        &self.generic
+        &self.segments[0]
+    }
+
+    /// The generic trees of the segments, from each key shape to the next.
+    pub fn segments(&self) -> &[GenericTree] {
+        &self.segments
     }
 }
 
@@ -559,10 +647,11 @@ impl Morph for BlobMorph {
     }
 
     fn frame(&self, t: f32) -> Result<Frame<BlobTree>, BlobMorphError> {
-        Ok(Frame { field: self.generic.at(t)?, iso: 0.0, transform: Affine3A::IDENTITY })
+        let (segment, u) = self.locate(isomorph_common::check_time(t)?);
+        Ok(Frame { field: segment.at(u)?, iso: 0.0, transform: Affine3A::IDENTITY })
     }
 
-    /// The union of the supports of `C(t)` at 33 instants, padded by 5 %.
+    /// The union of the supports of `C(t)` at 33 instants per segment, padded by 5 %.
     fn field_bounds(&self) -> Aabb {
         self.bounds
     }
@@ -648,6 +737,63 @@ mod tests {
                 assert!(worst <= 1e-6, "{name} at t = {t}: reloaded field differs by {worst}");
             }
         }
+    }
+
+    /// A morph through key shapes (`--via`) is each key shape exactly at
+    /// its time `i/n`, the source and target at the ends, and continuous
+    /// across the keys; a failing segment is named.
+    #[test]
+    fn key_shapes_are_reproduced_at_their_times() {
+        use crate::scenes;
+        let key = |name: &str, spec: MorphSpec| KeyShape { shape: scenes::load(name).unwrap(), spec };
+        let spec = |a: &str, b: &str| scenes::demo_spec(a, b).unwrap_or_default();
+        let source = scenes::load("rook").unwrap();
+        let keys = [
+            key("queen", spec("rook", "queen")),
+            key("bear", MorphSpec::default()),
+            key("rounded_cube", MorphSpec::default()),
+        ];
+        let m = BlobMorph::through(&source, &keys).unwrap();
+        assert_eq!(m.segments().len(), 3);
+        let shapes = [&source, &keys[0].shape, &keys[1].shape, &keys[2].shape];
+        let points: Vec<Vec3> = (0..500)
+            .map(|i| Vec3::new((i as f32 * 0.37).sin(), (i as f32 * 0.61).cos(), (i as f32 * 0.23).sin()))
+            .collect();
+        for (i, shape) in shapes.iter().enumerate() {
+            let t = i as f32 / 3.0;
+            let frame = m.frame(t).unwrap().field;
+            assert_eq!(frame.threshold(), shape.threshold());
+            for &p in &points {
+                assert!((frame.value(p) - shape.value(p)).abs() < 1e-6, "key {i} at t = {t}, {p}");
+            }
+        }
+        // Continuous across a key: just before and after t = 1/3 both
+        // approach the queen.
+        let (before, after) =
+            (m.frame(1.0 / 3.0 - 1e-4).unwrap().field, m.frame(1.0 / 3.0 + 1e-4).unwrap().field);
+        for &p in &points {
+            assert!((before.value(p) - after.value(p)).abs() < 1e-2, "at {p}");
+        }
+        // The same morph through the Morph constructor and the settings' via.
+        let settings = BlobSettings { spec: MorphSpec::default(), via: keys[..2].to_vec() };
+        let solid = |t: &BlobTree| Solid::implicit(std::sync::Arc::new(t.clone())).unwrap();
+        let boxed =
+            BlobMorph::new(&solid(&source), &solid(&keys[2].shape), &settings, &Control::new()).unwrap();
+        assert!(matches!(boxed.report().details.get("key shapes"), Some(isomorph_common::Value::Int(4))));
+        for &p in points.iter().step_by(10) {
+            assert_eq!(boxed.frame(0.2).unwrap().field.value(p), m.frame(0.2).unwrap().field.value(p));
+        }
+        assert!(m.world_bounds().contains(Vec3::ZERO));
+        // A bad link in the second segment is named by its segment.
+        let bad = MorphSpec {
+            links: vec![Link { a: NodePath(vec![7]), b: NodePath::root() }],
+            ..MorphSpec::default()
+        };
+        let keys = [key("queen", MorphSpec::default()), key("bear", bad)];
+        let e = BlobMorph::through(&source, &keys).unwrap_err();
+        assert!(matches!(e, BlobMorphError::Segment { index: 1, .. }), "{e:?}");
+        assert_eq!(e.to_string(), "segment 1 of the morph (key shape 1 → 2)");
+        assert!(BlobMorph::through(&source, &[]).is_err());
     }
 
     #[test]

@@ -48,6 +48,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
     let rook_queen = Settings {
         blobtree: isomorph_blobtree::BlobSettings {
             spec: isomorph_blobtree::scenes::demo_spec("rook", "queen").unwrap_or_default(),
+            ..Default::default()
         },
         ..defaults.clone()
     };
