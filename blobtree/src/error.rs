@@ -274,6 +274,17 @@ pub enum BlobMorphError {
         /// Why (printed as the error's source, not in its message).
         source: TransformError,
     },
+    /// A phantom's parameters in the links spec are invalid, or name a
+    /// node that gets no phantom (it has a partner).
+    #[error("phantom for {side} node {path}: {problem}")]
+    Phantom {
+        /// The side of the node the phantom partners.
+        side: Side,
+        /// The node.
+        path: NodePath,
+        /// What is wrong.
+        problem: &'static str,
+    },
     /// One segment of a morph through key shapes failed to build (segment
     /// `index` goes from key shape `index` to `index + 1`; the source is
     /// key 0, the target the last).

@@ -1,6 +1,6 @@
 //! The generic BlobTree `C(t)` (§4.4) and its [`Morph`] implementation.
 
-use crate::correspond::{Correspondence, Heuristic, Link, Origin, Pair, decompose};
+use crate::correspond::{Correspondence, Heuristic, Link, Origin, Pair, Phantom, decompose};
 use crate::error::{BlobMorphError, NodePath};
 use crate::minkowski::MinkowskiPath;
 use crate::node::{MAX_MAGNITUDE, NaryOp, Node, Primitive};
@@ -75,13 +75,19 @@ pub struct Trajectory {
 #[serde(default, deny_unknown_fields)]
 pub struct MorphSpec {
     /// Links between nodes.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub links: Vec<Link>,
     /// Pairing where no links are given.
     pub heuristic: Heuristic,
     /// Per-node speed curves.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub speeds: Vec<SpeedCurve>,
     /// Per-leaf origin trajectories.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub trajectories: Vec<Trajectory>,
+    /// The animator's phantom parameters (position, radius, stiffness).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub phantoms: Vec<Phantom>,
 }
 
 impl MorphSpec {
@@ -356,7 +362,11 @@ impl GenericTree {
     /// bad speed curves and trajectories (handles must be finite with
     /// magnitudes ≤ [`MAX_MAGNITUDE`]).
     pub fn new(a: &BlobTree, b: &BlobTree, spec: &MorphSpec) -> Result<Self, BlobMorphError> {
-        let corr = Correspondence { links: spec.links.clone(), heuristic: spec.heuristic };
+        let corr = Correspondence {
+            links: spec.links.clone(),
+            heuristic: spec.heuristic,
+            phantoms: spec.phantoms.clone(),
+        };
         let pair = decompose(a.root(), a.threshold(), b.root(), b.threshold(), &corr)?;
         let mut root = build(&pair)?;
         // Later curves for the same pair override earlier ones.
@@ -794,6 +804,51 @@ mod tests {
         assert!(matches!(e, BlobMorphError::Segment { index: 1, .. }), "{e:?}");
         assert_eq!(e.to_string(), "segment 1 of the morph (key shape 1 → 2)");
         assert!(BlobMorph::through(&source, &[]).is_err());
+    }
+
+    /// Fig. 17: the animator places and sizes the phantom the rounded cube
+    /// gets for the pierced sphere's boxes; the ends stay the inputs, the
+    /// in-betweens change, and bad phantom parameters are named errors.
+    #[test]
+    fn phantom_parameters_place_and_size_the_phantom() {
+        let (a, b, _) = crate::scenes::demo("cube_sphere").unwrap();
+        let spec = MorphSpec::from_ron(
+            "(phantoms: [(target: [1], position: (0.2, 0, 0), radius: 0.3, stiffness: 2)])",
+        )
+        .unwrap();
+        let g = GenericTree::new(&a, &b, &spec).unwrap();
+        let plain = GenericTree::new(&a, &b, &MorphSpec::default()).unwrap();
+        // A' = cube − phantom(boxes): the phantom boxes are moved by 0.2 along x and resized.
+        let Node::Difference { right, .. } = g.pair().side(crate::Side::Source) else {
+            panic!("a difference")
+        };
+        let Node::Difference { right: before, .. } = plain.pair().side(crate::Side::Source) else { panic!() };
+        assert_eq!(right.leaf_count(), 3);
+        assert!((right.centre() - before.centre() - Vec3::new(0.2, 0.0, 0.0)).length() < 1e-6);
+        for leaf in right.children() {
+            let Node::Primitive(p) = leaf else { panic!("{leaf:?}") };
+            assert_eq!((p.kernel.intensity, p.kernel.radius, p.kernel.stiffness), (0.0, 0.3, 2.0));
+        }
+        let points = testutil::points();
+        let (c0, c1) = (g.at(0.0).unwrap(), g.at(1.0).unwrap());
+        for &p in &points {
+            assert!((c0.value(p) - a.value(p)).abs() < 1e-6, "C(0) at {p}");
+            assert!((c1.value(p) - b.value(p)).abs() < 1e-6, "C(1) at {p}");
+        }
+        let (mid, mid_plain) = (g.at(0.5).unwrap(), plain.at(0.5).unwrap());
+        let changed = points.iter().filter(|&&p| (mid.value(p) - mid_plain.value(p)).abs() > 1e-3).count();
+        assert!(changed > 0, "the phantom changes the in-betweens");
+        let error = |text: &str| GenericTree::new(&a, &b, &MorphSpec::from_ron(text).unwrap()).unwrap_err();
+        assert_eq!(
+            error("(phantoms: [(target: [], radius: 0.3)])").to_string(),
+            "phantom for target node root: the node is matched, it has no phantom"
+        );
+        assert!(matches!(error("(phantoms: [(target: [5])])"), BlobMorphError::NoSuchNode { .. }));
+        assert!(error("(phantoms: [(target: [1], radius: -1)])").to_string().contains("`radius` must be"));
+        assert!(error("(phantoms: [(source: [], target: [1])])").to_string().contains("exactly one"));
+        assert!(
+            error("(phantoms: [(target: [1], position: (0, NaN, 0))])").to_string().contains("`position`")
+        );
     }
 
     #[test]

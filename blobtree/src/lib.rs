@@ -22,7 +22,8 @@
 //! | §2 convex skeletons, L^p distances | [`Skeleton`], [`Polytope`], [`lp_norm`] |
 //! | §2 blend, union (max), intersection (min), difference, super-elliptic blend, warps `f ∘ w⁻¹` | [`Node`], [`NaryOp`], [`Primitive`], [`Warp`], [`BlobTree`] |
 //! | scene files (RON / JSON, below) | [`BlobTree::from_ron`], [`BlobTree::from_json`], [`BlobTree::to_ron`], [`BlobTree::to_json`], [`scenes::load`] |
-//! | §3.1–3.3, §4.1–4.3 correspondence, decomposition, phantoms | [`decompose`], [`Correspondence`], [`Pair`], [`Link`], [`Heuristic`], [`split`] |
+//! | §3.1–3.3, §4.1–4.3 correspondence, decomposition, phantoms | [`decompose`], [`Correspondence`], [`Pair`], [`Link`], [`Heuristic`], [`Phantom`], [`split`] |
+//! | §1, §3 genericity: saved in-betweens, morphs through key shapes | [`BlobTree::to_ron`] of a frame (`mix` nodes), [`BlobMorph::through`], [`KeyShape`] |
 //! | §3.4.1 Minkowski-sum skeleton interpolation, generic topology | [`MinkowskiPath`] |
 //! | §3.4.2–3.5, §4.4 generic elements and nodes, frames, speed `s(t)`, `T(t)` | [`GenericTree`], [`BlobMorph`], [`MorphSpec`], [`SpeedCurve`], [`Trajectory`] |
 //! | §5 sequences (cube → pierced sphere, sphere → propeller, rook → queen, bear → bird) | [`scenes`] |
@@ -84,6 +85,7 @@
 //! | `heuristic: nearest_centre` or `all_children` | how children of matched nodes without links are paired (default `nearest_centre`) |
 //! | `speeds: [(a: PATH, b: PATH, speed: (start: 0.2, end: 0.8, smooth: true)), …]` | the speed `s(t)` of the generic node made from `a` and `b` (§4.4): 0 before `start`, 1 after `end`, linear or smooth (`3u² − 2u³`) in between (defaults 0, 1, false) |
 //! | `trajectories: [(a: PATH, b: PATH, handles: ((x, y, z), (x, y, z))), …]` | the two inner control points (world units) of the cubic Bézier curve the frame origin of the generic leaf `a → b` follows (default: uniform straight motion) |
+//! | `phantoms: [(target: PATH, position: (x, y, z), radius: R, stiffness: k), …]` | the phantom partner of a node without correspondence (§3.3, Fig. 17; [`Phantom`]): name the node by `source: PATH` or `target: PATH`; its phantom's skeletons are centred at `position` (world units), its primitives get radius `R` and stiffness `k` (each optional; default: the node's own); its intensity stays 0 |
 //!
 //! A full scene and a links spec for it, as in the shipped files:
 //!
@@ -224,7 +226,7 @@ mod tree;
 mod warp;
 
 pub use correspond::{
-    Correspondence, Heuristic, Link, MAX_PAIRS, MAX_VERTEX_PAIRS, Origin, Pair, decompose, split,
+    Correspondence, Heuristic, Link, MAX_PAIRS, MAX_VERTEX_PAIRS, Origin, Pair, Phantom, decompose, split,
 };
 pub use error::{BlobError, BlobMorphError, NodePath, NodeProblem, Side};
 pub use generic::{BlobMorph, BlobSettings, GenericTree, KeyShape, MorphSpec, Speed, SpeedCurve, Trajectory};

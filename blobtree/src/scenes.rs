@@ -476,8 +476,11 @@ mod tests {
     fn the_every_feature_spec_uses_every_control() {
         let spec = MorphSpec::load(&shipped().join(EVERY_FEATURE)).unwrap();
         // Every field given (a field added to MorphSpec must be added to the file).
-        let MorphSpec { links, heuristic: _, speeds, trajectories } = &spec;
-        assert!(!links.is_empty() && !speeds.is_empty() && !trajectories.is_empty(), "{spec:?}");
+        let MorphSpec { links, heuristic: _, speeds, trajectories, phantoms } = &spec;
+        assert!(
+            !links.is_empty() && !speeds.is_empty() && !trajectories.is_empty() && !phantoms.is_empty(),
+            "{spec:?}"
+        );
         let text = std::fs::read_to_string(shipped().join(EVERY_FEATURE)).unwrap();
         assert!(text.contains("heuristic:"));
         let (a, b) = (bear(), bird());
