@@ -210,17 +210,16 @@ pub enum BlobMorphError {
         /// Target node.
         b: NodePath,
     },
-    /// A speed curve is malformed (NaN, outside `[0, 1]`, or empty interval).
-    #[error("speed curve for {a} ↔ {b}: start {start} and end {end} must satisfy 0 ≤ start < end ≤ 1")]
+    /// A speed curve is malformed (NaN, outside `[0, 1]`, an empty window,
+    /// free-form points that are not monotone).
+    #[error("speed curve for {a} ↔ {b}: {problem}")]
     InvalidSpeed {
         /// Source node.
         a: NodePath,
         /// Target node.
         b: NodePath,
-        /// Start time.
-        start: f32,
-        /// End time.
-        end: f32,
+        /// What is wrong.
+        problem: &'static str,
     },
     /// A speed curve or trajectory names a pair of nodes that the
     /// correspondence never matched.

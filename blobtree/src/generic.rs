@@ -13,23 +13,31 @@ use isomorph_common::{Control, Frame, Morph, MorphReport, Outcome, Side, Solid, 
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 
-/// A speed curve `s(t)`: 0 before `start`, 1 after `end`, in between linear
-/// or smooth (`3u² − 2u³`, zero speed at both ends).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+/// A speed curve `s(t)` (§4.4): 0 before `start`, 1 after `end`, and in
+/// between a curve of the window's local time `u = (t − start)/(end − start)`:
+/// `u` itself (linear), `3u² − 2u³` (`smooth`: zero speed at both ends), or,
+/// when `points` are given, the free-form monotone piecewise cubic through
+/// `(0, 0)`, the points `(u, s)` and `(1, 1)` (Fritsch–Carlson tangents:
+/// never decreasing, never overshooting `[0, 1]`, C¹).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct Speed {
-    /// When the node starts to change.
+    /// When the node starts to change (`t`, in `[0, 1]`).
     pub start: f32,
-    /// When the node reaches its target.
+    /// When the node reaches its target (`t`, in `[0, 1]`, after `start`).
     pub end: f32,
     /// Ease in and out.
     pub smooth: bool,
+    /// Inner points `(u, s)` of a free-form curve: `u` strictly increasing
+    /// in `(0, 1)`, `s` non-decreasing in `[0, 1]` (not with `smooth`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub points: Vec<[f32; 2]>,
 }
 
 impl Default for Speed {
     /// `s(t) = t`.
     fn default() -> Self {
-        Self { start: 0.0, end: 1.0, smooth: false }
+        Self { start: 0.0, end: 1.0, smooth: false, points: Vec::new() }
     }
 }
 
@@ -37,11 +45,71 @@ impl Speed {
     /// `s(t)`.
     pub fn at(&self, t: f32) -> f32 {
         let u = ((t - self.start) / (self.end - self.start)).clamp(0.0, 1.0);
-        if self.smooth { u * u * (3.0 - 2.0 * u) } else { u }
+        if self.smooth {
+            u * u * (3.0 - 2.0 * u)
+        } else if self.points.is_empty() || u == 0.0 || u == 1.0 {
+            u
+        } else {
+            self.free_form(u)
+        }
     }
 
-    fn valid(&self) -> bool {
-        (0.0..=1.0).contains(&self.start) && (0.0..=1.0).contains(&self.end) && self.start < self.end
+    /// The monotone cubic through `(0, 0)`, the points and `(1, 1)` at `u ∈ (0, 1)`.
+    fn free_form(&self, u: f32) -> f32 {
+        let knots: Vec<[f32; 2]> =
+            std::iter::once([0.0, 0.0]).chain(self.points.iter().copied()).chain([[1.0, 1.0]]).collect();
+        let n = knots.len() - 1;
+        let secant: Vec<f32> = knots.windows(2).map(|w| (w[1][1] - w[0][1]) / (w[1][0] - w[0][0])).collect();
+        // Fritsch–Carlson: averaged secants, zero at flat steps and local
+        // extrema, then limited so that each piece stays monotone.
+        let mut tangent = vec![0.0f32; n + 1];
+        tangent[0] = secant[0];
+        tangent[n] = secant[n - 1];
+        for i in 1..n {
+            tangent[i] =
+                if secant[i - 1] * secant[i] <= 0.0 { 0.0 } else { 0.5 * (secant[i - 1] + secant[i]) };
+        }
+        for i in 0..n {
+            if secant[i] == 0.0 {
+                (tangent[i], tangent[i + 1]) = (0.0, 0.0);
+                continue;
+            }
+            let (alpha, beta) = (tangent[i] / secant[i], tangent[i + 1] / secant[i]);
+            let norm = alpha.hypot(beta);
+            if norm > 3.0 {
+                tangent[i] = 3.0 / norm * alpha * secant[i];
+                tangent[i + 1] = 3.0 / norm * beta * secant[i];
+            }
+        }
+        let i = knots[1..n].iter().take_while(|k| k[0] <= u).count();
+        let ([x0, y0], [x1, y1]) = (knots[i], knots[i + 1]);
+        let h = x1 - x0;
+        let v = (u - x0) / h;
+        let (v2, v3) = (v * v, v * v * v);
+        let value = (2.0 * v3 - 3.0 * v2 + 1.0) * y0
+            + (v3 - 2.0 * v2 + v) * h * tangent[i]
+            + (-2.0 * v3 + 3.0 * v2) * y1
+            + (v3 - v2) * h * tangent[i + 1];
+        value.clamp(y0, y1)
+    }
+
+    /// What is wrong with this curve, if anything.
+    fn problem(&self) -> Option<&'static str> {
+        let window =
+            (0.0..=1.0).contains(&self.start) && (0.0..=1.0).contains(&self.end) && self.start < self.end;
+        if !window {
+            return Some("start and end must satisfy 0 ≤ start < end ≤ 1");
+        }
+        if self.smooth && !self.points.is_empty() {
+            return Some("give either `smooth` or `points`, not both");
+        }
+        let knots: Vec<[f32; 2]> =
+            std::iter::once([0.0, 0.0]).chain(self.points.iter().copied()).chain([[1.0, 1.0]]).collect();
+        let monotone = knots.windows(2).all(|w| w[0][0] < w[1][0] && w[0][1] <= w[1][1]);
+        if !monotone || self.points.iter().flatten().any(|v| !v.is_finite()) {
+            return Some("points (u, s) need u strictly increasing in (0, 1) and s non-decreasing in [0, 1]");
+        }
+        None
     }
 }
 
@@ -372,19 +440,14 @@ impl GenericTree {
         // Later curves for the same pair override earlier ones.
         let mut speeds = HashMap::new();
         for (k, sc) in spec.speeds.iter().enumerate() {
-            if !sc.speed.valid() {
-                return Err(BlobMorphError::InvalidSpeed {
-                    a: sc.a.clone(),
-                    b: sc.b.clone(),
-                    start: sc.speed.start,
-                    end: sc.speed.end,
-                });
+            if let Some(problem) = sc.speed.problem() {
+                return Err(BlobMorphError::InvalidSpeed { a: sc.a.clone(), b: sc.b.clone(), problem });
             }
             speeds.insert((&sc.a, &sc.b), k);
         }
         let mut matched = vec![false; spec.speeds.len()];
         for_matching(&mut root, &speeds, &mut |k, n| {
-            n.speed = spec.speeds[k].speed;
+            n.speed = spec.speeds[k].speed.clone();
             matched[k] = true;
         });
         if let Some(sc) = spec.speeds.iter().find(|sc| !matched[speeds[&(&sc.a, &sc.b)]]) {
@@ -926,7 +989,7 @@ mod tests {
             speeds: vec![SpeedCurve {
                 a: NodePath::root(),
                 b: NodePath::root(),
-                speed: Speed { start: 0.5, end: 1.0, smooth: false },
+                speed: Speed { start: 0.5, end: 1.0, ..Speed::default() },
             }],
             ..MorphSpec::default()
         };
@@ -934,6 +997,47 @@ mod tests {
         // Nothing moves before t = 0.5; halfway through the window the point is at x = 0.5.
         assert_eq!(g.at(0.4).unwrap().potential(Vec3::ZERO), 1.0);
         assert!((g.at(0.75).unwrap().potential(Vec3::new(0.5, 0.0, 0.0)) - 1.0).abs() < 1e-6);
+    }
+
+    /// Free-form speed curves pass through their points, never decrease,
+    /// stay in `[0, 1]`, are continuous, and drive a node; bad points are refused.
+    #[test]
+    fn free_form_speed_curves_are_monotone_and_interpolate() {
+        let curve =
+            Speed { points: vec![[0.3, 0.05], [0.5, 0.1], [0.6, 0.7], [0.8, 0.7]], ..Speed::default() };
+        assert!(curve.problem().is_none());
+        for [u, s] in &curve.points {
+            assert!((curve.at(*u) - s).abs() < 1e-6, "s({u}) = {} ≠ {s}", curve.at(*u));
+        }
+        assert_eq!((curve.at(0.0), curve.at(1.0)), (0.0, 1.0));
+        let mut last = 0.0;
+        for k in 0..=2000 {
+            let s = curve.at(k as f32 / 2000.0);
+            assert!((last..=1.0).contains(&s), "at {}: {s} after {last}", k as f32 / 2000.0);
+            assert!(s - last < 0.01, "a jump at {}", k as f32 / 2000.0);
+            last = s;
+        }
+        // Flat between equal values (no overshoot), inside a start/end window.
+        assert_eq!(curve.at(0.7), 0.7);
+        let windowed = Speed { start: 0.5, end: 1.0, ..curve.clone() };
+        assert_eq!((windowed.at(0.4), windowed.at(0.75)), (0.0, 0.1));
+        for bad in
+            [vec![[0.5, 0.4], [0.4, 0.5]], vec![[0.5, 0.6], [0.6, 0.5]], vec![[0.0, 0.1]], vec![[0.5, 1.5]]]
+        {
+            assert!(Speed { points: bad.clone(), ..Speed::default() }.problem().is_some(), "{bad:?}");
+        }
+        assert!(Speed { smooth: true, ..curve.clone() }.problem().is_some());
+        // Through a generic tree: the point is at x = 0.1 when t = 0.5.
+        let a = BlobTree::from_ron(r#"(root: (kind: "point", vertices: [(0,0,0)], radius: 1))"#).unwrap();
+        let b = BlobTree::from_ron(r#"(root: (kind: "point", vertices: [(1,0,0)], radius: 1))"#).unwrap();
+        let spec = MorphSpec::from_ron("(speeds: [(a: [], b: [], speed: (points: [(0.5, 0.1)]))])").unwrap();
+        let g = GenericTree::new(&a, &b, &spec).unwrap();
+        assert!((g.at(0.5).unwrap().potential(Vec3::new(0.1, 0.0, 0.0)) - 1.0).abs() < 1e-6);
+        let bad =
+            MorphSpec::from_ron("(speeds: [(a: [], b: [], speed: (points: [(0.5, 0.9), (0.6, 0.2)]))])")
+                .unwrap();
+        let e = GenericTree::new(&a, &b, &bad).unwrap_err().to_string();
+        assert!(e.starts_with("speed curve for root ↔ root: points (u, s) need"), "{e}");
     }
 
     #[test]

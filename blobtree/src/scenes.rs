@@ -260,7 +260,11 @@ pub fn demo(name: &str) -> Option<(BlobTree, BlobTree, MorphSpec)> {
             for c in carvings {
                 let (a, b) = (NodePath(vec![1, 1, slot]), NodePath(vec![1, 1, c]));
                 spec.links.push(Link { a: a.clone(), b: b.clone() });
-                spec.speeds.push(SpeedCurve { a, b, speed: Speed { start: 0.0, end: 0.5, smooth: false } });
+                spec.speeds.push(SpeedCurve {
+                    a,
+                    b,
+                    speed: Speed { start: 0.0, end: 0.5, ..Speed::default() },
+                });
             }
         }
     }
