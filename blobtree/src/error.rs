@@ -245,6 +245,16 @@ pub enum BlobMorphError {
         /// The offending coordinate.
         value: f32,
     },
+    /// A trajectory's key frames are malformed.
+    #[error("trajectory for {a} ↔ {b}: {problem}")]
+    InvalidKeys {
+        /// Source node.
+        a: NodePath,
+        /// Target node.
+        b: NodePath,
+        /// What is wrong.
+        problem: &'static str,
+    },
     /// The decomposition would need more than `limit` node pairs
     /// ([`crate::correspond::MAX_PAIRS`]) or skeleton vertex pairs
     /// ([`crate::correspond::MAX_VERTEX_PAIRS`]): typically the

@@ -7,7 +7,7 @@ use crate::node::{MAX_MAGNITUDE, NaryOp, Node, Primitive};
 use crate::skeleton::Skeleton;
 use crate::tree::BlobTree;
 use crate::warp::Warp;
-use glam::{Affine3A, Vec3};
+use glam::{Affine3A, Quat, Vec3};
 use isomorph_common::{Aabb, AffineParts};
 use isomorph_common::{Control, Frame, Morph, MorphReport, Outcome, Side, Solid, Stages};
 use serde::{Deserialize, Serialize};
@@ -124,17 +124,155 @@ pub struct SpeedCurve {
     pub speed: Speed,
 }
 
-/// The trajectory of the frame origin of the generic leaf made from source
-/// primitive `a` and target primitive `b`: a cubic Bézier curve with these
-/// two inner control points.
+/// The trajectory of the frame made from source node `a` and target node
+/// `b` (§3.4: "the animator controls the location and the orientation of
+/// intermediate coordinate systems"): the local frame of a generic leaf
+/// (primitive) or the map of a generic affine node. By default the origin
+/// moves uniformly on a straight line, the orientation by slerp and the
+/// stretch linearly; `handles` bend the origin's path into a cubic Bézier
+/// curve, or `keys` make it pass through key positions (a cubic spline)
+/// and key orientations (slerp between consecutive keys) at given local
+/// times `s`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Trajectory {
     /// Source node path.
     pub a: NodePath,
     /// Target node path.
     pub b: NodePath,
-    /// The two inner Bézier control points (world units).
-    pub handles: [[f32; 3]; 2],
+    /// The two inner Bézier control points of the origin's path (world
+    /// units; not with keyed positions).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub handles: Option<[[f32; 3]; 2]>,
+    /// Key frames at increasing local times `s ∈ (0, 1)`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub keys: Vec<FrameKey>,
+}
+
+/// One key frame of a [`Trajectory`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrameKey {
+    /// The node's local time (after its speed curve), in `(0, 1)`.
+    pub s: f32,
+    /// The frame origin at `s` (world units; for an affine node, its translation).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position: Option<[f32; 3]>,
+    /// The frame orientation at `s`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rotate: Option<Orientation>,
+}
+
+/// An orientation as a rotation about `axis` by `degrees` (from the world axes).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Orientation {
+    /// The rotation axis (any non-zero length).
+    pub axis: [f32; 3],
+    /// The angle in degrees (right-handed about `axis`).
+    pub degrees: f32,
+}
+
+/// A frame's path over the local time `s`, from a [`Trajectory`].
+#[derive(Debug, Clone, Default)]
+struct FramePath {
+    /// Inner Bézier control points of the origin's path.
+    handles: Option<[Vec3; 2]>,
+    /// Inner origin keys `(s, position)`.
+    positions: Vec<(f32, Vec3)>,
+    /// Inner orientation keys `(s, rotation)`.
+    rotations: Vec<(f32, Quat)>,
+}
+
+impl FramePath {
+    /// The checked path of `tr`.
+    fn new(tr: &Trajectory) -> Result<Self, BlobMorphError> {
+        let fail = |problem| BlobMorphError::InvalidKeys { a: tr.a.clone(), b: tr.b.clone(), problem };
+        if let Some(&value) = tr
+            .handles
+            .iter()
+            .flatten()
+            .flatten()
+            .chain(tr.keys.iter().filter_map(|k| k.position.as_ref()).flatten())
+            .find(|v| !v.is_finite() || v.abs() > MAX_MAGNITUDE)
+        {
+            return Err(BlobMorphError::InvalidTrajectory { a: tr.a.clone(), b: tr.b.clone(), value });
+        }
+        let times = std::iter::once(0.0).chain(tr.keys.iter().map(|k| k.s)).chain([1.0]).collect::<Vec<_>>();
+        if !times.windows(2).all(|w| w[0] < w[1]) {
+            return Err(fail("key times s must increase strictly within (0, 1)"));
+        }
+        let positions: Vec<(f32, Vec3)> =
+            tr.keys.iter().filter_map(|k| Some((k.s, Vec3::from_array(k.position?)))).collect();
+        if tr.handles.is_some() && !positions.is_empty() {
+            return Err(fail("give either `handles` or key positions, not both"));
+        }
+        let mut rotations = Vec::new();
+        for k in &tr.keys {
+            if let Some(o) = &k.rotate {
+                let axis = Vec3::from_array(o.axis);
+                let axis = axis.try_normalize().filter(|_| o.degrees.is_finite());
+                let axis =
+                    axis.ok_or_else(|| fail("a key rotation needs a finite non-zero axis and angle"))?;
+                rotations.push((k.s, Quat::from_axis_angle(axis, o.degrees.to_radians())));
+            }
+        }
+        Ok(Self { handles: tr.handles.map(|h| h.map(Vec3::from_array)), positions, rotations })
+    }
+
+    /// The frame at `s ∈ (0, 1)` between the end frames `a` and `b`.
+    fn at(&self, a: &AffineParts, b: &AffineParts, s: f32) -> AffineParts {
+        let mut parts = a.lerp(b, s);
+        if let Some([h1, h2]) = self.handles {
+            let u = 1.0 - s;
+            parts.translation = a.translation * (u * u * u)
+                + h1 * (3.0 * u * u * s)
+                + h2 * (3.0 * u * s * s)
+                + b.translation * (s * s * s);
+        } else if !self.positions.is_empty() {
+            parts.translation = spline(a.translation, &self.positions, b.translation, s);
+        }
+        if !self.rotations.is_empty() {
+            let keys: Vec<(f32, Quat)> = std::iter::once((0.0, a.rotation))
+                .chain(self.rotations.iter().copied())
+                .chain([(1.0, b.rotation)])
+                .collect();
+            let i = keys[1..keys.len() - 1].iter().take_while(|k| k.0 <= s).count();
+            let ((s0, q0), (s1, q1)) = (keys[i], keys[i + 1]);
+            parts.rotation = q0.slerp(q1, (s - s0) / (s1 - s0)).normalize();
+        }
+        parts
+    }
+}
+
+/// The cubic spline through `(0, start)`, the `keys` and `(1, end)` at
+/// `s`: Hermite pieces with Catmull–Rom tangents (central differences over
+/// the neighbouring keys, one-sided at the ends), C¹, through every key.
+fn spline(start: Vec3, keys: &[(f32, Vec3)], end: Vec3, s: f32) -> Vec3 {
+    let knots: Vec<(f32, Vec3)> =
+        std::iter::once((0.0, start)).chain(keys.iter().copied()).chain([(1.0, end)]).collect();
+    let n = knots.len() - 1;
+    let tangent = |i: usize| {
+        let (l, r) = (i.saturating_sub(1), (i + 1).min(n));
+        (knots[r].1 - knots[l].1) / (knots[r].0 - knots[l].0)
+    };
+    let i = knots[1..n].iter().take_while(|k| k.0 <= s).count();
+    let ((x0, p0), (x1, p1)) = (knots[i], knots[i + 1]);
+    let h = x1 - x0;
+    let v = (s - x0) / h;
+    let (v2, v3) = (v * v, v * v * v);
+    p0 * (2.0 * v3 - 3.0 * v2 + 1.0)
+        + tangent(i) * (h * (v3 - 2.0 * v2 + v))
+        + p1 * (-2.0 * v3 + 3.0 * v2)
+        + tangent(i + 1) * (h * (v3 - v2))
+}
+
+/// A generic affine node's end maps, decomposed, and its keyed path.
+#[derive(Debug, Clone)]
+struct AffinePath {
+    a: AffineParts,
+    b: AffineParts,
+    path: FramePath,
 }
 
 /// Everything the animator controls (the `--links` file): links, heuristic,
@@ -218,7 +356,7 @@ struct GLeaf {
     skeleton: MinkowskiPath,
     frame_a: AffineParts,
     frame_b: AffineParts,
-    handles: [Vec3; 2],
+    path: FramePath,
 }
 
 #[derive(Debug, Clone)]
@@ -226,7 +364,8 @@ enum GKind {
     Leaf(Box<GLeaf>),
     Nary(NaryOp, NaryOp),
     Difference(f32, f32),
-    Warp(Warp, Warp),
+    /// Source and target warps, and the keyed path of two affine maps.
+    Warp(Warp, Warp, Option<Box<AffinePath>>),
 }
 
 #[derive(Debug, Clone)]
@@ -295,14 +434,13 @@ fn build(pair: &Pair) -> Result<GNode, BlobMorphError> {
                 .map_err(|p| crate::BlobError::node(&origin.b.clone().unwrap_or_default(), p))?;
             let frame_a = frame_parts(a, &origin.a, &origin.b)?;
             let frame_b = frame_parts(b, &origin.a, &origin.b)?;
-            let (oa, ob) = (frame_a.translation, frame_b.translation);
             let leaf = GLeaf {
                 a: (**a).clone(),
                 b: (**b).clone(),
                 skeleton: MinkowskiPath::new(&pa, &pb),
                 frame_a,
                 frame_b,
-                handles: [oa + (ob - oa) / 3.0, oa + (ob - oa) * (2.0 / 3.0)],
+                path: FramePath::default(),
             };
             (GKind::Leaf(Box::new(leaf)), Vec::new())
         }
@@ -312,7 +450,7 @@ fn build(pair: &Pair) -> Result<GNode, BlobMorphError> {
         Pair::Difference { a, b, left, right, .. } => {
             (GKind::Difference(*a, *b), vec![build(left)?, build(right)?])
         }
-        Pair::Warp { a, b, child, .. } => (GKind::Warp(*a, *b), vec![build(child)?]),
+        Pair::Warp { a, b, child, .. } => (GKind::Warp(*a, *b, None), vec![build(child)?]),
     };
     Ok(GNode { kind, speed: Speed::default(), origin, children })
 }
@@ -363,13 +501,7 @@ impl GLeaf {
             let inv = lerp(1.0 / a.p, 1.0 / b.p, s);
             if inv <= 0.0 { f32::INFINITY } else { 1.0 / inv }
         };
-        let mut parts = self.frame_a.lerp(&self.frame_b, s);
-        let u = 1.0 - s;
-        let [h1, h2] = self.handles;
-        parts.translation = self.frame_a.translation * (u * u * u)
-            + h1 * (3.0 * u * u * s)
-            + h2 * (3.0 * u * s * s)
-            + self.frame_b.translation * (s * s * s);
+        let parts = self.path.at(&self.frame_a, &self.frame_b, s);
         Primitive {
             skeleton: Skeleton::Generic(self.skeleton.at(s)),
             kernel: a.kernel.lerp(&b.kernel, s),
@@ -407,11 +539,13 @@ impl GNode {
                 let left = k.pop().expect("two children");
                 Node::difference(left, right, lerp(*a, *b, s))
             }
-            GKind::Warp(a, b) => {
+            GKind::Warp(a, b, keyed) => {
                 let w = if s <= 0.0 {
                     *a
                 } else if s >= 1.0 {
                     *b
+                } else if let Some(k) = keyed {
+                    Warp::Affine(k.path.at(&k.a, &k.b, s).to_affine())
                 } else {
                     a.lerp(b, s).unwrap_or(*a)
                 };
@@ -458,21 +592,38 @@ impl GenericTree {
             });
         }
         let mut trajectories = HashMap::new();
+        let mut paths = Vec::with_capacity(spec.trajectories.len());
         for (k, tr) in spec.trajectories.iter().enumerate() {
-            if let Some(&value) =
-                tr.handles.as_flattened().iter().find(|v| !v.is_finite() || v.abs() > MAX_MAGNITUDE)
-            {
-                return Err(BlobMorphError::InvalidTrajectory { a: tr.a.clone(), b: tr.b.clone(), value });
-            }
+            paths.push(FramePath::new(tr)?);
             trajectories.insert((&tr.a, &tr.b), k);
         }
         let mut matched = vec![false; spec.trajectories.len()];
-        for_matching(&mut root, &trajectories, &mut |k, n| {
-            if let GKind::Leaf(l) = &mut n.kind {
-                l.handles = spec.trajectories[k].handles.map(Vec3::from_array);
+        let mut failed = None;
+        for_matching(&mut root, &trajectories, &mut |k, n| match &mut n.kind {
+            GKind::Leaf(l) => {
+                l.path = paths[k].clone();
                 matched[k] = true;
             }
+            GKind::Warp(Warp::Affine(ma), Warp::Affine(mb), keyed) => {
+                let tr = &spec.trajectories[k];
+                let parts = |m: &Affine3A| {
+                    AffineParts::from_affine(m).map_err(|source| BlobMorphError::Transform {
+                        a: tr.a.clone(),
+                        b: tr.b.clone(),
+                        source,
+                    })
+                };
+                match (parts(ma), parts(mb)) {
+                    (Ok(a), Ok(b)) => *keyed = Some(Box::new(AffinePath { a, b, path: paths[k].clone() })),
+                    (Err(e), _) | (_, Err(e)) => failed = Some(e),
+                }
+                matched[k] = true;
+            }
+            _ => {}
         });
+        if let Some(e) = failed {
+            return Err(e);
+        }
         if let Some(tr) = spec.trajectories.iter().find(|tr| !matched[trajectories[&(&tr.a, &tr.b)]]) {
             return Err(BlobMorphError::UnmatchedPair {
                 what: "trajectory",
@@ -744,6 +895,7 @@ mod tests {
     use crate::testutil;
     use isomorph_common::Field3;
     use proptest::prelude::*;
+    use std::f32::consts::FRAC_PI_2;
 
     proptest! {
         #![proptest_config(ProptestConfig { cases: 32, ..ProptestConfig::default() })]
@@ -1038,6 +1190,88 @@ mod tests {
                 .unwrap();
         let e = GenericTree::new(&a, &b, &bad).unwrap_err().to_string();
         assert!(e.starts_with("speed curve for root ↔ root: points (u, s) need"), "{e}");
+    }
+
+    /// Key-framed trajectories: a leaf's frame and an affine node's map pass
+    /// through the key positions and orientations at their local times,
+    /// move continuously, keep the ends; malformed keys are refused.
+    #[test]
+    fn key_framed_trajectories_pass_through_their_keys() {
+        let seg = |at: &str| {
+            BlobTree::from_ron(&format!(
+                r#"(root: (kind: "segment", vertices: [(0,0,0), (1,0,0)], radius: 0.5, frame: (translate: {at})))"#
+            ))
+            .unwrap()
+        };
+        let (a, b) = (seg("(0, 0, 0)"), seg("(2, 0, 0)"));
+        let spec = MorphSpec::from_ron(
+            "(trajectories: [(a: [], b: [], keys: [
+                (s: 0.25, position: (0, 1, 0)),
+                (s: 0.5, position: (1, 1, 0), rotate: (axis: (0, 0, 1), degrees: 90)),
+                (s: 0.75, position: (2, 1, 0)),
+            ])])",
+        )
+        .unwrap();
+        let g = GenericTree::new(&a, &b, &spec).unwrap();
+        let frame_at = |t: f32| {
+            let Node::Primitive(p) = g.node_at(t) else { panic!("a leaf") };
+            p.frame
+        };
+        assert!(frame_at(0.25).translation.abs_diff_eq(glam::Vec3A::new(0.0, 1.0, 0.0), 1e-6));
+        let mid = frame_at(0.5);
+        assert!(
+            mid.abs_diff_eq(
+                Affine3A::from_rotation_translation(
+                    Quat::from_rotation_z(FRAC_PI_2),
+                    Vec3::new(1.0, 1.0, 0.0)
+                ),
+                1e-5
+            ),
+            "{mid:?}"
+        );
+        // The segment's end (1, 0, 0) is carried to (1, 2, 0): the field's maximum is there.
+        assert!((g.at(0.5).unwrap().potential(Vec3::new(1.0, 2.0, 0.0)) - 1.0).abs() < 1e-5);
+        assert!(frame_at(0.75).translation.abs_diff_eq(glam::Vec3A::new(2.0, 1.0, 0.0), 1e-6));
+        for k in 0..200 {
+            let (t0, t1) = (k as f32 / 200.0, (k + 1) as f32 / 200.0);
+            let step = (frame_at(t1).translation - frame_at(t0).translation).length();
+            assert!(step < 0.05, "a jump of {step} at t = {t0}");
+        }
+        for p in testutil::points() {
+            assert!((g.at(0.0).unwrap().value(p) - a.value(p)).abs() < 1e-6);
+            assert!((g.at(1.0).unwrap().value(p) - b.value(p)).abs() < 1e-6);
+        }
+        // An affine node's map follows its keys too.
+        let placed = |x: f32| {
+            BlobTree::from_ron(&format!(
+                r#"(root: (kind: "affine", frame: (translate: ({x}, 0, 0)), children: [(kind: "point", vertices: [(0,0,0)], radius: 1)]))"#
+            ))
+            .unwrap()
+        };
+        let spec =
+            MorphSpec::from_ron("(trajectories: [(a: [], b: [], keys: [(s: 0.5, position: (0.5, 1, 0))])])")
+                .unwrap();
+        let g = GenericTree::new(&placed(0.0), &placed(1.0), &spec).unwrap();
+        assert!((g.at(0.5).unwrap().potential(Vec3::new(0.5, 1.0, 0.0)) - 1.0).abs() < 1e-5);
+        // Malformed keys.
+        let error = |text: &str| {
+            GenericTree::new(&a, &b, &MorphSpec::from_ron(text).unwrap()).unwrap_err().to_string()
+        };
+        assert!(
+            error("(trajectories: [(a: [], b: [], keys: [(s: 0.5), (s: 0.4)])])")
+                .contains("increase strictly")
+        );
+        assert!(error("(trajectories: [(a: [], b: [], keys: [(s: 1.0)])])").contains("increase strictly"));
+        assert!(
+            error("(trajectories: [(a: [], b: [], handles: ((0,0,0), (1,0,0)), keys: [(s: 0.5, position: (0,0,0))])])")
+                .contains("not both")
+        );
+        assert!(
+            error(
+                "(trajectories: [(a: [], b: [], keys: [(s: 0.5, rotate: (axis: (0, 0, 0), degrees: 10))])])"
+            )
+            .contains("non-zero axis")
+        );
     }
 
     #[test]

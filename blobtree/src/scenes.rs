@@ -485,6 +485,11 @@ mod tests {
             !links.is_empty() && !speeds.is_empty() && !trajectories.is_empty() && !phantoms.is_empty(),
             "{spec:?}"
         );
+        assert!(speeds.iter().any(|c| c.speed.smooth) && speeds.iter().any(|c| !c.speed.points.is_empty()));
+        assert!(trajectories.iter().any(|t| t.handles.is_some()));
+        assert!(
+            trajectories.iter().any(|t| t.keys.iter().any(|k| k.position.is_some() && k.rotate.is_some()))
+        );
         let text = std::fs::read_to_string(shipped().join(EVERY_FEATURE)).unwrap();
         assert!(text.contains("heuristic:"));
         let (a, b) = (bear(), bird());
