@@ -43,6 +43,12 @@ pub enum Heuristic {
     /// is nearest (both directions, so every child has a partner).
     #[default]
     NearestCentre,
+    /// Hierarchical matching (§3.1): as `NearestCentre`, but positions are
+    /// taken relative to the parents, which are matched already — each
+    /// child's centre minus the mean of its siblings' centres — so parts
+    /// that moved with their parent still find their counterparts, at every
+    /// level down the trees.
+    Hierarchical,
 }
 
 /// The overlapping pair of trees: a tree of matched node pairs.
@@ -529,8 +535,14 @@ fn match_children(
         (false, true) => (op_a, op_a),
         _ => (op_a, op_b),
     };
-    let centres_a: Vec<Vec3> = kids_a.iter().map(|(n, _)| n.centre()).collect();
-    let centres_b: Vec<Vec3> = kids_b.iter().map(|(n, _)| n.centre()).collect();
+    let mut centres_a: Vec<Vec3> = kids_a.iter().map(|(n, _)| n.centre()).collect();
+    let mut centres_b: Vec<Vec3> = kids_b.iter().map(|(n, _)| n.centre()).collect();
+    if ctx.heuristic == Heuristic::Hierarchical {
+        for centres in [&mut centres_a, &mut centres_b] {
+            let mean = centres.iter().copied().sum::<Vec3>() / centres.len().max(1) as f32;
+            centres.iter_mut().for_each(|c| *c -= mean);
+        }
+    }
     // User links at this level, in the order they were given.
     let index_b: HashMap<&NodePath, usize> =
         kids_b.iter().enumerate().filter_map(|(j, (_, p))| Some((p.as_ref()?, j))).collect();
@@ -564,7 +576,7 @@ fn match_children(
                     }
                 }
             }
-            Heuristic::NearestCentre => {
+            Heuristic::NearestCentre | Heuristic::Hierarchical => {
                 let (near_a, near_b) = (KdTree::new(&centres_a), KdTree::new(&centres_b));
                 for (i, c) in centres_a.iter().enumerate() {
                     if let Some(j) = near_b.nearest(*c) {
@@ -805,12 +817,12 @@ mod tests {
         #![proptest_config(ProptestConfig { cases: 40, ..ProptestConfig::default() })]
 
         /// A' ≡ A and B' ≡ B (same field everywhere) and A', B' overlap, for
-        /// both heuristics.
+        /// every heuristic.
         #[test]
-        fn decomposition_is_equivalent_and_overlapping(a in testutil::tree(), b in testutil::tree(), all in any::<bool>()) {
+        fn decomposition_is_equivalent_and_overlapping(a in testutil::tree(), b in testutil::tree(), h in 0usize..3) {
             let corr = Correspondence {
                 links: vec![],
-                heuristic: if all { Heuristic::AllChildren } else { Heuristic::NearestCentre },
+                heuristic: [Heuristic::AllChildren, Heuristic::NearestCentre, Heuristic::Hierarchical][h],
                 phantoms: vec![],
             };
             let pair = decompose(&a, 0.5, &b, 0.5, &corr).unwrap();
@@ -876,6 +888,33 @@ mod tests {
             .map(|c| if let Node::Primitive(p) = c { p.kernel.intensity } else { -1.0 })
             .collect();
         assert_eq!(intensities, vec![0.5, 0.5, 1.0, 0.0]);
+    }
+
+    /// Hierarchical matching pairs the parts of two groups that moved
+    /// together by their places in the groups, where nearest centres in
+    /// world space pair both source groups with one target group.
+    #[test]
+    fn hierarchical_matching_follows_the_parents() {
+        let group = |x: f32| Node::blend(vec![ball(Vec3::new(x, 0.3, 0.0)), ball(Vec3::new(x, -0.3, 0.0))]);
+        let a = Node::blend(vec![group(-1.0), group(1.0)]);
+        let b = Node::blend(vec![group(2.0), group(4.0)]);
+        let corr = |heuristic| Correspondence { links: vec![], heuristic, phantoms: vec![] };
+        let nearest = decompose(&a, 0.5, &b, 0.5, &corr(Heuristic::NearestCentre)).unwrap();
+        assert!(nearest.leaf_count() > 4, "nearest centres split a group");
+        let hierarchical = decompose(&a, 0.5, &b, 0.5, &corr(Heuristic::Hierarchical)).unwrap();
+        assert_eq!(hierarchical.leaf_count(), 4, "a bijection, group to group and ball to ball");
+        let Pair::Nary { children, .. } = &hierarchical else { panic!("{hierarchical:?}") };
+        for (k, group) in children.iter().enumerate() {
+            assert_eq!(group.origin(), &Origin { a: Some(NodePath(vec![k])), b: Some(NodePath(vec![k])) });
+            let Pair::Nary { children: balls, .. } = group else { panic!("{group:?}") };
+            for (j, ball) in balls.iter().enumerate() {
+                assert_eq!(ball.origin().a, Some(NodePath(vec![k, j])));
+                assert_eq!(ball.origin().b, Some(NodePath(vec![k, j])));
+            }
+        }
+        assert_eq!(serde_json::to_string(&Heuristic::Hierarchical).unwrap(), "\"hierarchical\"");
+        check_equivalent(&a, &hierarchical.side(Side::Source)).unwrap();
+        check_equivalent(&b, &hierarchical.side(Side::Target)).unwrap();
     }
 
     #[test]
