@@ -294,6 +294,13 @@ pub struct MorphSpec {
     /// The animator's phantom parameters (position, radius, stiffness).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub phantoms: Vec<Phantom>,
+    /// Automatic coplanar frames (§3.4, Figs. 10–11): matched pairs of
+    /// points, segments and polygons (Euclidean, similarity frames) are
+    /// interpolated in frames where both lie in one plane, so their
+    /// in-between skeletons stay segments or polygons instead of becoming
+    /// polyhedra (default off: the scene's own frames).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub coplanar_frames: bool,
 }
 
 impl MorphSpec {
@@ -420,10 +427,20 @@ fn frame_parts(
     })
 }
 
-fn build(pair: &Pair) -> Result<GNode, BlobMorphError> {
+/// The generic node of `pair` and below; `coplanar`: automatic coplanar
+/// frames for flat leaf pairs ([`MorphSpec::coplanar_frames`]).
+fn build(pair: &Pair, coplanar: bool) -> Result<GNode, BlobMorphError> {
     let origin = pair.origin().clone();
+    let build = |p: &Pair| build(p, coplanar);
     let (kind, children) = match pair {
-        Pair::Leaf { a, b, .. } => {
+        Pair::Leaf { a: ends_a, b: ends_b, .. } => {
+            // The ends are returned as given; the in-betweens interpolate
+            // the same primitives, possibly re-expressed in coplanar frames.
+            let reframed = if coplanar { crate::coplanar::coplanar_frames(ends_a, ends_b) } else { None };
+            let (a, b) = match &reframed {
+                Some((a, b)) => (a, b),
+                None => (&**ends_a, &**ends_b),
+            };
             let pa = a
                 .skeleton
                 .polytope()
@@ -435,8 +452,8 @@ fn build(pair: &Pair) -> Result<GNode, BlobMorphError> {
             let frame_a = frame_parts(a, &origin.a, &origin.b)?;
             let frame_b = frame_parts(b, &origin.a, &origin.b)?;
             let leaf = GLeaf {
-                a: (**a).clone(),
-                b: (**b).clone(),
+                a: (**ends_a).clone(),
+                b: (**ends_b).clone(),
                 skeleton: MinkowskiPath::new(&pa, &pb),
                 frame_a,
                 frame_b,
@@ -570,7 +587,7 @@ impl GenericTree {
             phantoms: spec.phantoms.clone(),
         };
         let pair = decompose(a.root(), a.threshold(), b.root(), b.threshold(), &corr)?;
-        let mut root = build(&pair)?;
+        let mut root = build(&pair, spec.coplanar_frames)?;
         // Later curves for the same pair override earlier ones.
         let mut speeds = HashMap::new();
         for (k, sc) in spec.speeds.iter().enumerate() {
@@ -1272,6 +1289,40 @@ mod tests {
             )
             .contains("non-zero axis")
         );
+    }
+
+    /// Figs. 10–11: with automatic coplanar frames, two skew segments
+    /// interpolate through segments and a segment and a triangle in other
+    /// planes through polygons (without: a parallelogram and a
+    /// polyhedron); the ends are the inputs either way.
+    #[test]
+    fn coplanar_frames_keep_in_between_skeletons_flat() {
+        let scene = |node: &str| BlobTree::from_ron(&format!("(root: {node})")).unwrap();
+        let a = scene(r#"(kind: "segment", vertices: [(-0.5, 0, 0), (0.5, 0, 0)], radius: 0.4)"#);
+        let b = scene(r#"(kind: "segment", vertices: [(0, -0.4, 0.3), (0, 0.4, 0.5)], radius: 0.4)"#);
+        let c = scene(
+            r#"(kind: "polygon", vertices: [(0, 0, -0.4), (0, 0.5, 0.2), (0.1, -0.3, 0.3)], radius: 0.4)"#,
+        );
+        let dimension = |g: &GenericTree| {
+            let Node::Primitive(p) = g.node_at(0.5) else { panic!("a leaf") };
+            p.skeleton.polytope().unwrap().dimension()
+        };
+        let flat = MorphSpec { coplanar_frames: true, ..MorphSpec::default() };
+        for (target, own, coplanar) in [(&b, 2, 1), (&c, 3, 2)] {
+            let plain = GenericTree::new(&a, target, &MorphSpec::default()).unwrap();
+            let g = GenericTree::new(&a, target, &flat).unwrap();
+            assert_eq!((dimension(&plain), dimension(&g)), (own, coplanar));
+            for p in testutil::points() {
+                assert_eq!(g.at(0.0).unwrap().value(p), a.value(p));
+                assert_eq!(g.at(1.0).unwrap().value(p), target.value(p));
+            }
+            // Continuous: no jump from the ends into the coplanar frames.
+            for p in testutil::points() {
+                assert!((g.at(1e-4).unwrap().value(p) - a.value(p)).abs() < 1e-2, "at {p}");
+                assert!((g.at(1.0 - 1e-4).unwrap().value(p) - target.value(p)).abs() < 1e-2, "at {p}");
+            }
+        }
+        assert!(MorphSpec::from_ron("(coplanar_frames: true)").unwrap().coplanar_frames);
     }
 
     #[test]

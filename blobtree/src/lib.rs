@@ -85,6 +85,7 @@
 //! | `heuristic: nearest_centre`, `hierarchical` or `all_children` | how children of matched nodes without links are paired (default `nearest_centre`: nearest skeleton centres; `hierarchical`: nearest centres relative to their parents, recursively; `all_children`: every child with every child) ([`Heuristic`]) |
 //! | `speeds: [(a: PATH, b: PATH, speed: (start: 0.2, end: 0.8, smooth: true)), …]` | the speed `s(t)` of the generic node made from `a` and `b` (§4.4): 0 before `start`, 1 after `end`, linear or smooth (`3u² − 2u³`) in between (defaults 0, 1, false); or free-form with `points: [(u, s), …]`, a monotone piecewise cubic through `(0, 0)`, the points and `(1, 1)` over the window ([`Speed`]) |
 //! | `trajectories: [(a: PATH, b: PATH, handles: ((x, y, z), (x, y, z))), …]` | the two inner control points (world units) of the cubic Bézier curve the frame origin of the generic leaf or affine node `a → b` follows (default: uniform straight motion, slerped orientation); or key frames `keys: [(s: 0.5, position: (x, y, z), rotate: (axis: (x, y, z), degrees: a)), …]` at increasing local times `s ∈ (0, 1)`, each with a position and/or an orientation: the origin follows the cubic spline (Catmull–Rom tangents) through the end origins and the key positions, the orientation slerps from key to key ([`Trajectory`], [`FrameKey`]) |
+//! | `coplanar_frames: true` | automatic coplanar frames (§3.4, Figs. 10–11): matched points, segments and polygons are interpolated in local frames where both lie in one plane, so in-between skeletons stay segments or polygons (default `false`) |
 //! | `phantoms: [(target: PATH, position: (x, y, z), radius: R, stiffness: k), …]` | the phantom partner of a node without correspondence (§3.3, Fig. 17; [`Phantom`]): name the node by `source: PATH` or `target: PATH`; its phantom's skeletons are centred at `position` (world units), its primitives get radius `R` and stiffness `k` (each optional; default: the node's own); its intensity stays 0 |
 //!
 //! A full scene and a links spec for it, as in the shipped files:
@@ -151,6 +152,19 @@
 //! - **Trajectories**: the frame origin follows a cubic Bézier curve (default
 //!   handles give uniform straight motion); rotation by quaternion slerp,
 //!   stretch linearly ([`isomorph_common::AffineParts::lerp`]).
+//! - **Coplanar frames** (`coplanar_frames`): local x along a segment or a
+//!   polygon's principal axis, z along the polygon's normal (two segments:
+//!   the normal of the plane they span), origin at the skeleton's centroid,
+//!   signs chosen for the least turn; a point takes its partner's
+//!   orientation. Only for Euclidean metrics and similarity frames, where
+//!   re-expressing a primitive leaves its field unchanged.
+//! - **Hierarchical matching** compares children's centres relative to
+//!   the mean of their siblings' centres.
+//! - **Key shapes** (`--via`, [`BlobMorph::through`]): the pairwise
+//!   generic trees are joined end to end at evenly spaced times, so the
+//!   morph passes through every key shape (continuous, with a change of
+//!   speed at the keys); the paper's Bézier-like combination, whose inner
+//!   control shapes are approached but not reached, is not built.
 //! - **Warps**: Barr twist and taper about the local z axis, bend in the y–z
 //!   plane (put them under an affine node for other axes); the taper scale is
 //!   clamped at 0.05 to stay invertible.
@@ -212,6 +226,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+mod coplanar;
 mod correspond;
 mod error;
 mod generic;

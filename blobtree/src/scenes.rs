@@ -480,9 +480,13 @@ mod tests {
     fn the_every_feature_spec_uses_every_control() {
         let spec = MorphSpec::load(&shipped().join(EVERY_FEATURE)).unwrap();
         // Every field given (a field added to MorphSpec must be added to the file).
-        let MorphSpec { links, heuristic: _, speeds, trajectories, phantoms } = &spec;
+        let MorphSpec { links, heuristic: _, speeds, trajectories, phantoms, coplanar_frames } = &spec;
         assert!(
-            !links.is_empty() && !speeds.is_empty() && !trajectories.is_empty() && !phantoms.is_empty(),
+            !links.is_empty()
+                && !speeds.is_empty()
+                && !trajectories.is_empty()
+                && !phantoms.is_empty()
+                && *coplanar_frames,
             "{spec:?}"
         );
         assert!(speeds.iter().any(|c| c.speed.smooth) && speeds.iter().any(|c| !c.speed.points.is_empty()));
