@@ -244,7 +244,10 @@ pub use correspond::{
     Correspondence, Heuristic, Link, MAX_PAIRS, MAX_VERTEX_PAIRS, Origin, Pair, Phantom, decompose, split,
 };
 pub use error::{BlobError, BlobMorphError, NodePath, NodeProblem, Side};
-pub use generic::{BlobMorph, BlobSettings, GenericTree, KeyShape, MorphSpec, Speed, SpeedCurve, Trajectory};
+pub use generic::{
+    BlobMorph, BlobSettings, FrameKey, GenericTree, KeyShape, MorphSpec, Orientation, Speed, SpeedCurve,
+    Trajectory,
+};
 pub use kernel::Kernel;
 pub use minkowski::MinkowskiPath;
 pub use node::{MAX_MAGNITUDE, MAX_SUPPORT, NaryOp, Node, Primitive};
