@@ -399,9 +399,10 @@ struct GNode {
 ///   slerped rotation · stretch ([`isomorph_common::AffineParts::lerp`]);
 ///   different kinds were already split into two warps through the identity (Fig. 16);
 /// - leaves: skeleton `(1 − s) S_A ⊕ s S_B` in the time-varying local frame
-///   (origin on a cubic Bézier curve — uniform straight motion unless the
-///   animator gives handles — orientation by quaternion slerp, stretch
-///   linearly), generic topology built once ([`MinkowskiPath`]); `I, R, k`
+///   (origin uniform and straight unless the animator gives a
+///   [`Trajectory`] — Bézier handles or key frames — orientation by
+///   quaternion slerp, stretch linearly; optionally coplanar frames,
+///   [`MorphSpec::coplanar_frames`]), generic topology built once ([`MinkowskiPath`]); `I, R, k`
 ///   linear; the L^p exponent linear (§3.4.3), or `1/p` linear when one end
 ///   is `p = ∞`.
 ///

@@ -149,9 +149,18 @@
 //!   `α^{1/n}` so their super-elliptic blend equals the original.
 //! - **Unlinked children under an intersection** are linked to the nearest
 //!   child instead of getting a phantom (a null field is not neutral for `min`).
-//! - **Trajectories**: the frame origin follows a cubic Bézier curve (default
-//!   handles give uniform straight motion); rotation by quaternion slerp,
-//!   stretch linearly ([`isomorph_common::AffineParts::lerp`]).
+//! - **Trajectories** (§3.4: "the origin … follows a cubic spline curve,
+//!   whereas … the orientations involves quaternion [slerping]"): by
+//!   default the origin moves uniformly on a straight line, the rotation by
+//!   slerp, the stretch linearly ([`isomorph_common::AffineParts::lerp`]);
+//!   the animator bends the origin's path into a cubic Bézier curve
+//!   (`handles`), or keys positions (a C¹ cubic spline with Catmull–Rom
+//!   tangents through the keys) and orientations (slerp from key to key),
+//!   for leaves and affine nodes alike. Keys are at the node's local time
+//!   `s`, after its speed curve.
+//! - **Phantom parameters**: position, radius and stiffness; the
+//!   intensity of a phantom stays 0 (a phantom with an intensity would
+//!   change the end shape it belongs to).
 //! - **Coplanar frames** (`coplanar_frames`): local x along a segment or a
 //!   polygon's principal axis, z along the polygon's normal (two segments:
 //!   the normal of the plane they span), origin at the skeleton's centroid,
