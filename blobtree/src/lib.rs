@@ -149,9 +149,8 @@
 //!   `α^{1/n}` so their super-elliptic blend equals the original.
 //! - **Unlinked children under an intersection** are linked to the nearest
 //!   child instead of getting a phantom (a null field is not neutral for `min`).
-//! - **Trajectories** (§3.4: "the origin … follows a cubic spline curve,
-//!   whereas … the orientations involves quaternion [slerping]"): by
-//!   default the origin moves uniformly on a straight line, the rotation by
+//! - **Trajectories** (§3.4: the origin follows a cubic spline curve, the
+//!   orientations are interpolated by quaternion slerp): by default the origin moves uniformly on a straight line, the rotation by
 //!   slerp, the stretch linearly ([`isomorph_common::AffineParts::lerp`]);
 //!   the animator bends the origin's path into a cubic Bézier curve
 //!   (`handles`), or keys positions (a C¹ cubic spline with Catmull–Rom
