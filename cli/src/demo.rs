@@ -69,6 +69,19 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
     let rook_queen = Settings {
         blobtree: isomorph_blobtree::BlobSettings {
             spec: isomorph_blobtree::scenes::demo_spec("rook", "queen").unwrap_or_default(),
+            ..Default::default()
+        },
+        ..defaults.clone()
+    };
+    // The rook becomes the queen (its built-in links) and then the bear:
+    // a morph through a key shape.
+    let rook_queen_bear = Settings {
+        blobtree: isomorph_blobtree::BlobSettings {
+            via: vec![isomorph_blobtree::KeyShape {
+                shape: isomorph_blobtree::scenes::queen(),
+                spec: rook_queen.blobtree.spec.clone(),
+            }],
+            ..Default::default()
         },
         ..defaults.clone()
     };
@@ -77,6 +90,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         (Method::LevelSet, "ball", "c-shape", &defaults, "level_set_ball_to_c"),
         (Method::LevelSet, "mug", "chain", &mug_on_chain, "level_set_mug_to_chain"),
         (Method::Blobtree, "rook", "queen", &rook_queen, "blobtree_rook_to_queen"),
+        (Method::Blobtree, "rook", "bear", &rook_queen_bear, "blobtree_rook_via_queen_to_bear"),
         (Method::Rbf, "sphere", "torus", &defaults, "rbf_sphere_to_torus"),
         (Method::Warp, "sphere", "torus", &defaults, "warp_sphere_to_torus"),
         (Method::Tspline, "sphere", "torus", &defaults, "tspline_sphere_to_torus"),

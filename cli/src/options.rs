@@ -132,6 +132,15 @@ pub struct MethodArgs {
     /// correspondence, without it.
     #[arg(long, help_heading = "BlobTree (Galin et al.)")]
     pub links: Option<PathBuf>,
+
+    /// A key shape the morph passes through (a BlobTree scene file or a
+    /// built-in scene); repeat for several, in order. The morph joins the
+    /// generic trees of each pair of consecutive shapes and is each key
+    /// shape at evenly spaced times (with two: the source at 0, the keys at
+    /// 1/3 and 2/3, the target at 1). Each segment uses its built-in spec
+    /// (a built-in pair) or automatic correspondence.
+    #[arg(long, help_heading = "BlobTree (Galin et al.)", conflicts_with = "links")]
+    pub via: Vec<String>,
 }
 
 /// Which options belong to which method (by their argument ids).
@@ -163,6 +172,7 @@ const OWNERS: &[(&str, &[Method])] = &[
     ("refine", &[Method::Tspline]),
     ("refine_rounds", &[Method::Tspline]),
     ("links", &[Method::Blobtree]),
+    ("via", &[Method::Blobtree]),
 ];
 
 /// The options given on the command line that belong to no method in
@@ -267,8 +277,19 @@ impl MethodArgs {
             Some(path) => {
                 MorphSpec::load(path).with_context(|| format!("invalid links file {}", path.display()))?
             }
-            None => isomorph_blobtree::scenes::demo_spec(source, target).unwrap_or_default(),
+            None => {
+                let last = self.via.last().map_or(source, String::as_str);
+                isomorph_blobtree::scenes::demo_spec(last, target).unwrap_or_default()
+            }
         };
+        let mut from = source;
+        settings.blobtree.via = Vec::with_capacity(self.via.len());
+        for name in &self.via {
+            let shape = isomorph_blobtree::scenes::load(name).with_context(|| format!("--via {name}"))?;
+            let spec = isomorph_blobtree::scenes::demo_spec(from, name).unwrap_or_default();
+            settings.blobtree.via.push(isomorph_blobtree::KeyShape { shape, spec });
+            from = name;
+        }
         Ok(settings)
     }
 }

@@ -493,6 +493,58 @@ fn blob_polygonizes_a_scene_and_morph_takes_blobtrees() {
         let e = &report["endpoints"][end];
         assert!(e["mean_voxels"].as_f64().unwrap() < 0.5, "{end}: {e}");
     }
+    // Through a key shape: the rook becomes the queen (at t = 0.5) and then the bear.
+    let o = isomorph(&[
+        "morph",
+        "--method",
+        "blobtree",
+        "--source",
+        "rook",
+        "--via",
+        "queen",
+        "--target",
+        "bear",
+        "--res",
+        "32",
+        "--frames",
+        "3",
+        "--no-preview",
+        "--report",
+        "--out",
+        frames.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(report["morph"]["details"]["key shapes"], 3, "{report}");
+    let queen = isomorph_blobtree::scenes::queen().mesh(32).unwrap();
+    let middle = isomorph_io::mesh::read_mesh(frames.join("frame_001.ply")).unwrap();
+    assert_eq!(middle.genus(), queen.genus());
+    let o = isomorph(&[
+        "morph",
+        "--method",
+        "level-set",
+        "--source",
+        "sphere",
+        "--via",
+        "torus",
+        "--target",
+        "ball",
+    ]);
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("--via"));
+    // Any built-in scene or links spec is dumped as the shipped file (RON) or as JSON.
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../blobtree/scenes");
+    let o = isomorph(&["blob", "--dump", "rook"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rook = std::fs::read_to_string(shipped.join("rook.ron")).unwrap();
+    assert_eq!(String::from_utf8_lossy(&o.stdout).trim_end(), rook.trim_end());
+    let o = isomorph(&["blob", "--dump", "queen", "--format", "json"]);
+    let queen = isomorph_blobtree::BlobTree::from_json(&String::from_utf8_lossy(&o.stdout)).unwrap();
+    assert_eq!(queen.root(), isomorph_blobtree::scenes::queen().root());
+    let o = isomorph(&["blob", "--dump", "rook_queen"]);
+    let links = std::fs::read_to_string(shipped.join("rook_queen.links.ron")).unwrap();
+    assert_eq!(String::from_utf8_lossy(&o.stdout).trim_end(), links.trim_end());
+    let o = isomorph(&["blob", "--help"]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("Scene files"));
     // A scene with a negative radius is one error line naming the node.
     std::fs::write(&scene, r#"(root: (kind: "point", vertices: [(0, 0, 0)], radius: -1.0))"#).unwrap();
     let o = isomorph(&["blob", scene.to_str().unwrap(), "--out", out.to_str().unwrap()]);
