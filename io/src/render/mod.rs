@@ -282,6 +282,7 @@ mod tests {
             positions: vec![Vec3::NAN, Vec3::X, Vec3::Y, Vec3::new(1.0, 1.0, f32::INFINITY)],
             triangles: vec![[0, 1, 2], [1, 2, 3], [1, 2, 7]],
             normals: Some(vec![Vec3::NAN; 2]),
+            colors: None,
         };
         assert_eq!(render(&nan, &settings), plain);
         let mut partly = uv_sphere(Vec3::ZERO, 1.0, 8, 16);
