@@ -73,6 +73,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
             threads: args.threads,
             format: Format::Ply,
             no_preview: false,
+            colour: false,
         };
         let out = args.out.join(folder);
         let report = morph(method, &io, settings, &out)?;
