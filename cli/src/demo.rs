@@ -10,8 +10,9 @@ use anyhow::Context;
 use clap::Args;
 use isomorph_cli::methods::{LandmarkWarp, Method, Settings, landmark_warp};
 use isomorph_common::glam::Vec3;
-use isomorph_common::{Control, Solid, models};
-use isomorph_io::inputs::BUNNY;
+use isomorph_common::mesh::primitives::torus;
+use isomorph_common::{Control, Solid, TriMesh, models};
+use isomorph_io::inputs::{BUNNY, bunny};
 use isomorph_io::mesh::{MeshFormat, write_mesh};
 use isomorph_levelset::Align;
 use std::f32::consts::FRAC_PI_2;
@@ -107,15 +108,20 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         );
         s
     };
-    let (fin_a, fin_b) = (fins.0.as_str(), fins.1.as_str());
-    let demos = demos.into_iter().chain([
-        (Method::LevelSet, fin_a, fin_b, &defaults, "level_set_fin_without_landmarks"),
-        (Method::LevelSet, fin_a, fin_b, &fin_guided, "level_set_fin_with_landmarks"),
-    ]);
-    for (method, source, target, settings, folder) in demos {
+    // Breen & Whitaker's Fig. 13: colour carried through the morph, from a
+    // bunny painted by height into a torus painted around its ring.
+    let (painted_bunny, painted_torus) = painted_inputs(&args.out.join("colour_inputs"))?;
+    let written = [
+        (Method::LevelSet, fins.0.clone(), fins.1.clone(), &defaults, "level_set_fin_without_landmarks"),
+        (Method::LevelSet, fins.0.clone(), fins.1.clone(), &fin_guided, "level_set_fin_with_landmarks"),
+        (Method::LevelSet, painted_bunny, painted_torus, &defaults, "level_set_colour_bunny_to_torus"),
+    ];
+    let demos =
+        demos.into_iter().map(|(m, s, t, settings, f)| (m, s.to_string(), t.to_string(), settings, f));
+    for (method, source, target, settings, folder) in demos.chain(written) {
         let io = Io {
-            source: source.into(),
-            target: target.into(),
+            source,
+            target,
             res: args.res,
             frames: args.frames,
             // The fin meshes are in the landmarks' coordinates.
@@ -125,6 +131,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
             threads: args.threads,
             format: Format::Ply,
             no_preview: false,
+            colour: false,
         };
         let out = args.out.join(folder);
         let report = morph(method, &io, settings, &out)?;
@@ -173,4 +180,26 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
     warp::run(&warp_args)?;
     println!("demo written to {}", args.out.display());
     Ok(())
+}
+
+/// Writes two differently coloured inputs into `dir` and returns their
+/// paths: the bunny painted by height (dark red at its feet to yellow at
+/// its ears) and a torus painted around its ring (teal to violet and back).
+fn painted_inputs(dir: &Path) -> anyhow::Result<(String, String)> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let bunny = bunny();
+    let bounds = bunny.bounds();
+    let (low, high) = (Vec3::new(0.6, 0.05, 0.1), Vec3::new(1.0, 0.85, 0.2));
+    let by_height =
+        bunny.positions.iter().map(|p| low.lerp(high, (p.y - bounds.min.y) / bounds.size().y)).collect();
+    let torus = torus(0.35, 0.14, 96, 48);
+    let (teal, violet) = (Vec3::new(0.1, 0.6, 0.7), Vec3::new(0.5, 0.25, 0.85));
+    let around =
+        torus.positions.iter().map(|p| teal.lerp(violet, 0.5 - 0.5 * p.y.atan2(p.x).cos())).collect();
+    let write = |name: &str, mesh: TriMesh, colors| -> anyhow::Result<String> {
+        let path = dir.join(name);
+        write_mesh(&mesh.with_colors(colors)?, &path, MeshFormat::PlyBinaryLittleEndian)?;
+        Ok(path.to_string_lossy().into_owned())
+    };
+    Ok((write("bunny_by_height.ply", bunny, by_height)?, write("torus_around.ply", torus, around)?))
 }

@@ -6,9 +6,10 @@ use crate::raw::RawArgs;
 use anyhow::Context;
 use clap::{ArgMatches, Args, ValueEnum};
 use isomorph_cli::methods::{Method, Settings, build, load_input_with_warnings};
-use isomorph_common::{Control, Solid};
-use isomorph_io::export::{ExportSettings, Report, export_sequence, reference_surfaces};
-use isomorph_io::inputs::LoadOptions;
+use isomorph_common::mesh::color::ColorLookup;
+use isomorph_common::{Control, Solid, TriMesh};
+use isomorph_io::export::{ExportSettings, FrameColors, Report, export_sequence, reference_surfaces};
+use isomorph_io::inputs::{LoadOptions, UNCOLORED, builtin_color};
 use isomorph_io::mesh::MeshFormat;
 use std::path::{Path, PathBuf};
 
@@ -79,6 +80,13 @@ pub struct Io {
     /// Do not write preview.gif (the frames' renders as a loop).
     #[arg(long)]
     pub no_preview: bool,
+    /// Colour the frames even when no input mesh has vertex colours:
+    /// built-in shapes in their own colours, other inputs light grey.
+    /// Frames are always coloured when an input mesh has vertex colours
+    /// (PLY `red green blue`, OBJ `v x y z r g b`): each vertex blends the
+    /// source's and the target's colour at their closest points by t.
+    #[arg(long, visible_alias = "color")]
+    pub colour: bool,
 }
 
 impl Io {
@@ -125,7 +133,8 @@ impl Io {
     }
 
     /// Export settings writing into `out`, with the inputs' surfaces as
-    /// references for the endpoint distances.
+    /// references for the endpoint distances and, when frames are coloured
+    /// (`--colour` or an input with vertex colours), as colour sources.
     ///
     /// # Errors
     /// Inputs whose surface cannot be made.
@@ -136,6 +145,18 @@ impl Io {
         control: &Control,
     ) -> anyhow::Result<ExportSettings> {
         let (source, target) = reference_surfaces(&inputs.0, &inputs.1, self.resolution(), control)?;
+        let colors = (self.colour || source.colors.is_some() || target.colors.is_some())
+            .then(|| -> anyhow::Result<FrameColors> {
+                let lookup = |spec: &str, surface: &TriMesh| {
+                    ColorLookup::new(surface, builtin_color(spec).unwrap_or(UNCOLORED))
+                        .with_context(|| format!("the colours of {spec}"))
+                };
+                Ok(FrameColors {
+                    source: lookup(&self.source, &source)?,
+                    target: lookup(&self.target, &target)?,
+                })
+            })
+            .transpose()?;
         Ok(ExportSettings {
             frames: self.frames as usize,
             resolution: self.resolution(),
@@ -146,6 +167,7 @@ impl Io {
             preview: !self.no_preview,
             source_reference: Some(source),
             target_reference: Some(target),
+            colors,
             ..ExportSettings::default()
         })
     }

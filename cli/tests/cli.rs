@@ -42,6 +42,12 @@ fn demo_writes_frames_sheet_and_report() {
     }
     assert!(level_set["endpoints"]["target"]["mean_voxels"].as_f64().unwrap() < 0.5);
     assert!(out.join("level_set_mug_to_chain/contact_sheet.png").is_file());
+    // Colour through the morph: the painted bunny's and torus's colours.
+    let painted = out.join("level_set_colour_bunny_to_torus");
+    for f in ["frame_000.ply", "frame_003.ply"] {
+        let frame = isomorph_io::mesh::read_mesh(painted.join(f)).unwrap();
+        assert!(frame.colors.is_some(), "{f} has no colours");
+    }
     // The rook becomes the queen in one piece (its built-in links and speeds).
     let blob: serde_json::Value = read_json(out.join("blobtree_rook_to_queen/report.json"));
     for f in blob["frames"].as_array().unwrap() {

@@ -5,7 +5,7 @@ use crate::band::BandFrame;
 use crate::solver::{Curvature, Solver, StepParams, StepStats};
 use crate::stencil::Lattice;
 use crate::{DenseSolver, LevelSetError, Placement, SparseFieldSolver, SpeedGrid};
-use isomorph_common::glam::{UVec3, Vec3};
+use isomorph_common::glam::{Affine3A, UVec3, Vec3};
 use isomorph_common::marching_cubes::marching_cubes;
 use isomorph_common::{Aabb, Grid3, TriMesh};
 use isomorph_common::{
@@ -486,5 +486,10 @@ impl Morph for LevelSetMorph {
         let mut mesh = marching_cubes(&self.frame_grid(n)?, 0.0);
         self.placement.apply(&mut mesh, self.alpha(n));
         Ok(mesh)
+    }
+
+    /// `T(·, n/(N − 1))`'s affine part, without making the frame.
+    fn world_transform(&self, t: f32) -> Result<Affine3A, LevelSetError> {
+        Ok(self.placement.affine_at(self.alpha(self.index(check_time(t)?))))
     }
 }

@@ -280,6 +280,11 @@ impl Morph for TsplineMorph {
         mesh.transform(&self.frame_transform(i));
         Ok(mesh)
     }
+
+    /// [`TsplineMorph::frame_transform`], without making the frame.
+    fn world_transform(&self, t: f32) -> Result<Affine3A, TsplineError> {
+        Ok(self.frame_transform(self.index(t)?))
+    }
 }
 
 /// Runs the whole method from a source to a target mesh (closed, outward

@@ -419,4 +419,10 @@ impl Morph for WarpMorph {
         let frame = self.frame(t)?;
         Ok(marching_cubes(&frame.field, frame.iso))
     }
+
+    /// The identity: frames are not placed (without making the frame).
+    fn world_transform(&self, t: f32) -> Result<Affine3A, WarpError> {
+        check_time(t)?;
+        Ok(Affine3A::IDENTITY)
+    }
 }

@@ -107,6 +107,19 @@ pub trait Morph: Send + Sync {
         mesh.transform(&frame.transform);
         Ok(mesh)
     }
+
+    /// [`Frame::transform`] of the frame at `t` alone (field space → world
+    /// space), e.g. to find where a world point of frame `t` sits in frames
+    /// 0 and 1 (`world_transform(0) · world_transform(t)⁻¹` places it on the
+    /// source, as the sequence exporter's colour lookup does). The default
+    /// makes the whole frame; methods whose placement is known without it
+    /// override this.
+    ///
+    /// # Errors
+    /// As [`Morph::frame`].
+    fn world_transform(&self, t: f32) -> Result<Affine3A, Self::Error> {
+        Ok(self.frame(t)?.transform)
+    }
 }
 
 /// The box containing `bounds` placed by every transform of `placements`
