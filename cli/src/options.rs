@@ -72,12 +72,12 @@ pub struct MethodArgs {
     /// them; the RBF method warps both shapes half-way by them; the level
     /// set evolves towards the target seen through the warp they define
     /// (at least 4, not all on one plane).
-    #[arg(long = "landmark", help_heading = "Volume warp (True)", value_parser = parse_pair, allow_hyphen_values = true)]
-    pub landmarks: Vec<(Vec3, Vec3)>,
+    #[arg(long, help_heading = "Volume warp (True)", value_parser = parse_pair, allow_hyphen_values = true)]
+    pub landmark: Vec<(Vec3, Vec3)>,
     /// A landmarks file: a JSON list of `{"source": [x, y, z], "target":
     /// [x, y, z]}` pairs (world units), used as `--landmark` pairs are.
-    #[arg(long = "landmarks", help_heading = "Volume warp (True)")]
-    pub landmarks_file: Option<PathBuf>,
+    #[arg(long, help_heading = "Volume warp (True)")]
+    pub landmarks: Option<PathBuf>,
     /// Voxels between B-spline control points.
     #[arg(long, help_heading = "Volume warp (True)", default_value_t = WarpMorphSettings::default().control_spacing)]
     pub control_spacing: u32,
@@ -156,8 +156,8 @@ const OWNERS: &[(&str, &[Method])] = &[
     ("kernel", &[Method::Rbf]),
     ("tolerance", &[Method::Rbf]),
     ("warp_spec", &[Method::Warp]),
+    ("landmark", &[Method::Warp, Method::Rbf, Method::LevelSet]),
     ("landmarks", &[Method::Warp, Method::Rbf, Method::LevelSet]),
-    ("landmarks_file", &[Method::Warp, Method::Rbf, Method::LevelSet]),
     ("control_spacing", &[Method::Warp]),
     ("speed", &[Method::Tspline]),
     ("nt", &[Method::Tspline]),
@@ -297,7 +297,7 @@ impl MethodArgs {
 impl MethodArgs {
     /// Whether landmark pairs are given (`--landmark` or `--landmarks`).
     pub fn has_landmarks(&self) -> bool {
-        !self.landmarks.is_empty() || self.landmarks_file.is_some()
+        !self.landmark.is_empty() || self.landmarks.is_some()
     }
 
     /// The `--landmark` pairs and those of the `--landmarks` file,
@@ -306,8 +306,8 @@ impl MethodArgs {
     /// # Errors
     /// An unreadable file or an invalid set ([`Landmarks::new`]).
     fn landmark_pairs(&self) -> anyhow::Result<Option<Landmarks>> {
-        let mut pairs = self.landmarks.clone();
-        if let Some(path) = &self.landmarks_file {
+        let mut pairs = self.landmark.clone();
+        if let Some(path) = &self.landmarks {
             pairs.extend_from_slice(Landmarks::load(path)?.pairs());
         }
         if pairs.is_empty() {

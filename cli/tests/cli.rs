@@ -644,7 +644,7 @@ fn landmarks_warp_the_rbf_transformation() {
         "0,0,0:0,0,0",
     ]);
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success() && err.contains("--landmarks (warp, rbf)"), "{err}");
+    assert!(!o.status.success() && err.contains("--landmark (warp, rbf, level-set)"), "{err}");
     let _ = std::fs::remove_dir_all(&out);
 }
 

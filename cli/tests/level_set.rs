@@ -1,4 +1,5 @@
-//! `isomorph morph --method level-set`: the unreached-share option.
+//! `isomorph morph --method level-set`: the unreached-share option and
+//! landmark files.
 
 mod common;
 
@@ -24,4 +25,97 @@ fn max_unreached_is_a_checked_level_set_option() {
     let report: serde_json::Value = read_json(out.join("report.json"));
     let details = &report["morph"]["details"];
     assert_eq!((details["target_parts"].as_u64(), details["unreached_share"].as_f64()), (Some(1), Some(0.0)));
+}
+
+/// A landmarks file of `pairs` in `dir`.
+fn landmarks_file(dir: &std::path::Path, name: &str, pairs: &[([f32; 3], [f32; 3])]) -> String {
+    let records: Vec<serde_json::Value> =
+        pairs.iter().map(|(p, q)| serde_json::json!({"source": p, "target": q})).collect();
+    let path = dir.join(name);
+    std::fs::write(&path, serde_json::to_string(&records).unwrap()).unwrap();
+    path.to_string_lossy().into_owned()
+}
+
+#[test]
+fn landmark_files_drive_the_level_set_and_bad_ones_are_refused() {
+    let out = scratch("level_set_landmarks");
+    std::fs::create_dir_all(&out).unwrap();
+    // A shift of (0.1, 0.05, 0) at the sphere's six poles.
+    let shift = [0.1, 0.05, 0.0];
+    let poles: Vec<([f32; 3], [f32; 3])> =
+        [[0.3, 0., 0.], [-0.3, 0., 0.], [0., 0.3, 0.], [0., -0.3, 0.], [0., 0., 0.3], [0., 0., -0.3]]
+            .iter()
+            .map(|p| (*p, [p[0] + shift[0], p[1] + shift[1], p[2] + shift[2]]))
+            .collect();
+    let good = landmarks_file(&out, "shift.json", &poles);
+    let frames = out.join("frames");
+    let run = |file: &str, extra: &[&str]| {
+        let base =
+            ["morph", "--method", "level-set", "--source", "sphere", "--target", "ball", "--res", "32"];
+        let tail = ["--frames", "3", "--no-preview", "--landmarks", file, "--out", frames.to_str().unwrap()];
+        isomorph(&[&base[..], extra, &tail[..]].concat())
+    };
+    // The ball is a smaller sphere elsewhere: through the warp the target
+    // is seen where the source is, and the frames end on the ball.
+    for warp in ["rbf", "bspline"] {
+        let o = run(&good, &["--landmark-warp", warp]);
+        assert!(o.status.success(), "{warp}: {}", String::from_utf8_lossy(&o.stderr));
+        let report = read_json(frames.join("report.json"));
+        assert_eq!(report["morph"]["details"]["warped"], true, "{report}");
+        let end = &report["endpoints"]["target"];
+        assert!(end["mean_voxels"].as_f64().unwrap() < 1.0, "{warp}: {end}");
+    }
+    // Bad files: each error says what is wrong.
+    let three = landmarks_file(&out, "three.json", &poles[..3]);
+    let flat: Vec<_> = poles.iter().map(|&(p, q)| ([p[0], p[1] + 0.5 * p[2], 0.0], q)).collect();
+    let flat = landmarks_file(&out, "flat.json", &flat);
+    let mut twice = poles.clone();
+    twice.push((poles[0].0, [9.0, 9.0, 9.0]));
+    let twice = landmarks_file(&out, "twice.json", &twice);
+    let nan = out.join("nan.json");
+    std::fs::write(&nan, r#"[{"source": [0, 0, 0], "target": [NaN, 0, 0]}]"#).unwrap();
+    let missing = out.join("missing.json");
+    for (file, expected) in [
+        (three.as_str(), "at least 4"),
+        (flat.as_str(), "one plane"),
+        (twice.as_str(), "different target points"),
+        (nan.to_str().unwrap(), "JSON list"),
+        (missing.to_str().unwrap(), "cannot read"),
+    ] {
+        let o = run(file, &[]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(expected), "{file}: {err}");
+    }
+    // Landmarks and an alignment both place the source: refused.
+    let o = run(&good, &["--align", "auto"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("--align and landmarks"), "{err}");
+    // `align --landmarks` prints the affine part as a map `--align` reads.
+    let aligned = out.join("aligned.ply");
+    let o = isomorph(&["align", "sphere", "ball", "--landmarks", &good, "--out", aligned.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let map: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(map["max_misfit"].as_f64().unwrap() < 1e-5, "{map}");
+    assert!((map["matrix"][0][3].as_f64().unwrap() - 0.1).abs() < 1e-5, "{map}");
+    let map_file = out.join("map.json");
+    std::fs::write(&map_file, o.stdout).unwrap();
+    let o = isomorph(&[
+        "morph",
+        "--method",
+        "level-set",
+        "--source",
+        "sphere",
+        "--target",
+        "ball",
+        "--res",
+        "24",
+        "--frames",
+        "2",
+        "--no-preview",
+        "--align",
+        map_file.to_str().unwrap(),
+        "--out",
+        frames.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
