@@ -260,10 +260,16 @@ pub fn print_summary(report: &Report, io: &Io, out: &Path) {
         report.resolution,
         report.export_seconds
     );
-    println!("  {:>5} {:>9} {:>10} {:>5} {:>5}", "t", "vertices", "triangles", "comp", "genus");
+    println!(
+        "  {:>5} {:>9} {:>10} {:>5} {:>5} {:>5}",
+        "t", "vertices", "triangles", "comp", "voids", "genus"
+    );
     for f in &report.frames {
         let genus = f.genus.map_or("-".to_string(), |g| g.to_string());
-        println!("  {:>5.2} {:>9} {:>10} {:>5} {:>5}", f.t, f.vertices, f.triangles, f.components, genus);
+        println!(
+            "  {:>5.2} {:>9} {:>10} {:>5} {:>5} {:>5}",
+            f.t, f.vertices, f.triangles, f.components, f.voids, genus
+        );
     }
     for (name, e) in [("source", report.endpoints.source), ("target", report.endpoints.target)] {
         if let Some(e) = e {

@@ -23,7 +23,7 @@ fn demo_writes_frames_sheet_and_report() {
     assert_eq!(report["resolution"], 32);
     let frames = report["frames"].as_array().unwrap();
     assert_eq!(frames.len(), 4);
-    for key in ["t", "vertices", "triangles", "components", "genus", "area", "volume", "seconds"] {
+    for key in ["t", "vertices", "triangles", "components", "voids", "genus", "area", "volume", "seconds"] {
         assert!(frames[0].get(key).is_some(), "frame key {key} missing");
     }
     for end in ["source", "target"] {

@@ -10,7 +10,8 @@ use glam::{Quat, Vec3};
 use std::f32::consts::FRAC_PI_2;
 
 /// Names accepted by [`by_name`], in display order.
-pub const NAMES: [&str; 8] = ["sphere", "torus", "ball", "c-shape", "mug", "chain", "cube", "holed-cube"];
+pub const NAMES: [&str; 9] =
+    ["sphere", "torus", "ball", "c-shape", "mug", "chain", "cube", "holed-cube", "apple"];
 
 /// The built-in model called `name` (see [`NAMES`]), or `None`.
 pub fn by_name(name: &str) -> Option<Shape> {
@@ -23,6 +24,7 @@ pub fn by_name(name: &str) -> Option<Shape> {
         "chain" => chain(),
         "cube" => cube(),
         "holed-cube" => holed_cube(),
+        "apple" => apple(),
         _ => return None,
     })
 }
@@ -53,6 +55,21 @@ pub fn holed_cube() -> Shape {
         .subtract(drill(Quat::IDENTITY, Vec3::new(0.12, -0.12, 0.0)))
         .subtract(drill(Quat::from_rotation_y(FRAC_PI_2), Vec3::new(0.0, 0.12, -0.12)))
         .subtract(drill(Quat::from_rotation_x(FRAC_PI_2), Vec3::new(-0.12, 0.0, 0.12)))
+}
+
+/// Yang & Jüttler's Example 3 source (Fig. 7, apple → teapot): an apple
+/// upright along y, a flattened ellipsoid (half width 0.3, half height
+/// 0.26) with a spherical dimple at the top (radius 0.1) and a shallower one
+/// at the bottom, and a stem (radius 0.02) rising from the top dimple to
+/// y = 0.36. Genus 0.
+pub fn apple() -> Shape {
+    let body = Shape::superellipsoid(Vec3::new(0.3, 0.26, 0.3), 1.0, 1.0);
+    let top = Shape::sphere(0.1).translated(Vec3::new(0.0, 0.3, 0.0));
+    let bottom = Shape::sphere(0.07).translated(Vec3::new(0.0, -0.3, 0.0));
+    let stem = Shape::cylinder(0.02, 0.08)
+        .rotated(Quat::from_rotation_x(-FRAC_PI_2))
+        .translated(Vec3::new(0.0, 0.28, 0.0));
+    body.subtract(top).subtract(bottom).union(stem)
 }
 
 /// Breen's ball (Fig. 4): a small sphere lying mostly inside the left half of
@@ -157,6 +174,12 @@ mod tests {
         assert!(mug.distance(Vec3::new(0.0, -0.27, 0.0)) > 0.0, "floor");
         assert!(mug.distance(Vec3::new(0.41, 0.0, 0.0)) > 0.0, "handle");
         assert!(mug.distance(Vec3::new(0.32, 0.0, 0.0)) < 0.0, "hole of the handle");
+        let apple = apple();
+        assert!(apple.distance(Vec3::ZERO) > 0.0, "solid");
+        assert!(apple.distance(Vec3::new(0.0, 0.23, 0.05)) < 0.0, "top dimple");
+        assert!(apple.distance(Vec3::new(0.0, -0.245, 0.03)) < 0.0, "bottom dimple");
+        assert!(apple.distance(Vec3::new(0.0, 0.33, 0.0)) > 0.0, "stem");
+        assert!(apple.distance(Vec3::new(0.0, 0.37, 0.0)) < 0.0, "stem top");
         let chain = chain();
         assert!(chain.distance(Vec3::new(-0.19, 0.14, 0.0)) > 0.0, "left link");
         assert!(chain.distance(Vec3::new(0.0, 0.0, 0.14)) > 0.0, "middle link");

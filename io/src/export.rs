@@ -209,8 +209,10 @@ pub struct FrameReport {
     pub vertices: usize,
     /// Triangle count.
     pub triangles: usize,
-    /// Connected components.
+    /// Connected components (outer shells and cavity walls).
     pub components: usize,
+    /// Of those, walls of enclosed cavities ([`MeshMetrics::voids`](isomorph_common::mesh::metrics::MeshMetrics::voids)).
+    pub voids: usize,
     /// Genus, when the frame is a closed 2-manifold.
     pub genus: Option<i64>,
     /// Surface area (world units²).
@@ -287,6 +289,12 @@ impl Report {
     /// The largest component count over all frames.
     pub fn max_components(&self) -> usize {
         self.frames.iter().map(|f| f.components).max().unwrap_or(0)
+    }
+
+    /// The largest number of outer shells (components that are not cavity
+    /// walls) over all frames.
+    pub fn max_shells(&self) -> usize {
+        self.frames.iter().map(|f| f.components - f.voids).max().unwrap_or(0)
     }
 
     /// Genus per frame.
@@ -373,6 +381,7 @@ fn export_on_pool<M: Morph + ?Sized>(
                 vertices: m.vertices,
                 triangles: m.triangles,
                 components: m.components,
+                voids: m.voids,
                 genus: m.genus,
                 area: m.area,
                 volume: m.volume,
