@@ -36,7 +36,7 @@ impl From<Mode> for AlignMode {
 #[derive(Debug, Args)]
 pub struct AlignArgs {
     /// Source: a built-in shape (sphere, torus, ball, c-shape, mug, chain,
-    /// cube, holed-cube) or a closed mesh file (.obj, .ply, .stl), in its own coordinates.
+    /// cube, holed-cube, apple) or a closed mesh file (.obj, .ply, .stl), in its own coordinates.
     pub source: String,
     /// Target: a built-in shape or a closed mesh file, as for the source.
     pub target: String,

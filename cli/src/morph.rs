@@ -40,7 +40,7 @@ impl Format {
 #[derive(Debug, Clone, Args)]
 pub struct Io {
     /// Source: a built-in shape (sphere, torus, ball, c-shape, mug, chain,
-    /// cube, holed-cube, bunny), a mesh file (.obj, .ply, .stl), a `.npy`
+    /// cube, holed-cube, apple, bunny), a mesh file (.obj, .ply, .stl), a `.npy`
     /// volume (signed distance, positive inside, placed by its JSON
     /// sidecar; u8 densities with the surface at 127.5), a `.raw` volume
     /// (with `--raw-dims`, `--raw-type`), or a BlobTree scene

@@ -21,7 +21,7 @@ use std::time::Instant;
 /// Arguments of `isomorph warp`.
 #[derive(Debug, Args)]
 pub struct WarpArgs {
-    /// A built-in shape (sphere, torus, ball, c-shape, mug, chain, cube, holed-cube), a
+    /// A built-in shape (sphere, torus, ball, c-shape, mug, chain, cube, holed-cube, apple), a
     /// mesh file (.obj, .ply, .stl), kept in its own coordinates, or a volume:
     /// `.npy` (u8 densities 0–255, surface at 127.5; or f32/f64 fields,
     /// positive inside, surface at 0; placed by its `.json` sidecar if any,

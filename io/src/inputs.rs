@@ -115,7 +115,7 @@ pub const UNCOLORED: Vec3 = Vec3::splat(0.75);
 /// | torus | sky blue (0.25, 0.55, 0.85) | | chain | steel (0.55, 0.6, 0.68) |
 /// | ball | amber (0.95, 0.7, 0.2) | | cube | purple (0.55, 0.35, 0.7) |
 /// | c-shape | green (0.3, 0.7, 0.4) | | holed-cube | teal (0.2, 0.65, 0.65) |
-/// | bunny | fawn (0.8, 0.6, 0.45) | | | |
+/// | bunny | fawn (0.8, 0.6, 0.45) | | apple | apple red (0.75, 0.15, 0.15) |
 pub fn builtin_color(name: &str) -> Option<Vec3> {
     let [r, g, b] = match name {
         "sphere" => [0.85, 0.33, 0.25],
@@ -126,6 +126,7 @@ pub fn builtin_color(name: &str) -> Option<Vec3> {
         "chain" => [0.55, 0.6, 0.68],
         "cube" => [0.55, 0.35, 0.7],
         "holed-cube" => [0.2, 0.65, 0.65],
+        "apple" => [0.75, 0.15, 0.15],
         BUNNY => [0.8, 0.6, 0.45],
         _ => return None,
     };
