@@ -10,7 +10,9 @@ use isomorph_common::{
 };
 use isomorph_io::inputs::{InputError, LoadOptions, load_solid_with_warnings};
 use isomorph_levelset::{LevelSetMorph, LevelSetSettings, Warp};
-use isomorph_rbf::{DisplacementWarp, FitSettings, RbfMorph, RbfSettings, WarpedMorph, WarpedSettings};
+use isomorph_rbf::{
+    DisplacementWarp, FitSettings, InfluencePath, RbfMorph, RbfSettings, WarpedMorph, WarpedSettings,
+};
 use isomorph_tspline::{TsplineMorph, TsplineSettings};
 use isomorph_warp::{WarpMorph, WarpMorphSettings, WorldMap};
 use std::sync::Arc;
@@ -75,6 +77,10 @@ pub struct Settings {
     /// when given, the shapes are warped half-way to each other first (the
     /// paper's appendix, [`WarpedMorph`]).
     pub rbf_correspondences: Vec<(Vec3, Vec3)>,
+    /// One or two influence shapes for the variational implicit (§7): when
+    /// given, the morph runs from the source to the target pulled towards
+    /// them ([`InfluencePath::from_solids`]).
+    pub rbf_influence: Vec<Solid>,
     /// True's B-spline warp with a cross-dissolve.
     pub warp: WarpMorphSettings,
     /// Yang & Jüttler's T-spline level sets.
@@ -207,6 +213,11 @@ pub fn build(
         }
         Method::LevelSet => {
             LevelSetMorph::new(source, target, &settings.level_set, control).map_err(BoxedError::new)?.boxed()
+        }
+        Method::Rbf if !settings.rbf_influence.is_empty() => {
+            InfluencePath::from_solids(source, target, &settings.rbf_influence, &settings.rbf, control)
+                .map_err(BoxedError::new)?
+                .boxed()
         }
         Method::Rbf if !settings.rbf_correspondences.is_empty() => {
             let warped = WarpedSettings {

@@ -100,16 +100,19 @@ impl Io {
     /// # Errors
     /// Unreadable or unknown inputs.
     pub fn inputs(&self, method: Method) -> anyhow::Result<(Solid, Solid)> {
+        Ok((self.load(method, &self.source)?, self.load(method, &self.target)?))
+    }
+
+    /// Loads the input `spec` for `method` as the source and target are
+    /// read, printing what the readers noticed.
+    fn load(&self, method: Method, spec: &str) -> anyhow::Result<Solid> {
         let options = LoadOptions { fit: !self.keep_scale, iso: self.iso, raw: self.raw.layout() };
-        let load = |spec: &str| -> anyhow::Result<Solid> {
-            let (solid, warnings) =
-                load_input_with_warnings(method, spec, &options).with_context(|| format!("input {spec}"))?;
-            for warning in warnings {
-                eprintln!("warning: {spec}: {warning}");
-            }
-            Ok(solid)
-        };
-        Ok((load(&self.source)?, load(&self.target)?))
+        let (solid, warnings) =
+            load_input_with_warnings(method, spec, &options).with_context(|| format!("input {spec}"))?;
+        for warning in warnings {
+            eprintln!("warning: {spec}: {warning}");
+        }
+        Ok(solid)
     }
 
     /// These inputs as `options` need them: landmarks are points in the
@@ -129,7 +132,13 @@ impl Io {
         if let Some(res) = self.res {
             settings = settings.with_resolution(res);
         }
-        options.apply(settings, &self.source, &self.target)
+        let mut settings = options.apply(settings, &self.source, &self.target)?;
+        settings.rbf_influence = options
+            .influence
+            .iter()
+            .map(|spec| self.load(Method::Rbf, spec))
+            .collect::<anyhow::Result<_>>()?;
+        Ok(settings)
     }
 
     /// Export settings writing into `out`, with the inputs' surfaces as

@@ -56,6 +56,12 @@ pub struct MethodArgs {
     /// The radial kernel.
     #[arg(long, help_heading = "RBF (Turk & O'Brien)", value_enum, default_value_t = KernelArg::from(RbfSettings::default().kernel))]
     pub kernel: KernelArg,
+    /// An influence shape (§7; repeat for a second): the morph runs from the
+    /// source to the target through one implicit of all the shapes, pulled
+    /// towards this one (a built-in shape, a mesh or a volume, read as the
+    /// inputs are).
+    #[arg(long, help_heading = "RBF (Turk & O'Brien)")]
+    pub influence: Vec<String>,
     /// Fit to this tolerance through greedily chosen centres (FastRBF)
     /// instead of interpolating every constraint: relative to the normal
     /// constraints' value, 0.001–1; allows up to 250000 --points.
@@ -155,6 +161,7 @@ const OWNERS: &[(&str, &[Method])] = &[
     ("separation", &[Method::Rbf]),
     ("kernel", &[Method::Rbf]),
     ("tolerance", &[Method::Rbf]),
+    ("influence", &[Method::Rbf]),
     ("warp_spec", &[Method::Warp]),
     ("landmark", &[Method::Warp, Method::Rbf, Method::LevelSet]),
     ("landmarks", &[Method::Warp, Method::Rbf, Method::LevelSet]),

@@ -752,3 +752,39 @@ fn rbf_tolerance_fits_many_points_through_fewer_centres() {
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("tolerance"));
     let _ = std::fs::remove_dir_all(&out);
 }
+
+#[test]
+fn rbf_influence_shapes_from_the_command_line() {
+    let out = scratch("rbf_influence");
+    let dir = out.to_str().unwrap();
+    let run = |extra: &[&str]| {
+        let base = ["morph", "--source", "sphere", "--target", "torus", "--res", "24", "--frames", "3"];
+        isomorph(&[&base[..], extra, &["--no-preview", "--report", "--out", dir][..]].concat())
+    };
+    let o = run(&["--method", "rbf", "--points", "100", "--influence", "cube"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(report["morph"]["method"], "rbf-influence", "{report}");
+    assert_eq!(report["morph"]["details"]["shapes"], 3, "{report}");
+    for end in ["source", "target"] {
+        let e = &report["endpoints"][end];
+        assert!(e["mean_voxels"].as_f64().unwrap() < 0.5, "{end}: {e}");
+    }
+    let o = run(&[
+        "--method",
+        "rbf",
+        "--points",
+        "50",
+        "--influence",
+        "cube",
+        "--influence",
+        "ball",
+        "--influence",
+        "mug",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("one or two influence shapes"), "{err}");
+    let o = run(&["--method", "level-set", "--influence", "cube"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("--influence (rbf)"), "{err}");
+}
