@@ -15,8 +15,9 @@ use isomorph_io::compare::error_chain;
 use isomorph_levelset::{Align, LevelSetSettings, SolverKind};
 use isomorph_rbf::{Kernel, RbfSettings};
 use isomorph_tspline::{Align as TsplineAlign, Speed, TsplineSettings};
-use isomorph_warp::{WarpMorphSettings, WarpSpec};
+use isomorph_warp::{WarpMorphSettings, WarpSpec, WorldMap};
 use std::path::PathBuf;
+use std::sync::Arc;
 
 /// Method options (each belongs to one method).
 #[derive(Debug, Clone, Args)]
@@ -41,6 +42,10 @@ pub struct MethodArgs {
     /// `W` (§6.2), frames placed by `(1 − α) x + α W(x)`.
     #[arg(long, help_heading = "Level set (Breen & Whitaker)", value_enum, default_value_t = LandmarkWarp::Rbf)]
     pub landmark_warp: LandmarkWarp,
+    /// A B-spline map as `isomorph warp` writes it (`map.json`) used as the
+    /// generalized warp `W` from source to target space (§6.2).
+    #[arg(long, help_heading = "Level set (Breen & Whitaker)")]
+    pub warp_map: Option<PathBuf>,
     /// Largest share (0–1) of the target's inside that may lie in parts the
     /// source does not overlap: the morph goes on without them and warns up
     /// to it, and is refused above it.
@@ -157,6 +162,7 @@ const OWNERS: &[(&str, &[Method])] = &[
     ("max_iterations", &[Method::LevelSet]),
     ("max_unreached", &[Method::LevelSet]),
     ("landmark_warp", &[Method::LevelSet]),
+    ("warp_map", &[Method::LevelSet]),
     ("points", &[Method::Rbf]),
     ("separation", &[Method::Rbf]),
     ("kernel", &[Method::Rbf]),
@@ -222,6 +228,14 @@ impl MethodArgs {
         let landmarks = self.landmark_pairs()?;
         let l = &mut settings.level_set;
         l.align = match (&self.align, &landmarks) {
+            _ if self.warp_map.is_some() && (landmarks.is_some() || self.align != AlignArg::None) => {
+                bail!("--warp-map places the source on the target: give it without --align or landmarks")
+            }
+            (_, None) if let Some(path) = &self.warp_map => {
+                let map =
+                    WorldMap::load(path).with_context(|| format!("invalid warp map {}", path.display()))?;
+                Align::Warp(Arc::new(move |x| map.apply(x)))
+            }
             (AlignArg::None, Some(landmarks)) => Align::Warp(
                 landmark_warp(landmarks, self.landmark_warp, self.control_spacing)
                     .map_err(|e| anyhow::anyhow!(error_chain(&e)))

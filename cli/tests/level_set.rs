@@ -119,3 +119,54 @@ fn landmark_files_drive_the_level_set_and_bad_ones_are_refused() {
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+#[test]
+fn a_saved_warp_map_drives_the_level_set() {
+    let out = scratch("level_set_warp_map");
+    let warp_dir = out.join("warp");
+    // Drag the sphere's +x pole a little further out: `isomorph warp` writes
+    // the edited map as map.json beside the warped shape.
+    let o = isomorph(&[
+        "warp",
+        "sphere",
+        "--drag",
+        "0.3,0,0:0.1,0,0",
+        "--res",
+        "32",
+        "--out",
+        warp_dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (map, warped) = (warp_dir.join("map.json"), warp_dir.join("warped.obj"));
+    let frames = out.join("frames");
+    let run = |extra: &[&str]| {
+        let base =
+            ["morph", "--method", "level-set", "--source", "sphere", "--target", warped.to_str().unwrap()];
+        let tail = [
+            "--res",
+            "32",
+            "--frames",
+            "3",
+            "--no-preview",
+            "--keep-scale",
+            "--out",
+            frames.to_str().unwrap(),
+        ];
+        isomorph(&[&base[..], extra, &tail[..]].concat())
+    };
+    let o = run(&["--warp-map", map.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report = read_json(frames.join("report.json"));
+    assert_eq!(report["morph"]["details"]["warped"], true, "{report}");
+    // Through the map the target is the source itself: the evolution has
+    // next to nothing to do, and the placed frames end on the warped shape.
+    assert!(report["morph"]["iterations"].as_u64().unwrap() < 20, "{report}");
+    let end = &report["endpoints"]["target"];
+    assert!(end["mean_voxels"].as_f64().unwrap() < 1.0, "{end}");
+    let o = run(&["--warp-map", map.to_str().unwrap(), "--align", "auto"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("--warp-map places the source"), "{err}");
+    let o = run(&["--warp-map", out.join("missing.json").to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("invalid warp map"), "{err}");
+}
