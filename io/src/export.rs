@@ -30,23 +30,23 @@
 //! # Colour
 //! With [`ExportSettings::colors`], every frame carries per-vertex colours
 //! (Breen & Whitaker Fig. 13): a vertex `p` of the frame at `t` is taken
-//! back to where the morph places the inputs, `S(t) = W(0) · W(t)⁻¹ p` on
-//! the source and `T(t) = W(1) · W(t)⁻¹ p` on the target (`W` is
-//! [`Morph::world_transform`]; the identity for methods that do not place
-//! their frames), and gets `(1 − t) · source colour at the surface point
-//! closest to S(t) + t · target colour at the one closest to T(t)`
-//! ([`ColorLookup`]), sRGB components blended linearly. At `t = 0` a
+//! back to where the morph places the same field point in the frames at 0
+//! and 1 ([`Morph::ends_of`]: `W(0) · W(t)⁻¹ p` and `W(1) · W(t)⁻¹ p` for a
+//! placement `W` = [`Morph::world_transform`], the identity for methods that
+//! do not place their frames; the inverse of Breen's `T(x, α)` for a level
+//! set placed by a warp), and gets `(1 − t) · source colour at the surface
+//! point closest to the first + t · target colour at the one closest to the
+//! second` ([`ColorLookup`]), sRGB components blended linearly. At `t = 0` a
 //! vertex thus gets exactly the source's colour at its closest source
 //! point, at `t = 1` the target's. Frame files (PLY `uchar red green blue`,
 //! OBJ `v x y z r g b`), `morph.usda` (per-vertex `displayColor`), the
 //! contact sheet and `preview.gif` then show them. Without it nothing about
-//! the output changes. A level set placed by a warp (not an affine map) is
-//! looked up where its frame lies in the world.
+//! the output changes.
 
 use crate::mesh::{MeshFormat, write_mesh};
 use crate::render::{Camera, Image, RenderSettings, contact_sheet, render, write_gif};
 use crate::usd::{UsdSettings, write_usda};
-use isomorph_common::glam::{Affine3A, Vec3};
+use isomorph_common::glam::Vec3;
 use isomorph_common::mesh::color::ColorLookup;
 use isomorph_common::mesh::distance::{SurfaceDistance, surface_distance};
 use isomorph_common::{Aabb, Control, Morph, MorphError, Solid, TriMesh};
@@ -115,19 +115,17 @@ pub struct FrameColors {
 }
 
 impl FrameColors {
-    /// Colours `mesh`, the world-space frame at `t` placed by `placed`
-    /// (`W(t)`), with `at_source` and `at_target` (`W(0)`, `W(1)`).
-    fn paint(&self, mesh: &mut TriMesh, t: f32, [at_source, placed, at_target]: [Affine3A; 3]) {
-        let back = placed.inverse();
-        let lookup = |lookup: &ColorLookup, to: Affine3A| {
-            let map = to * back;
-            let points: Vec<Vec3> = mesh.positions.iter().map(|&p| map.transform_point3(p)).collect();
+    /// Colours `mesh`, the world-space frame at `t`, whose vertices sit at
+    /// `on_source` and `on_target` in the frames at 0 and 1
+    /// ([`Morph::ends_of`]).
+    fn paint(&self, mesh: &mut TriMesh, t: f32, [on_source, on_target]: [Vec<Vec3>; 2]) {
+        let lookup = |lookup: &ColorLookup, points: &[Vec3]| {
             let mut colors = vec![Vec3::ZERO; points.len()];
-            lookup.colors_at(&points, &mut colors);
+            lookup.colors_at(points, &mut colors);
             colors
         };
-        let from_source = lookup(&self.source, at_source);
-        let from_target = lookup(&self.target, at_target);
+        let from_source = lookup(&self.source, &on_source);
+        let from_target = lookup(&self.target, &on_target);
         mesh.colors = Some(from_source.iter().zip(&from_target).map(|(s, g)| s.lerp(*g, t)).collect());
     }
 }
@@ -346,12 +344,6 @@ fn export_on_pool<M: Morph + ?Sized>(
     let dir = &settings.out_dir;
     std::fs::create_dir_all(dir).map_err(|source| ExportError::Io { path: dir.clone(), source })?;
     let total = settings.frames;
-    let placement =
-        |t: f32| morph.world_transform(t).map_err(|e| ExportError::Frame { t, source: BoxedError::new(e) });
-    let ends = match settings.colors {
-        Some(_) => Some((placement(0.0)?, placement(1.0)?)),
-        None => None,
-    };
     let done = std::sync::atomic::AtomicUsize::new(0);
     let results: Vec<(FrameReport, TriMesh)> = (0..total)
         .into_par_iter()
@@ -362,8 +354,11 @@ fn export_on_pool<M: Morph + ?Sized>(
             let mut mesh = morph
                 .frame_mesh(t, settings.resolution)
                 .map_err(|e| ExportError::Frame { t, source: BoxedError::new(e) })?;
-            if let (Some(colors), Some((at_source, at_target))) = (&settings.colors, ends) {
-                colors.paint(&mut mesh, t, [at_source, placement(t)?, at_target]);
+            if let Some(colors) = &settings.colors {
+                let ends = morph
+                    .ends_of(t, &mesh.positions)
+                    .map_err(|e| ExportError::Frame { t, source: BoxedError::new(e) })?;
+                colors.paint(&mut mesh, t, ends);
             }
             let file = if settings.frame_files {
                 let file = format!("frame_{i:03}.{}", settings.format.extension());

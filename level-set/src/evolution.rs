@@ -11,6 +11,7 @@ use isomorph_common::{Aabb, Grid3, TriMesh};
 use isomorph_common::{
     Control, Frame, MissedPart, Morph, MorphError, MorphReport, Outcome, Residual, Stages, check, check_time,
 };
+use rayon::prelude::*;
 
 /// Which solver integrates the level-set equation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
@@ -491,5 +492,17 @@ impl Morph for LevelSetMorph {
     /// `T(·, n/(N − 1))`'s affine part, without making the frame.
     fn world_transform(&self, t: f32) -> Result<Affine3A, LevelSetError> {
         Ok(self.placement.affine_at(self.alpha(self.index(check_time(t)?))))
+    }
+
+    /// Each point's field point `x` (`T(x, α) = p`, [`Placement::unplace`])
+    /// placed at `α = 0` and `α = 1`: exact for a warp too, where the default
+    /// (affine parts only) would read the inputs' colours where the frame
+    /// lies, not where its surface came from.
+    fn ends_of(&self, t: f32, points: &[Vec3]) -> Result<[Vec<Vec3>; 2], LevelSetError> {
+        let alpha = self.alpha(self.index(check_time(t)?));
+        let scale = self.field_bounds().size().max_element();
+        let field: Vec<Vec3> = points.par_iter().map(|&p| self.placement.unplace(p, alpha, scale)).collect();
+        let at = |end: f32| field.iter().map(|&x| self.placement.point_at(x, end)).collect();
+        Ok([at(0.0), at(1.0)])
     }
 }

@@ -102,3 +102,23 @@ fn a_landmark_morph_runs_from_the_source_to_the_target() {
         assert_eq!(m.report().details.get("warped"), Some(&Value::Bool(true)));
     }
 }
+
+#[test]
+fn a_warped_frame_knows_where_its_points_came_from() {
+    // The colour lookup reads the inputs at `ends_of`: for the mid-way fin
+    // tip that is the source's tip and the target's tip, not the empty
+    // space where the turning fin happens to be.
+    let m = morph(Align::Warp(landmark_warp(&landmarks(), LandmarkWarp::Rbf, 8).unwrap()));
+    let mid = tip(&m.frame_mesh(0.5, RES).unwrap());
+    let [on_source, on_target] = m.ends_of(0.5, &[mid]).unwrap();
+    let (source_tip, target_tip) = (Vec3::new(0.58, 0.0, 0.0), Vec3::new(0.0, 0.58, 0.0));
+    // Within 0.1 of the tips (the fin is 0.4 long; the mid-way tip itself
+    // is about 0.4 from both, where a lookup at the frame would read).
+    println!("mid-way tip {mid} came from {} and goes to {}", on_source[0], on_target[0]);
+    assert!(mid.distance(source_tip) > 0.3 && mid.distance(target_tip) > 0.3, "{mid}");
+    assert!(on_source[0].distance(source_tip) < 0.1, "{} from the source's tip", on_source[0]);
+    assert!(on_target[0].distance(target_tip) < 0.1, "{} from the target's tip", on_target[0]);
+    // Frame 0 is the source where it is.
+    let p = Vec3::new(0.1, -0.2, 0.15);
+    assert!(m.ends_of(0.0, &[p]).unwrap()[0][0].distance(p) < 1e-5);
+}

@@ -112,6 +112,10 @@ where
     fn world_transform(&self, t: f32) -> Result<Affine3A, BoxedError> {
         self.0.world_transform(t).map_err(BoxedError::new)
     }
+
+    fn ends_of(&self, t: f32, points: &[Vec3]) -> Result<[Vec<Vec3>; 2], BoxedError> {
+        self.0.ends_of(t, points).map_err(BoxedError::new)
+    }
 }
 
 /// [`MorphExt::boxed`] for every morph.

@@ -44,7 +44,7 @@ pub use report::{Details, MorphReport, Outcome, Residual, StageTime, Stages, Val
 
 use crate::marching_cubes::level_set_mesh;
 use crate::{Aabb, Field3, TriMesh};
-use glam::Affine3A;
+use glam::{Affine3A, Vec3};
 
 /// One in-between shape: a field (positive inside, surface at `iso`) in the
 /// morph's field space, and the map that places it in the world.
@@ -119,6 +119,20 @@ pub trait Morph: Send + Sync {
     /// As [`Morph::frame`].
     fn world_transform(&self, t: f32) -> Result<Affine3A, Self::Error> {
         Ok(self.frame(t)?.transform)
+    }
+
+    /// Where the world points `points` of frame `t` sit in the frames at 0
+    /// and at 1 (the same field point placed as the source and as the
+    /// target are): what the exporter's colour lookup reads the inputs'
+    /// colours at. The default maps by `world_transform(0 | 1) ·
+    /// world_transform(t)⁻¹`; methods placed by a non-affine map override it.
+    ///
+    /// # Errors
+    /// As [`Morph::world_transform`].
+    fn ends_of(&self, t: f32, points: &[Vec3]) -> Result<[Vec<Vec3>; 2], Self::Error> {
+        let back = self.world_transform(t)?.inverse();
+        let to = |end: Affine3A| points.iter().map(|&p| (end * back).transform_point3(p)).collect();
+        Ok([to(self.world_transform(0.0)?), to(self.world_transform(1.0)?)])
     }
 }
 
