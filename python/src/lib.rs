@@ -21,8 +21,8 @@ use isomorph_cli::methods::{LandmarkWarp, Method, Settings, build, landmark_warp
 use isomorph_cli::parse::read_map;
 use isomorph_common::glam::{Affine3A, UVec3, Vec3};
 use isomorph_common::{
-    Aabb, BoxedError, BoxedMorph, CancelToken, Control, DynField, Field3, Grid3, MorphError, MorphFailure,
-    Landmarks, Solid, TriMesh, lattice_for_box,
+    Aabb, BoxedError, BoxedMorph, CancelToken, Control, DynField, Field3, Grid3, Landmarks, MorphError,
+    MorphFailure, Solid, TriMesh, lattice_for_box,
 };
 use isomorph_io::compare::{Candidate, Comparison, compare as compare_methods, error_chain};
 use isomorph_io::export::{ExportError, ExportSettings, export_sequence, reference_surfaces};
@@ -524,12 +524,12 @@ fn apply_settings(
                     if methods.contains(&Method::LevelSet) {
                         // Breen & Whitaker §6.2: the level set evolves towards
                         // the target seen through the RBF warp of the pairs.
-                        let warp = Landmarks::new(&pairs)
-                            .map_err(|e| setting_error(py, &name, &e.to_string()))
-                            .and_then(|l| {
+                        let warp = Landmarks::new(&pairs).map_err(|e| setting_error(py, &name, e)).and_then(
+                            |l| {
                                 landmark_warp(&l, LandmarkWarp::Rbf, s.warp.control_spacing)
-                                    .map_err(|e| setting_error(py, &name, &error_chain(&e)))
-                            })?;
+                                    .map_err(|e| setting_error(py, &name, error_chain(&e)))
+                            },
+                        )?;
                         s.level_set.align = Align::Warp(warp);
                     }
                 }
