@@ -149,5 +149,29 @@ fn lenient_reads_are_reported() {
     let o = isomorph(&["info", obj.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).starts_with("warning: ") && stderr(&o).contains("normal"), "{}", stderr(&o));
+    // A volume without its sidecar is placed in voxel units, and says so.
+    let npy = dir.join("sphere.npy");
+    let o = isomorph(&["sdf", "sphere", "--res", "16", "--out", npy.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    std::fs::remove_file(dir.join("sphere.json")).unwrap();
+    let frames = dir.join("frames");
+    let o = isomorph(&[
+        "morph",
+        "--method",
+        "baseline",
+        "--source",
+        npy.to_str().unwrap(),
+        "--target",
+        "sphere",
+        "--res",
+        "16",
+        "--frames",
+        "2",
+        "--no-preview",
+        "--out",
+        frames.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no sidecar") && stderr(&o).contains("voxel units"), "{}", stderr(&o));
     let _ = std::fs::remove_dir_all(&dir);
 }

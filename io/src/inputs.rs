@@ -175,9 +175,17 @@ pub fn load_solid_with_warnings(
     }
     let solid_error = |source| InputError::Solid { spec: spec.to_string(), source };
     let path = Path::new(spec);
+    let mut warnings = Vec::new();
     let volume = if !path.is_file() {
         None
     } else if has_extension(path, "npy") {
+        let sidecar = crate::npy::sidecar_path(path);
+        if !sidecar.is_file() {
+            warnings.push(format!(
+                "no sidecar {}: the volume is placed in voxel units (spacing 1) with its first voxel at the origin",
+                sidecar.display()
+            ));
+        }
         Some(load_npy(path)?)
     } else if has_extension(path, "raw") {
         let layout = options.raw.ok_or_else(|| InputError::RawLayoutMissing { spec: spec.to_string() })?;
@@ -202,7 +210,7 @@ pub fn load_solid_with_warnings(
             Some(iso) => Solid::level_volume(&values, iso),
             None => Solid::volume(values),
         };
-        return Ok((solid.map_err(solid_error)?, Vec::new()));
+        return Ok((solid.map_err(solid_error)?, warnings));
     }
     if spec == BUNNY || path.is_file() {
         let MeshRead { mut mesh, warnings } = if spec == BUNNY {
