@@ -227,24 +227,26 @@ impl MethodArgs {
     pub fn apply(&self, mut settings: Settings, source: &str, target: &str) -> anyhow::Result<Settings> {
         let landmarks = self.landmark_pairs()?;
         let l = &mut settings.level_set;
-        l.align = match (&self.align, &landmarks) {
-            _ if self.warp_map.is_some() && (landmarks.is_some() || self.align != AlignArg::None) => {
-                bail!("--warp-map places the source on the target: give it without --align or landmarks")
-            }
-            (_, None) if let Some(path) = &self.warp_map => {
-                let map =
-                    WorldMap::load(path).with_context(|| format!("invalid warp map {}", path.display()))?;
-                Align::Warp(Arc::new(move |x| map.apply(x)))
-            }
-            (AlignArg::None, Some(landmarks)) => Align::Warp(
+        l.align = match (&self.align, &landmarks, &self.warp_map) {
+            (AlignArg::None, None, None) => Align::None,
+            (AlignArg::Auto, None, None) => Align::Auto,
+            (AlignArg::File(path), None, None) => Align::Map(read_map(path)?),
+            (AlignArg::None, Some(landmarks), None) => Align::Warp(
                 landmark_warp(landmarks, self.landmark_warp, self.control_spacing)
                     .map_err(|e| anyhow::anyhow!(error_chain(&e)))
                     .context("cannot fit a warp through the landmarks")?,
             ),
-            (_, Some(_)) => bail!("--align and landmarks both place the source on the target: give one"),
-            (AlignArg::None, None) => Align::None,
-            (AlignArg::Auto, None) => Align::Auto,
-            (AlignArg::File(path), None) => Align::Map(read_map(path)?),
+            (AlignArg::None, None, Some(path)) => {
+                let map =
+                    WorldMap::load(path).with_context(|| format!("invalid warp map {}", path.display()))?;
+                Align::Warp(Arc::new(move |x| map.apply(x)))
+            }
+            (_, _, Some(_)) => {
+                bail!("--warp-map places the source on the target: give it without --align or landmarks")
+            }
+            (_, Some(_), None) => {
+                bail!("--align and landmarks both place the source on the target: give one")
+            }
         };
         l.solver = match self.solver {
             SolverArg::Sparse => SolverKind::SparseField,

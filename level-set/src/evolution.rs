@@ -500,9 +500,18 @@ impl Morph for LevelSetMorph {
     /// lies, not where its surface came from.
     fn ends_of(&self, t: f32, points: &[Vec3]) -> Result<[Vec<Vec3>; 2], LevelSetError> {
         let alpha = self.alpha(self.index(check_time(t)?));
+        let Placement::Warp(warp) = &self.placement else {
+            // An affine placement: two maps, computed once.
+            let back = self.placement.affine_at(alpha).inverse();
+            let to = |end: f32| {
+                let map = self.placement.affine_at(end) * back;
+                points.iter().map(|&p| map.transform_point3(p)).collect()
+            };
+            return Ok([to(0.0), to(1.0)]);
+        };
         let scale = self.field_bounds().size().max_element();
         let field: Vec<Vec3> = points.par_iter().map(|&p| self.placement.unplace(p, alpha, scale)).collect();
-        let at = |end: f32| field.iter().map(|&x| self.placement.point_at(x, end)).collect();
-        Ok([at(0.0), at(1.0)])
+        let on_target = field.par_iter().map(|&x| warp(x)).collect();
+        Ok([field, on_target])
     }
 }

@@ -131,7 +131,10 @@ pub trait Morph: Send + Sync {
     /// As [`Morph::world_transform`].
     fn ends_of(&self, t: f32, points: &[Vec3]) -> Result<[Vec<Vec3>; 2], Self::Error> {
         let back = self.world_transform(t)?.inverse();
-        let to = |end: Affine3A| points.iter().map(|&p| (end * back).transform_point3(p)).collect();
+        let to = |end: Affine3A| {
+            let map = end * back;
+            points.iter().map(|&p| map.transform_point3(p)).collect()
+        };
         Ok([to(self.world_transform(0.0)?), to(self.world_transform(1.0)?)])
     }
 }
