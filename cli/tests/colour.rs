@@ -4,26 +4,25 @@
 
 mod common;
 
-use common::{isomorph, scratch};
+use common::{assert_ok, morph, scratch, stderr};
 use isomorph_common::glam::Vec3;
 use isomorph_common::mesh::primitives::uv_sphere;
 use isomorph_io::inputs::builtin_color;
 use isomorph_io::mesh::read_mesh;
 use std::path::Path;
 
-fn morph(source: &str, target: &str, out: &Path, extra: &[&str]) -> String {
-    let mut args = vec!["morph", "--method", "baseline", "--source", source, "--target", target];
-    args.extend(["--res", "24", "--frames", "3", "--no-preview", "--out", out.to_str().unwrap()]);
+fn baseline(source: &str, target: &str, out: &Path, extra: &[&str]) -> String {
+    let mut args = vec!["--res", "24", "--frames", "3", "--no-preview", "--out", out.to_str().unwrap()];
     args.extend(extra);
-    let o = isomorph(&args);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    String::from_utf8_lossy(&o.stderr).into_owned()
+    let o = morph("baseline", source, target, &args);
+    assert_ok(&o);
+    stderr(&o)
 }
 
 #[test]
 fn colour_flag_paints_builtins_and_its_absence_writes_no_colour() {
     let out = scratch("colour-builtins");
-    morph("sphere", "torus", &out, &["--colour"]);
+    baseline("sphere", "torus", &out, &["--colour"]);
     for (file, name) in [("frame_000.ply", "sphere"), ("frame_002.ply", "torus")] {
         let frame = read_mesh(out.join(file)).unwrap();
         let expected = builtin_color(name).unwrap();
@@ -32,7 +31,7 @@ fn colour_flag_paints_builtins_and_its_absence_writes_no_colour() {
         assert!(off <= 0.5 / 255.0 + 1e-6, "{file}: {off} off the {name}'s colour");
     }
     let plain = scratch("colour-none");
-    morph("sphere", "torus", &plain, &[]);
+    baseline("sphere", "torus", &plain, &[]);
     assert_eq!(read_mesh(plain.join("frame_001.ply")).unwrap().colors, None);
     let _ = std::fs::remove_dir_all(&out);
     let _ = std::fs::remove_dir_all(&plain);
@@ -55,7 +54,7 @@ fn coloured_files_colour_the_frames_and_partial_obj_colours_are_reported() {
     let path = dir.join("painted.obj");
     std::fs::write(&path, &obj).unwrap();
     let out = dir.join("out");
-    morph(path.to_str().unwrap(), "cube", &out, &[]);
+    baseline(path.to_str().unwrap(), "cube", &out, &[]);
     let first = read_mesh(out.join("frame_000.ply")).unwrap();
     let colors = first.colors.expect("frames of a coloured input are coloured");
     // Fitted, the sphere keeps its centre at the origin: red above, blue below.
@@ -75,7 +74,7 @@ fn coloured_files_colour_the_frames_and_partial_obj_colours_are_reported() {
     let partial_path = dir.join("partial.obj");
     std::fs::write(&partial_path, partial).unwrap();
     let out = dir.join("partial_out");
-    let stderr = morph(partial_path.to_str().unwrap(), "cube", &out, &[]);
+    let stderr = baseline(partial_path.to_str().unwrap(), "cube", &out, &[]);
     assert!(stderr.contains("have no colour") && stderr.contains("dropped"), "{stderr}");
     assert_eq!(read_mesh(out.join("frame_000.ply")).unwrap().colors, None);
     let _ = std::fs::remove_dir_all(&dir);

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{isomorph, read_json, scratch};
+use common::{assert_ok, isomorph, morph, read_json, scratch, stderr};
 
 #[test]
 fn max_unreached_is_a_checked_level_set_option() {
@@ -13,15 +13,15 @@ fn max_unreached_is_a_checked_level_set_option() {
         ["morph", "--source", "sphere", "--target", "torus", "--res", "24", "--frames", "2", "--out", dir];
     let run = |extra: &[&str]| isomorph(&[&base[..], extra].concat());
     let o = run(&["--method", "level-set", "--max-unreached", "1.5"]);
-    let err = String::from_utf8_lossy(&o.stderr);
+    let err = stderr(&o);
     assert!(!o.status.success() && err.contains("max_unreached_share") && err.contains("[0, 1]"), "{err}");
     let o = run(&["--method", "rbf", "--max-unreached", "0.1"]);
-    let err = String::from_utf8_lossy(&o.stderr);
+    let err = stderr(&o);
     assert!(!o.status.success() && err.contains("--max-unreached (level-set)"), "{err}");
     // Every part of the torus overlaps the sphere: nothing is left unreached
     // even when nothing may be.
     let o = run(&["--method", "level-set", "--max-unreached", "0"]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_ok(&o);
     let report: serde_json::Value = read_json(out.join("report.json"));
     let details = &report["morph"]["details"];
     assert_eq!((details["target_parts"].as_u64(), details["unreached_share"].as_f64()), (Some(1), Some(0.0)));
@@ -59,7 +59,7 @@ fn landmark_files_drive_the_level_set_and_bad_ones_are_refused() {
     // is seen where the source is, and the frames end on the ball.
     for warp in ["rbf", "bspline"] {
         let o = run(&good, &["--landmark-warp", warp]);
-        assert!(o.status.success(), "{warp}: {}", String::from_utf8_lossy(&o.stderr));
+        assert!(o.status.success(), "{warp}: {}", stderr(&o));
         let report = read_json(frames.join("report.json"));
         assert_eq!(report["morph"]["details"]["warped"], true, "{report}");
         let end = &report["endpoints"]["target"];
@@ -83,41 +83,39 @@ fn landmark_files_drive_the_level_set_and_bad_ones_are_refused() {
         (missing.to_str().unwrap(), "cannot read"),
     ] {
         let o = run(file, &[]);
-        let err = String::from_utf8_lossy(&o.stderr);
+        let err = stderr(&o);
         assert!(!o.status.success() && err.contains(expected), "{file}: {err}");
     }
     // Landmarks and an alignment both place the source: refused.
     let o = run(&good, &["--align", "auto"]);
-    let err = String::from_utf8_lossy(&o.stderr);
+    let err = stderr(&o);
     assert!(!o.status.success() && err.contains("--align and landmarks"), "{err}");
     // `align --landmarks` prints the affine part as a map `--align` reads.
     let aligned = out.join("aligned.ply");
     let o = isomorph(&["align", "sphere", "ball", "--landmarks", &good, "--out", aligned.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_ok(&o);
     let map: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert!(map["max_misfit"].as_f64().unwrap() < 1e-5, "{map}");
     assert!((map["matrix"][0][3].as_f64().unwrap() - 0.1).abs() < 1e-5, "{map}");
     let map_file = out.join("map.json");
     std::fs::write(&map_file, o.stdout).unwrap();
-    let o = isomorph(&[
-        "morph",
-        "--method",
+    let o = morph(
         "level-set",
-        "--source",
         "sphere",
-        "--target",
         "ball",
-        "--res",
-        "24",
-        "--frames",
-        "2",
-        "--no-preview",
-        "--align",
-        map_file.to_str().unwrap(),
-        "--out",
-        frames.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        &[
+            "--res",
+            "24",
+            "--frames",
+            "2",
+            "--no-preview",
+            "--align",
+            map_file.to_str().unwrap(),
+            "--out",
+            frames.to_str().unwrap(),
+        ],
+    );
+    assert_ok(&o);
 }
 
 #[test]
@@ -136,7 +134,7 @@ fn a_saved_warp_map_drives_the_level_set() {
         "--out",
         warp_dir.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_ok(&o);
     let (map, warped) = (warp_dir.join("map.json"), warp_dir.join("warped.obj"));
     let frames = out.join("frames");
     let run = |extra: &[&str]| {
@@ -155,7 +153,7 @@ fn a_saved_warp_map_drives_the_level_set() {
         isomorph(&[&base[..], extra, &tail[..]].concat())
     };
     let o = run(&["--warp-map", map.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_ok(&o);
     let report = read_json(frames.join("report.json"));
     assert_eq!(report["morph"]["details"]["warped"], true, "{report}");
     // Through the map the target is the source itself: the evolution has
@@ -164,9 +162,9 @@ fn a_saved_warp_map_drives_the_level_set() {
     let end = &report["endpoints"]["target"];
     assert!(end["mean_voxels"].as_f64().unwrap() < 1.0, "{end}");
     let o = run(&["--warp-map", map.to_str().unwrap(), "--align", "auto"]);
-    let err = String::from_utf8_lossy(&o.stderr);
+    let err = stderr(&o);
     assert!(!o.status.success() && err.contains("--warp-map places the source"), "{err}");
     let o = run(&["--warp-map", out.join("missing.json").to_str().unwrap()]);
-    let err = String::from_utf8_lossy(&o.stderr);
+    let err = stderr(&o);
     assert!(!o.status.success() && err.contains("invalid warp map"), "{err}");
 }
