@@ -11,7 +11,7 @@ use glam::{Affine3A, Quat, Vec3};
 use isomorph_common::{Aabb, AffineParts};
 use isomorph_common::{Control, Frame, Morph, MorphReport, Outcome, Side, Solid, Stages};
 use serde::{Deserialize, Serialize};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// A speed curve `s(t)` (§4.4): 0 before `start`, 1 after `end`, and in
 /// between a curve of the window's local time `u = (t − start)/(end − start)`:
@@ -473,6 +473,36 @@ fn build(pair: &Pair, coplanar: bool) -> Result<GNode, BlobMorphError> {
     Ok(GNode { kind, speed: Speed::default(), origin, children })
 }
 
+/// The pairs the correspondence made under the commutative nodes of
+/// `pair` (children matched by links or the heuristic), as links: given
+/// back to [`decompose`] on trees of the same structure they make the same
+/// choices.
+fn links_of(pair: &Pair) -> Vec<Link> {
+    fn walk<'a>(pair: &'a Pair, seen: &mut HashSet<(&'a NodePath, &'a NodePath)>, out: &mut Vec<Link>) {
+        match pair {
+            Pair::Leaf { .. } => {}
+            Pair::Nary { children, .. } => {
+                for c in children {
+                    if let Origin { a: Some(a), b: Some(b) } = c.origin()
+                        && seen.insert((a, b))
+                    {
+                        out.push(Link { a: a.clone(), b: b.clone() });
+                    }
+                    walk(c, seen, out);
+                }
+            }
+            Pair::Difference { left, right, .. } => {
+                walk(left, seen, out);
+                walk(right, seen, out);
+            }
+            Pair::Warp { child, .. } => walk(child, seen, out),
+        }
+    }
+    let mut out = Vec::new();
+    walk(pair, &mut HashSet::new(), &mut out);
+    out
+}
+
 /// Applies `f` to every node whose origin `(a, b)` is a key of `wanted`,
 /// with that key's index; one traversal for all keys.
 fn for_matching(
@@ -530,11 +560,25 @@ impl GLeaf {
 }
 
 impl GNode {
-    fn at(&self, t: f32) -> Node {
+    /// The node at `t`. With `fixed`, a pair of commutative operators
+    /// outside the super-elliptic family is instantiated as the equivalent
+    /// blend of the two scaled operators, `(1 − s) N_A + s N_B` (§4.2
+    /// scaling nodes), even at `s ∈ {0, 1}`: the same value as the mix node,
+    /// with a structure that does not change with `t` (what a further
+    /// correspondence, [`BlobMorph::bezier`], needs).
+    fn at(&self, t: f32, fixed: bool) -> Node {
         let s = self.speed.at(t);
-        let kids = || self.children.iter().map(|c| c.at(t)).collect::<Vec<Node>>();
+        let kids = || self.children.iter().map(|c| c.at(t, fixed)).collect::<Vec<Node>>();
         match &self.kind {
             GKind::Leaf(leaf) => Node::Primitive(leaf.at(s)),
+            GKind::Nary(a, b)
+                if fixed && a != b && (ricci_inverse(*a).is_none() || ricci_inverse(*b).is_none()) =>
+            {
+                let children = kids();
+                let from = Node::Nary { op: *a, children: children.clone() }.scaled(1.0 - s);
+                let to = Node::Nary { op: *b, children }.scaled(s);
+                Node::Nary { op: NaryOp::Blend, children: vec![from, to] }
+            }
             GKind::Nary(a, b) => {
                 let op = if s <= 0.0 || a == b {
                     Some(*a)
@@ -664,7 +708,13 @@ impl GenericTree {
 
     /// The instantiated tree description at `t` (unchecked `t`).
     pub fn node_at(&self, t: f32) -> Node {
-        self.root.at(t)
+        self.root.at(t, false)
+    }
+
+    /// `C(t)` with a structure independent of `t` (mix nodes as blends of
+    /// scaled operators; the same field as [`GenericTree::at`]).
+    fn at_fixed(&self, t: f32) -> Result<BlobTree, BlobMorphError> {
+        Ok(BlobTree::new(self.root.at(t, true), self.threshold_at(t))?)
     }
 
     /// The evaluable BlobTree `C(t)`.
@@ -697,10 +747,32 @@ pub struct BlobSettings {
     /// segment that arrives at the target (the whole morph without `via`;
     /// default: the nearest-centre heuristic, no links).
     pub spec: MorphSpec,
-    /// Key shapes between the source and the target (default none): the
-    /// morph passes through them in order at evenly spaced times (see
-    /// [`BlobMorph::through`]).
+    /// Key shapes between the source and the target (default none),
+    /// combined as `via_mode` says.
     pub via: Vec<KeyShape>,
+    /// How the morph uses the key shapes `via` (default: the paper's
+    /// Bézier-like combination).
+    pub via_mode: ViaMode,
+}
+
+/// How a morph through key shapes combines the pairwise generic trees
+/// (`isomorph morph --via-mode`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ViaMode {
+    /// The paper's Bézier-like metamorphosis, "control knots replaced by
+    /// control BlobTrees" (§1, §3): the generic trees of consecutive shapes
+    /// combined by de Casteljau's construction ([`BlobMorph::bezier`]). The
+    /// source and the target are reproduced; the shapes in between are
+    /// control shapes, approached but (as Bézier control points) in general
+    /// not reached.
+    #[default]
+    Bezier,
+    /// The generic trees of consecutive shapes played one after the other
+    /// ([`BlobMorph::through`]): the morph passes through every key shape,
+    /// at evenly spaced times (continuous, with a change of speed at the
+    /// keys). Not in the paper; an interpolating alternative.
+    Chain,
 }
 
 /// The BlobTree metamorphosis as a [`Morph`]: frames are `C(t)` as fields
@@ -721,6 +793,12 @@ pub struct BlobSettings {
 pub struct BlobMorph {
     /// The generic trees from each key shape to the next (one without key shapes).
     segments: Vec<GenericTree>,
+    /// How the segments combine.
+    mode: ViaMode,
+    /// Bézier mode: for each de Casteljau level `r ≥ 2` and each `i`, the
+    /// correspondence (as links) between `P_i^{r−1}` and `P_{i+1}^{r−1}`,
+    /// computed once so the morph is continuous in `t`.
+    levels: Vec<Vec<MorphSpec>>,
     bounds: Aabb,
     report: MorphReport,
 }
@@ -766,11 +844,12 @@ impl BlobMorph {
             control.progress("correspondence", None, String::new);
             control.check()?;
             let segments = Self::segments_of(a, &keys, control)?;
+            let mut morph = Self::combined(segments, settings.via_mode)?;
             stages.lap("correspondence");
-            let bounds = Self::support(&segments, control)?;
+            morph.bounds = morph.support(control)?;
             stages.lap("bounds");
-            let report = Self::report_of(&segments).with_stages(stages).with_warnings(warnings);
-            Ok(Self { segments, bounds, report })
+            morph.report = morph.report.with_stages(stages).with_warnings(warnings);
+            Ok(morph)
         })
     }
 
@@ -781,10 +860,7 @@ impl BlobMorph {
     /// As [`GenericTree::new`].
     pub fn from_trees(a: &BlobTree, b: &BlobTree, spec: &MorphSpec) -> Result<Self, BlobMorphError> {
         let generic = GenericTree::new(a, b, spec)?;
-        let segments = vec![generic];
-        let bounds = Self::support(&segments, &Control::new())?;
-        let report = Self::report_of(&segments);
-        Ok(Self { segments, bounds, report })
+        Self::finished(vec![generic], ViaMode::Chain)
     }
 
     /// The morph from `source` through the key shapes `keys` (the last is
@@ -801,11 +877,66 @@ impl BlobMorph {
     /// [`BlobMorphError::Segment`] wrapping the errors of
     /// [`GenericTree::new`] for the segment that failed.
     pub fn through(source: &BlobTree, keys: &[KeyShape]) -> Result<Self, BlobMorphError> {
-        let control = Control::new();
-        let segments = Self::segments_of(source, keys, &control)?;
-        let bounds = Self::support(&segments, &control)?;
-        let report = Self::report_of(&segments);
-        Ok(Self { segments, bounds, report })
+        Self::finished(Self::segments_of(source, keys, &Control::new())?, ViaMode::Chain)
+    }
+
+    /// The Bézier-like morph (§1, §3: "combine interpolations together so
+    /// as to define a Bézier-like metamorphosis where control knots are
+    /// replaced by control BlobTree shapes") from `source` with the control
+    /// shapes `controls` (the last is the target).
+    ///
+    /// With the shapes `P_0 = source, P_1, …, P_n`, the generic trees
+    /// `C_i` of `P_i → P_{i+1}` (under `controls[i]`'s spec) are the first
+    /// level of de Casteljau's construction, `P_i^1(t) = C_i(t)`; level `r`
+    /// is the generic tree of the two shapes below it, instantiated at the
+    /// same `t`: `P_i^r(t) = (P_i^{r−1}(t) → P_{i+1}^{r−1}(t))(t)`, and the
+    /// morph is `C(t) = P_0^n(t)`. For convex skeletons and linear
+    /// parameters this is the Bernstein form: the skeleton of a primitive
+    /// matched through all the shapes is `⊕_i B_i^n(t) S_i` (Kaul &
+    /// Rossignac's Bézier Minkowski combination), its intensity, radius,
+    /// stiffness and exponent `Σ_i B_i^n(t) x_i`, the threshold likewise.
+    /// `C(0)` is the source and `C(1)` the target; the inner shapes are
+    /// control shapes, generally not reached.
+    ///
+    /// The correspondence of each level `r ≥ 2` is made once, by the
+    /// nearest-centre heuristic on the shapes at `t = ½`, and kept as links
+    /// for every `t` (instances of a generic tree share one structure, mix
+    /// nodes written as blends of scaled operators), so `C(t)` is
+    /// continuous in `t`.
+    ///
+    /// # Errors
+    /// As [`BlobMorph::through`]; a level's correspondence fails as
+    /// [`GenericTree::new`].
+    pub fn bezier(source: &BlobTree, controls: &[KeyShape]) -> Result<Self, BlobMorphError> {
+        Self::finished(Self::segments_of(source, controls, &Control::new())?, ViaMode::Bezier)
+    }
+
+    /// The morph of `segments` combined as `mode` says, with its bounds and report.
+    fn finished(segments: Vec<GenericTree>, mode: ViaMode) -> Result<Self, BlobMorphError> {
+        let mut morph = Self::combined(segments, mode)?;
+        morph.bounds = morph.support(&Control::new())?;
+        Ok(morph)
+    }
+
+    /// The morph of `segments` combined as `mode` says (Bézier: the
+    /// correspondences of the de Casteljau levels), bounds not yet computed.
+    fn combined(segments: Vec<GenericTree>, mode: ViaMode) -> Result<Self, BlobMorphError> {
+        let mut levels = Vec::new();
+        if mode == ViaMode::Bezier {
+            let mut row = segments.iter().map(|g| g.at_fixed(0.5)).collect::<Result<Vec<_>, _>>()?;
+            while row.len() > 1 {
+                let (mut specs, mut next) = (Vec::new(), Vec::new());
+                for w in row.windows(2) {
+                    let generic = GenericTree::new(&w[0], &w[1], &MorphSpec::default())?;
+                    specs.push(MorphSpec { links: links_of(generic.pair()), ..MorphSpec::default() });
+                    next.push(generic.at_fixed(0.5)?);
+                }
+                levels.push(specs);
+                row = next;
+            }
+        }
+        let report = Self::report_of(&segments, mode);
+        Ok(Self { segments, mode, levels, bounds: Aabb::EMPTY, report })
     }
 
     /// The generic tree of every segment `source → keys[0] → keys[1] → …`.
@@ -845,27 +976,58 @@ impl BlobMorph {
         (&self.segments[i], u)
     }
 
+    /// The Bézier-like `C(t)` by de Casteljau's construction (see
+    /// [`BlobMorph::bezier`]).
+    fn casteljau(&self, t: f32) -> Result<BlobTree, BlobMorphError> {
+        let mut row = self.segments.iter().map(|g| g.at_fixed(t)).collect::<Result<Vec<_>, _>>()?;
+        for specs in &self.levels {
+            row = row
+                .windows(2)
+                .zip(specs)
+                .map(|(w, spec)| GenericTree::new(&w[0], &w[1], spec)?.at_fixed(t))
+                .collect::<Result<_, _>>()?;
+        }
+        Ok(row.pop().expect("one shape is left"))
+    }
+
+    /// `C(t)` for `t ∈ [0, 1]`.
+    fn shape_at(&self, t: f32) -> Result<BlobTree, BlobMorphError> {
+        match self.mode {
+            ViaMode::Bezier if self.segments.len() > 1 => self.casteljau(t),
+            _ => {
+                let (segment, u) = self.locate(t);
+                segment.at(u)
+            }
+        }
+    }
+
     /// The union of the supports of `C(t)` at 33 instants per segment,
     /// padded by 5 % against motion between samples.
-    fn support(segments: &[GenericTree], control: &Control) -> Result<Aabb, BlobMorphError> {
+    fn support(&self, control: &Control) -> Result<Aabb, BlobMorphError> {
         let mut bounds = Aabb::EMPTY;
-        for (k, generic) in segments.iter().enumerate() {
-            for i in 0..BOUND_SAMPLES {
-                let t = i as f32 / (BOUND_SAMPLES - 1) as f32;
-                control.progress("bounds", Some((k as f32 + t) / segments.len() as f32), String::new);
-                control.check()?;
-                bounds = bounds.union(&generic.at(t)?.support());
-            }
+        let samples = BOUND_SAMPLES * self.segments.len() - (self.segments.len() - 1);
+        for i in 0..samples {
+            let t = i as f32 / (samples - 1) as f32;
+            control.progress("bounds", Some(t), String::new);
+            control.check()?;
+            bounds = bounds.union(&self.shape_at(t)?.support());
         }
         Ok(bounds.padded(0.05))
     }
 
-    fn report_of(segments: &[GenericTree]) -> MorphReport {
+    fn report_of(segments: &[GenericTree], mode: ViaMode) -> MorphReport {
         let leaves: usize = segments.iter().map(|g| g.pair().leaf_count()).sum();
         let report = MorphReport::new("blobtree", Outcome::Direct)
             .with_memory(leaves * size_of::<GLeaf>(), None)
             .with_detail("generic leaves", leaves);
-        if segments.len() > 1 { report.with_detail("key shapes", segments.len() + 1) } else { report }
+        if segments.len() == 1 {
+            return report;
+        }
+        let mode = match mode {
+            ViaMode::Bezier => "bezier",
+            ViaMode::Chain => "chain",
+        };
+        report.with_detail("key shapes", segments.len() + 1).with_detail("via mode", mode)
     }
 
     /// The generic tree of the first segment (of the whole morph when it
@@ -889,8 +1051,8 @@ impl Morph for BlobMorph {
     }
 
     fn frame(&self, t: f32) -> Result<Frame<BlobTree>, BlobMorphError> {
-        let (segment, u) = self.locate(isomorph_common::check_time(t)?);
-        Ok(Frame { field: segment.at(u)?, iso: 0.0, transform: Affine3A::IDENTITY })
+        let field = self.shape_at(isomorph_common::check_time(t)?)?;
+        Ok(Frame { field, iso: 0.0, transform: Affine3A::IDENTITY })
     }
 
     /// The union of the supports of `C(t)` at 33 instants per segment, padded by 5 %.
@@ -911,6 +1073,7 @@ impl Morph for BlobMorph {
 mod tests {
     use super::*;
     use crate::testutil;
+    use crate::{Kernel, Polytope};
     use isomorph_common::Field3;
     use proptest::prelude::*;
     use std::f32::consts::FRAC_PI_2;
@@ -951,6 +1114,28 @@ mod tests {
         }
     }
 
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 8, ..ProptestConfig::default() })]
+
+        /// The Bézier-like morph through a random control tree (mix nodes of
+        /// every operator pair written as blends of scaled operators at the
+        /// higher level) starts at the source and ends at the target; its
+        /// in-betweens are finite.
+        #[test]
+        fn bezier_endpoints_reproduce_random_trees(a in testutil::tree(), b in testutil::tree(), c in testutil::tree()) {
+            let (ta, tb, tc) =
+                (BlobTree::new(a, 0.5).unwrap(), BlobTree::new(b, 0.4).unwrap(), BlobTree::new(c, 0.45).unwrap());
+            let key = |t: &BlobTree| KeyShape { shape: t.clone(), spec: MorphSpec::default() };
+            let m = BlobMorph::bezier(&ta, &[key(&tb), key(&tc)]).unwrap();
+            let (c0, c1, mid) = (m.frame(0.0).unwrap().field, m.frame(1.0).unwrap().field, m.frame(0.37).unwrap().field);
+            for p in testutil::points() {
+                prop_assert!((c0.value(p) - ta.value(p)).abs() < 1e-5 * (1.0 + ta.value(p).abs()), "C(0) at {}", p);
+                prop_assert!((c1.value(p) - tc.value(p)).abs() < 1e-5 * (1.0 + tc.value(p).abs()), "C(1) at {}", p);
+                prop_assert!(mid.value(p).is_finite());
+            }
+        }
+    }
+
     /// §1 "genericity": `C(t)` saved as a scene file at any `t` loads back
     /// into the same field (mix nodes, Minkowski skeletons, interpolated
     /// warps, frames and thresholds included), for every built-in morph.
@@ -980,6 +1165,154 @@ mod tests {
                 assert!(worst <= 1e-6, "{name} at t = {t}: reloaded field differs by {worst}");
             }
         }
+    }
+
+    /// The Bézier-like morph through control shapes (§1, §3) against the
+    /// Bernstein form computed here from the control primitives alone:
+    /// skeleton `⊕ B_i^n(t) S_i` (the hull of the weighted vertex sums),
+    /// intensity, radius, stiffness and threshold `Σ B_i^n(t) x_i`; for
+    /// three and four control shapes. The ends are the source and the
+    /// target; an inner control shape is approached, not reached.
+    #[test]
+    fn bezier_morph_is_the_bernstein_combination_of_its_control_primitives() {
+        let shape = |skeleton: Skeleton, kernel: Kernel, at: Vec3, threshold: f32| {
+            let p = Primitive::new(skeleton, kernel).with_frame(Affine3A::from_translation(at));
+            BlobTree::new(Node::Primitive(p), threshold).unwrap()
+        };
+        let controls = [
+            (
+                Skeleton::Segment(Vec3::new(-0.3, 0.0, 0.0), Vec3::new(0.3, 0.0, 0.0)),
+                Kernel::new(1.0, 0.8, 0.5),
+                Vec3::ZERO,
+                0.5,
+            ),
+            (
+                Skeleton::Polygon(vec![
+                    Vec3::new(-0.2, -0.1, 0.0),
+                    Vec3::new(0.25, -0.1, 0.0),
+                    Vec3::new(0.0, 0.3, 0.0),
+                ]),
+                Kernel::new(1.4, 0.6, 1.0),
+                Vec3::new(0.1, 0.5, 0.0),
+                0.4,
+            ),
+            (
+                Skeleton::cuboid(Vec3::new(0.1, 0.2, 0.15)),
+                Kernel::new(0.9, 0.7, 0.2),
+                Vec3::new(0.2, -0.1, 0.3),
+                0.55,
+            ),
+            (Skeleton::Point(Vec3::ZERO), Kernel::new(1.2, 0.9, 0.0), Vec3::new(-0.3, 0.1, -0.2), 0.45),
+        ];
+        let shapes: Vec<BlobTree> =
+            controls.iter().map(|(s, k, at, th)| shape(s.clone(), *k, *at, *th)).collect();
+        let points: Vec<Vec3> = (0..400)
+            .map(|i| {
+                Vec3::new((i as f32 * 0.37).sin(), (i as f32 * 0.61).cos(), (i as f32 * 0.23).sin()) * 0.9
+            })
+            .collect();
+        for count in [3, 4] {
+            let n = count - 1;
+            let keys: Vec<KeyShape> = shapes[1..count]
+                .iter()
+                .map(|s| KeyShape { shape: s.clone(), spec: MorphSpec::default() })
+                .collect();
+            let m = BlobMorph::bezier(&shapes[0], &keys).unwrap();
+            let binomial = |i: usize| (1..=i).fold(1.0f32, |b, j| b * (n + 1 - j) as f32 / j as f32);
+            for t in [0.0f32, 0.2, 0.5, 0.77, 1.0] {
+                let w: Vec<f32> = (0..count)
+                    .map(|i| binomial(i) * t.powi(i as i32) * (1.0 - t).powi((n - i) as i32))
+                    .collect();
+                // Every weighted sum of one vertex (in world coordinates) per control skeleton.
+                let mut sums = vec![Vec3::ZERO];
+                for (i, (s, _, at, _)) in controls[..count].iter().enumerate() {
+                    let (verts, wi) = (s.vertices(), w[i]);
+                    sums =
+                        sums.iter().flat_map(|&p| verts.iter().map(move |&v| p + wi * (v + *at))).collect();
+                }
+                let blend = |f: &dyn Fn(&Kernel) -> f32| -> f32 {
+                    controls[..count].iter().zip(&w).map(|(c, wi)| wi * f(&c.1)).sum()
+                };
+                let kernel =
+                    Kernel::new(blend(&|k| k.intensity), blend(&|k| k.radius), blend(&|k| k.stiffness));
+                let threshold: f32 = controls[..count].iter().zip(&w).map(|(c, wi)| wi * c.3).sum();
+                let expected = BlobTree::new(
+                    Node::Primitive(Primitive::new(Skeleton::Generic(Polytope::hull(&sums)), kernel)),
+                    threshold,
+                )
+                .unwrap();
+                let frame = m.frame(t).unwrap().field;
+                assert!((frame.threshold() - threshold).abs() < 1e-6, "{count} shapes, t = {t}");
+                for &p in &points {
+                    let (v, e) = (frame.value(p), expected.value(p));
+                    assert!((v - e).abs() < 1e-5, "{count} shapes, t = {t}, at {p}: {v} vs Bernstein {e}");
+                }
+                if t == 0.0 || t == 1.0 {
+                    let end = if t == 0.0 { &shapes[0] } else { &shapes[n] };
+                    for &p in &points {
+                        assert!((frame.value(p) - end.value(p)).abs() < 1e-6, "{count} shapes, end t = {t}");
+                    }
+                }
+            }
+            // The first control shape is not reached at its chained time 1/n.
+            let near = m.frame(1.0 / n as f32).unwrap().field;
+            let gap =
+                points.iter().map(|&p| (near.value(p) - shapes[1].value(p)).abs()).fold(0.0f32, f32::max);
+            assert!(gap > 0.05, "{count} shapes: the control shape is interpolated ({gap})");
+        }
+    }
+
+    /// The Bézier-like morph of built-in scenes (rook, queen as the control
+    /// shape, bear): the source and target at the ends, the level-2 generic
+    /// tree of the two pairwise instances at `t = ½`, saved in-betweens
+    /// reload to the same field, and `C(t)` is continuous in `t`.
+    #[test]
+    fn bezier_morph_of_scenes_reproduces_the_ends_and_is_continuous() {
+        use crate::scenes;
+        let (source, control, target) =
+            (scenes::load("rook").unwrap(), scenes::load("queen").unwrap(), scenes::load("bear").unwrap());
+        let keys = [
+            KeyShape { shape: control.clone(), spec: scenes::demo_spec("rook", "queen").unwrap() },
+            KeyShape { shape: target.clone(), spec: MorphSpec::default() },
+        ];
+        let m = BlobMorph::bezier(&source, &keys).unwrap();
+        let chain = BlobMorph::through(&source, &keys).unwrap();
+        let bounds = m.world_bounds();
+        let points: Vec<Vec3> = (0..600)
+            .map(|i| {
+                let u = Vec3::new((i as f32 * 0.37).sin(), (i as f32 * 0.61).cos(), (i as f32 * 0.23).sin());
+                bounds.min + (bounds.max - bounds.min) * (u * 0.5 + 0.5)
+            })
+            .collect();
+        let gap = |x: &BlobTree, y: &BlobTree| {
+            points.iter().map(|&p| (x.value(p) - y.value(p)).abs()).fold(0.0, f32::max)
+        };
+        assert!(gap(&m.frame(0.0).unwrap().field, &source) < 1e-6);
+        assert!(gap(&m.frame(1.0).unwrap().field, &target) < 1e-6);
+        // De Casteljau at t = ½: the generic tree of the instances C_01(½), C_12(½).
+        let half = |g: &GenericTree| g.at(0.5).unwrap();
+        let level2 =
+            GenericTree::new(&half(&m.segments()[0]), &half(&m.segments()[1]), &MorphSpec::default())
+                .unwrap()
+                .at(0.5)
+                .unwrap();
+        let mid = m.frame(0.5).unwrap().field;
+        assert!(gap(&mid, &level2) < 1e-6, "C(½) is not the de Casteljau combination");
+        assert!(gap(&mid, &control) > 0.05, "the control shape is interpolated");
+        assert!(gap(&mid, &chain.frame(0.5).unwrap().field) > 0.05, "the same as the chained morph");
+        for t in [0.13, 0.5, 0.81] {
+            let frame = m.frame(t).unwrap().field;
+            let again = BlobTree::from_ron(&frame.to_ron().unwrap()).unwrap();
+            assert!(gap(&frame, &again) <= 1e-6, "saved in-between at t = {t}");
+        }
+        for k in 0..=10 {
+            let t = (k as f32 / 10.0).min(1.0 - 1e-3);
+            let (x, y) = (m.frame(t).unwrap().field, m.frame(t + 1e-3).unwrap().field);
+            assert!(gap(&x, &y) < 2e-2, "jump between t = {t} and {}: {}", t + 1e-3, gap(&x, &y));
+        }
+        assert!(
+            matches!(m.report().details.get("via mode"), Some(isomorph_common::Value::Text(s)) if s == "bezier")
+        );
     }
 
     /// A morph through key shapes (`--via`) is each key shape exactly at
@@ -1018,7 +1351,8 @@ mod tests {
             assert!((before.value(p) - after.value(p)).abs() < 1e-2, "at {p}");
         }
         // The same morph through the Morph constructor and the settings' via.
-        let settings = BlobSettings { spec: MorphSpec::default(), via: keys[..2].to_vec() };
+        let settings =
+            BlobSettings { spec: MorphSpec::default(), via: keys[..2].to_vec(), via_mode: ViaMode::Chain };
         let solid = |t: &BlobTree| Solid::implicit(std::sync::Arc::new(t.clone())).unwrap();
         let boxed =
             BlobMorph::new(&solid(&source), &solid(&keys[2].shape), &settings, &Control::new()).unwrap();

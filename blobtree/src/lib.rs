@@ -23,7 +23,7 @@
 //! | §2 blend, union (max), intersection (min), difference, super-elliptic blend, warps `f ∘ w⁻¹` | [`Node`], [`NaryOp`], [`Primitive`], [`Warp`], [`BlobTree`] |
 //! | scene files (RON / JSON, below) | [`BlobTree::from_ron`], [`BlobTree::from_json`], [`BlobTree::to_ron`], [`BlobTree::to_json`], [`scenes::load`] |
 //! | §3.1–3.3, §4.1–4.3 correspondence, decomposition, phantoms | [`decompose`], [`Correspondence`], [`Pair`], [`Link`], [`Heuristic`], [`Phantom`], [`split`] |
-//! | §1, §3 genericity: saved in-betweens, morphs through key shapes | [`BlobTree::to_ron`] of a frame (`mix` nodes), [`BlobMorph::through`], [`KeyShape`] |
+//! | §1, §3 genericity: saved in-betweens, morphs through key shapes | [`BlobTree::to_ron`] of a frame (`mix` nodes), [`BlobMorph::through`], [`KeyShape`]; Bézier-like control shapes: [`BlobMorph::bezier`], [`ViaMode`] |
 //! | §3.4.1 Minkowski-sum skeleton interpolation, generic topology | [`MinkowskiPath`] |
 //! | §3.4.2–3.5, §4.4 generic elements and nodes, frames, speed `s(t)`, `T(t)` | [`GenericTree`], [`BlobMorph`], [`MorphSpec`], [`SpeedCurve`], [`Trajectory`] |
 //! | §5 sequences (cube → pierced sphere, sphere → propeller, rook → queen, bear → bird) | [`scenes`] |
@@ -168,11 +168,19 @@
 //!   re-expressing a primitive leaves its field unchanged.
 //! - **Hierarchical matching** compares children's centres relative to
 //!   the mean of their siblings' centres.
-//! - **Key shapes** (`--via`, [`BlobMorph::through`]): the pairwise
-//!   generic trees are joined end to end at evenly spaced times, so the
-//!   morph passes through every key shape (continuous, with a change of
-//!   speed at the keys); the paper's Bézier-like combination, whose inner
-//!   control shapes are approached but not reached, is not built.
+//! - **Control shapes** (`--via`, [`ViaMode`]): by default the paper's
+//!   Bézier-like morph ([`BlobMorph::bezier`]): the pairwise generic trees
+//!   are combined by de Casteljau's construction, each level the generic
+//!   tree of the two instances below it at the same `t`, so a primitive
+//!   matched through all the shapes has the skeleton `⊕ B_i^n(t) S_i` and
+//!   the parameters `Σ B_i^n(t) x_i`; the source and the target are
+//!   reproduced, the shapes in between approached, not reached. The
+//!   correspondence of the levels above the first is the nearest-centre
+//!   heuristic on the shapes at `t = ½`, kept for every `t`. `--via-mode
+//!   chain` ([`BlobMorph::through`], not in the paper) joins the pairwise
+//!   generic trees end to end at evenly spaced times instead, so the morph
+//!   passes through every key shape (continuous, with a change of speed at
+//!   the keys).
 //! - **Warps**: Barr twist and taper about the local z axis, bend in the y–z
 //!   plane (put them under an affine node for other axes); the taper scale is
 //!   clamped at 0.05 to stay invertible.
@@ -254,7 +262,7 @@ pub use correspond::{
 pub use error::{BlobError, BlobMorphError, NodePath, NodeProblem, Side};
 pub use generic::{
     BlobMorph, BlobSettings, FrameKey, GenericTree, KeyShape, MorphSpec, Orientation, Speed, SpeedCurve,
-    Trajectory,
+    Trajectory, ViaMode,
 };
 pub use kernel::Kernel;
 pub use minkowski::MinkowskiPath;

@@ -82,16 +82,21 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
                 shape: isomorph_blobtree::scenes::queen(),
                 spec: rook_queen.blobtree.spec.clone(),
             }],
+            via_mode: isomorph_blobtree::ViaMode::Chain,
             ..Default::default()
         },
         ..defaults.clone()
     };
+    // The same shapes as a Bézier-like morph: the queen is a control shape.
+    let mut rook_queen_bear_bezier = rook_queen_bear.clone();
+    rook_queen_bear_bezier.blobtree.via_mode = isomorph_blobtree::ViaMode::Bezier;
     let demos = [
         (Method::Baseline, "mug", "chain", &defaults, "baseline_mug_to_chain"),
         (Method::LevelSet, "ball", "c-shape", &defaults, "level_set_ball_to_c"),
         (Method::LevelSet, "mug", "chain", &mug_on_chain, "level_set_mug_to_chain"),
         (Method::Blobtree, "rook", "queen", &rook_queen, "blobtree_rook_to_queen"),
         (Method::Blobtree, "rook", "bear", &rook_queen_bear, "blobtree_rook_via_queen_to_bear"),
+        (Method::Blobtree, "rook", "bear", &rook_queen_bear_bezier, "blobtree_rook_bezier_queen_to_bear"),
         (Method::Rbf, "sphere", "torus", &defaults, "rbf_sphere_to_torus"),
         (Method::Warp, "sphere", "torus", &defaults, "warp_sphere_to_torus"),
         (Method::Tspline, "sphere", "torus", &defaults, "tspline_sphere_to_torus"),

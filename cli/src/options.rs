@@ -144,14 +144,22 @@ pub struct MethodArgs {
     #[arg(long, help_heading = "BlobTree (Galin et al.)")]
     pub links: Option<PathBuf>,
 
-    /// A key shape the morph passes through (a BlobTree scene file or a
-    /// built-in scene); repeat for several, in order. The morph joins the
-    /// generic trees of each pair of consecutive shapes and is each key
-    /// shape at evenly spaced times (with two: the source at 0, the keys at
-    /// 1/3 and 2/3, the target at 1). Each segment uses its built-in spec
-    /// (a built-in pair) or automatic correspondence.
+    /// A control (key) shape between the source and the target (a BlobTree
+    /// scene file or a built-in scene); repeat for several, in order. The
+    /// generic trees of each pair of consecutive shapes are combined as
+    /// --via-mode says. Each pair uses its built-in spec (a built-in pair)
+    /// or automatic correspondence.
     #[arg(long, help_heading = "BlobTree (Galin et al.)", conflicts_with = "links")]
     pub via: Vec<String>,
+
+    /// How the --via shapes are used: `bezier` (the paper's Bézier-like
+    /// morph: de Casteljau's combination of the pairwise generic trees; the
+    /// --via shapes are control shapes, approached but in general not
+    /// reached) or `chain` (the pairwise morphs one after the other: the
+    /// morph is each key shape at evenly spaced times; with two, the source
+    /// at 0, the keys at 1/3 and 2/3, the target at 1).
+    #[arg(long, help_heading = "BlobTree (Galin et al.)", value_enum, default_value_t = ViaModeArg::Bezier)]
+    pub via_mode: ViaModeArg,
 }
 
 /// Which options belong to which method (by their argument ids).
@@ -186,6 +194,7 @@ const OWNERS: &[(&str, &[Method])] = &[
     ("refine_rounds", &[Method::Tspline]),
     ("links", &[Method::Blobtree]),
     ("via", &[Method::Blobtree]),
+    ("via_mode", &[Method::Blobtree]),
 ];
 
 /// The options given on the command line that belong to no method in
@@ -305,6 +314,10 @@ impl MethodArgs {
                 isomorph_blobtree::scenes::demo_spec(last, target).unwrap_or_default()
             }
         };
+        settings.blobtree.via_mode = match self.via_mode {
+            ViaModeArg::Bezier => isomorph_blobtree::ViaMode::Bezier,
+            ViaModeArg::Chain => isomorph_blobtree::ViaMode::Chain,
+        };
         let mut from = source;
         settings.blobtree.via = Vec::with_capacity(self.via.len());
         for name in &self.via {
@@ -365,6 +378,15 @@ fn parse_align(s: &str) -> Result<AlignArg, String> {
 fn parse_weight(s: &str) -> Result<f32, String> {
     let w: f32 = s.parse().map_err(|e| format!("{e}"))?;
     if (0.0..=100.0).contains(&w) { Ok(w) } else { Err(format!("{w} is not in [0, 100]")) }
+}
+
+/// How a BlobTree morph uses its `--via` shapes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ViaModeArg {
+    /// The paper's Bézier-like morph: control shapes, approached.
+    Bezier,
+    /// The pairwise morphs one after the other: key shapes, passed through.
+    Chain,
 }
 
 /// The level-set solvers.

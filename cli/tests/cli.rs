@@ -457,6 +457,8 @@ fn blob_polygonizes_a_scene_and_morph_takes_blobtrees() {
         "rook",
         "--via",
         "queen",
+        "--via-mode",
+        "chain",
         "--target",
         "bear",
         "--res",
@@ -474,6 +476,35 @@ fn blob_polygonizes_a_scene_and_morph_takes_blobtrees() {
     let queen = isomorph_blobtree::scenes::queen().mesh(32).unwrap();
     let middle = isomorph_io::mesh::read_mesh(frames.join("frame_001.ply")).unwrap();
     assert_eq!(middle.genus(), queen.genus());
+    assert_eq!(report["morph"]["details"]["via mode"], "chain", "{report}");
+    // By default the queen is a Bézier control shape: approached, not reached.
+    let o = isomorph(&[
+        "morph",
+        "--method",
+        "blobtree",
+        "--source",
+        "rook",
+        "--via",
+        "queen",
+        "--target",
+        "bear",
+        "--res",
+        "32",
+        "--frames",
+        "3",
+        "--no-preview",
+        "--report",
+        "--out",
+        frames.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(report["morph"]["details"]["via mode"], "bezier", "{report}");
+    let middle = isomorph_io::mesh::read_mesh(frames.join("frame_001.ply")).unwrap();
+    assert!(
+        (middle.signed_volume() - queen.signed_volume()).abs() > 0.05 * queen.signed_volume(),
+        "the queen is reached"
+    );
     let o = isomorph(&[
         "morph",
         "--method",
