@@ -728,8 +728,10 @@ impl GenericTree {
     }
 }
 
-/// A key shape a morph passes through (`isomorph morph --via`), with the
-/// links spec of the segment that arrives at it.
+/// A shape between the source and the target (`isomorph morph --via`): a
+/// key shape the chained morph passes through or a control shape of the
+/// Bézier-like morph ([`ViaMode`]), with the links spec of the pairwise
+/// generic tree that arrives at it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct KeyShape {
     /// The shape.
@@ -1036,7 +1038,9 @@ impl BlobMorph {
         &self.segments[0]
     }
 
-    /// The generic trees of the segments, from each key shape to the next.
+    /// The pairwise generic trees, from each key (or control) shape to the
+    /// next: the segments of a chained morph, the first de Casteljau level
+    /// of a Bézier-like one.
     pub fn segments(&self) -> &[GenericTree] {
         &self.segments
     }
