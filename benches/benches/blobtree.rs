@@ -1,12 +1,15 @@
 //! Benchmarks of BlobTree evaluation on the rook → queen generic tree at
 //! t = 0.5: field evaluation with and without bounding-box pruning (single
-//! thread, and in parallel), and polygonizing one frame at 128³.
+//! thread, and in parallel), and polygonizing one frame at 128³; building
+//! the frame at t = 0.5 of rook → queen → bear, the queen a Bézier control
+//! shape (de Casteljau: a level-2 generic tree per frame) or a chained key
+//! shape.
 //!
 //! `cargo bench -p isomorph-benches --bench blobtree -- eval/rook_queen/pruned`
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
-use isomorph_blobtree::{BlobMorph, BlobTree, scenes};
+use isomorph_blobtree::{BlobMorph, BlobTree, KeyShape, MorphSpec, scenes};
 use isomorph_common::marching_cubes::polygonize;
 use isomorph_common::{Field3, Morph};
 use rayon::prelude::*;
@@ -64,5 +67,19 @@ fn polygonize_frame(c: &mut Criterion) {
     });
 }
 
-criterion_group!(benches, eval, polygonize_frame);
+fn instantiate(c: &mut Criterion) {
+    let (rook, queen) = (scenes::rook(), scenes::queen());
+    let keys = [
+        KeyShape { shape: queen, spec: scenes::demo_spec("rook", "queen").expect("built-in pair") },
+        KeyShape { shape: scenes::bear(), spec: MorphSpec::default() },
+    ];
+    let bezier = BlobMorph::bezier(&rook, &keys).expect("valid shapes");
+    let chain = BlobMorph::through(&rook, &keys).expect("valid shapes");
+    let mut group = c.benchmark_group("frame/rook_queen_bear");
+    group.bench_function("bezier", |b| b.iter(|| bezier.frame(black_box(0.5)).expect("valid time")));
+    group.bench_function("chain", |b| b.iter(|| chain.frame(black_box(0.5)).expect("valid time")));
+    group.finish();
+}
+
+criterion_group!(benches, eval, polygonize_frame, instantiate);
 criterion_main!(benches);

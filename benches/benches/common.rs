@@ -1,5 +1,5 @@
 //! Benchmarks of the shared core: marching cubes, grid fill, mesh parsing,
-//! mesh signed distance.
+//! mesh signed distance, colour lookup.
 //!
 //! `cargo bench -p isomorph-benches --bench common -- marching_cubes/torus/256`
 
@@ -11,6 +11,7 @@ use isomorph_common::alignment::Moments;
 use isomorph_common::fast_marching::{FastMarchingSettings, redistance};
 use isomorph_common::marching_cubes::marching_cubes;
 use isomorph_common::mesh::bvh::Lattice;
+use isomorph_common::mesh::color::ColorLookup;
 use isomorph_common::sdf::{MeshSdf, SdfSettings, VolumeMode};
 use isomorph_io::mesh::{MeshFormat, read_mesh, read_mesh_from};
 use std::hint::black_box;
@@ -108,6 +109,29 @@ fn mesh_sdf_bunny(c: &mut Criterion) {
     group.finish();
 }
 
+/// The colours of a frame's vertices from a coloured input
+/// ([`ColorLookup`], what the sequence exporter does twice per coloured
+/// frame): the bunny painted by position, queried at its own vertices
+/// moved 1 % of its height out along their normals, as a frame near it.
+fn color_lookup_bunny(c: &mut Criterion) {
+    let bunny = read_mesh(data_path("bunny.ply")).expect("bunny in data/");
+    let size = bunny.bounds().size();
+    let colors = bunny.positions.iter().map(|p| (*p - bunny.bounds().min) / size).collect();
+    let painted = bunny.clone().with_colors(colors).expect("one colour per vertex");
+    let offset = 0.01 * size.y;
+    let normals = bunny.vertex_normals();
+    let points: Vec<Vec3> = bunny.positions.iter().zip(&normals).map(|(p, n)| *p + offset * *n).collect();
+    let mut group = c.benchmark_group("color_lookup");
+    group.throughput(Throughput::Elements(points.len() as u64));
+    group.bench_function("build/bunny", |b| {
+        b.iter(|| ColorLookup::new(black_box(&painted), Vec3::ONE).unwrap())
+    });
+    let lookup = ColorLookup::new(&painted, Vec3::ONE).unwrap();
+    let mut out = vec![Vec3::ZERO; points.len()];
+    group.bench_function("query/bunny_near", |b| b.iter(|| lookup.colors_at(black_box(&points), &mut out)));
+    group.finish();
+}
+
 criterion_group!(
     benches,
     marching_cubes_torus,
@@ -115,6 +139,7 @@ criterion_group!(
     redistance_torus,
     mesh_io_bunny,
     moments,
-    mesh_sdf_bunny
+    mesh_sdf_bunny,
+    color_lookup_bunny
 );
 criterion_main!(benches);

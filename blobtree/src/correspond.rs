@@ -3,7 +3,7 @@
 //! (their nodes and leaves match bijectively).
 
 use crate::error::{BlobMorphError, NodePath, Side};
-use crate::node::{NaryOp, Node, Primitive};
+use crate::node::{MAX_MAGNITUDE, NaryOp, Node, Primitive};
 use crate::warp::Warp;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
@@ -43,6 +43,12 @@ pub enum Heuristic {
     /// is nearest (both directions, so every child has a partner).
     #[default]
     NearestCentre,
+    /// Hierarchical matching (§3.1): as `NearestCentre`, but positions are
+    /// taken relative to the parents, which are matched already — each
+    /// child's centre minus the mean of its siblings' centres — so parts
+    /// that moved with their parent still find their counterparts, at every
+    /// level down the trees.
+    Hierarchical,
 }
 
 /// The overlapping pair of trees: a tree of matched node pairs.
@@ -148,6 +154,66 @@ impl Pair {
     }
 }
 
+/// The animator's parameters of one phantom (§3.3, Fig. 17): the
+/// null-intensity partner a node without correspondence gets on the other
+/// side. By default the phantom has the node's skeletons, radii and
+/// stiffnesses; these fields move and reshape it, so the node grows from
+/// (or shrinks into) another place and size. Its intensity stays 0 — that
+/// is what makes it a phantom and keeps the end shape the input.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Phantom {
+    /// The source node whose phantom (in the target) this is; give
+    /// exactly one of `source` and `target`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub source: Option<NodePath>,
+    /// The target node whose phantom (in the source) this is.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub target: Option<NodePath>,
+    /// Where the phantom is centred (world units): its skeletons are moved
+    /// by `position − centre of the node` in the node's space (exactly a
+    /// world translation unless the node holds warps). Default: in place.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub position: Option<[f32; 3]>,
+    /// The radius of influence `R` of its primitives (default: the node's).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub radius: Option<f32>,
+    /// The stiffness `k` of its primitives (default: the node's).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stiffness: Option<f32>,
+}
+
+impl Phantom {
+    /// The side and path of the node this phantom partners.
+    fn node(&self) -> Result<(Side, &NodePath), BlobMorphError> {
+        match (&self.source, &self.target) {
+            (Some(p), None) => Ok((Side::Source, p)),
+            (None, Some(p)) => Ok((Side::Target, p)),
+            (a, b) => Err(BlobMorphError::Phantom {
+                side: if a.is_some() { Side::Source } else { Side::Target },
+                path: a.clone().or_else(|| b.clone()).unwrap_or_default(),
+                problem: "give exactly one of `source` and `target`",
+            }),
+        }
+    }
+
+    /// Checks the parameters' ranges.
+    fn check(&self) -> Result<(Side, &NodePath), BlobMorphError> {
+        let (side, path) = self.node()?;
+        let fail = |problem| Err(BlobMorphError::Phantom { side, path: path.clone(), problem });
+        if self.position.is_some_and(|p| p.iter().any(|v| !v.is_finite() || v.abs() > MAX_MAGNITUDE)) {
+            return fail("`position` must be finite with magnitudes ≤ 1e6");
+        }
+        if self.radius.is_some_and(|r| !(1.0 / MAX_MAGNITUDE..=MAX_MAGNITUDE).contains(&r)) {
+            return fail("`radius` must be in [1e-6, 1e6]");
+        }
+        if self.stiffness.is_some_and(|k| !(0.0..=MAX_MAGNITUDE).contains(&k)) {
+            return fail("`stiffness` must be in [0, 1e6]");
+        }
+        Ok((side, path))
+    }
+}
+
 /// How to match two trees.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
@@ -156,6 +222,19 @@ pub struct Correspondence {
     pub links: Vec<Link>,
     /// Pairing for matched commutative nodes without links.
     pub heuristic: Heuristic,
+    /// The animator's phantom parameters.
+    pub phantoms: Vec<Phantom>,
+}
+
+/// A phantom's reshaping, applied to each of its primitives.
+#[derive(Debug, Clone, Copy)]
+struct Reshape {
+    /// Translation of the skeletons.
+    shift: Vec3,
+    /// Radius of influence, if set.
+    radius: Option<f32>,
+    /// Stiffness, if set.
+    stiffness: Option<f32>,
 }
 
 struct Ctx<'a> {
@@ -172,6 +251,10 @@ struct Ctx<'a> {
     pairs: usize,
     /// Skeleton vertex pairs of the leaf pairs so far (at most [`MAX_VERTEX_PAIRS`]).
     vertex_pairs: usize,
+    /// The animator's phantoms by the node they partner.
+    phantoms: HashMap<(Side, NodePath), &'a Phantom>,
+    /// The phantom nodes met so far.
+    phantoms_used: HashSet<(Side, NodePath)>,
 }
 
 impl Ctx<'_> {
@@ -284,6 +367,15 @@ pub fn decompose(
         by_pair.entry((&l.a, &l.b)).or_default().push(i);
         by_source.entry(&l.a).or_default().push(i);
     }
+    let mut phantoms = HashMap::new();
+    for ph in &corr.phantoms {
+        let (side, path) = ph.check()?;
+        let tree = if side == Side::Source { a } else { b };
+        if tree.get(path).is_none() {
+            return Err(BlobMorphError::NoSuchNode { side, path: path.clone() });
+        }
+        phantoms.insert((side, path.clone()), ph);
+    }
     let mut ctx = Ctx {
         links: &corr.links,
         used: vec![false; corr.links.len()],
@@ -293,6 +385,8 @@ pub fn decompose(
         thresholds: (ta, tb),
         pairs: 0,
         vertex_pairs: 0,
+        phantoms,
+        phantoms_used: HashSet::new(),
     };
     let root = NodePath::root();
     consume(&mut ctx, &root, &root);
@@ -300,6 +394,18 @@ pub fn decompose(
     if let Some(i) = ctx.used.iter().position(|u| !u) {
         let l = &corr.links[i];
         return Err(BlobMorphError::LinkBreaksHierarchy { a: l.a.clone(), b: l.b.clone() });
+    }
+    let unused = corr
+        .phantoms
+        .iter()
+        .filter_map(|ph| ph.node().ok())
+        .find(|&(side, path)| !ctx.phantoms_used.contains(&(side, path.clone())));
+    if let Some((side, path)) = unused {
+        return Err(BlobMorphError::Phantom {
+            side,
+            path: path.clone(),
+            problem: "the node is matched, it has no phantom",
+        });
     }
     Ok(pair)
 }
@@ -370,12 +476,12 @@ fn pair(
         (Node::Difference { left, right, level }, _) => {
             // Fig. 14: B becomes difference(B, phantom of A's right child).
             let l = pair(left, child(pa, 0).as_ref(), b, pb, ctx)?;
-            let r = with_phantom(right, child(pa, 1), Side::Source, ctx)?;
+            let r = with_phantom(right, child(pa, 1), Side::Source, None, ctx)?;
             Pair::Difference { a: *level, b: ctx.thresholds.1, left: Box::new(l), right: Box::new(r), origin }
         }
         (_, Node::Difference { left, right, level }) => {
             let l = pair(a, pa, left, child(pb, 0).as_ref(), ctx)?;
-            let r = with_phantom(right, child(pb, 1), Side::Target, ctx)?;
+            let r = with_phantom(right, child(pb, 1), Side::Target, None, ctx)?;
             Pair::Difference { a: ctx.thresholds.0, b: *level, left: Box::new(l), right: Box::new(r), origin }
         }
         (Node::Primitive(x), Node::Primitive(y)) => {
@@ -429,8 +535,14 @@ fn match_children(
         (false, true) => (op_a, op_a),
         _ => (op_a, op_b),
     };
-    let centres_a: Vec<Vec3> = kids_a.iter().map(|(n, _)| n.centre()).collect();
-    let centres_b: Vec<Vec3> = kids_b.iter().map(|(n, _)| n.centre()).collect();
+    let mut centres_a: Vec<Vec3> = kids_a.iter().map(|(n, _)| n.centre()).collect();
+    let mut centres_b: Vec<Vec3> = kids_b.iter().map(|(n, _)| n.centre()).collect();
+    if ctx.heuristic == Heuristic::Hierarchical {
+        for centres in [&mut centres_a, &mut centres_b] {
+            let mean = centres.iter().copied().sum::<Vec3>() / centres.len().max(1) as f32;
+            centres.iter_mut().for_each(|c| *c -= mean);
+        }
+    }
     // User links at this level, in the order they were given.
     let index_b: HashMap<&NodePath, usize> =
         kids_b.iter().enumerate().filter_map(|(j, (_, p))| Some((p.as_ref()?, j))).collect();
@@ -464,7 +576,7 @@ fn match_children(
                     }
                 }
             }
-            Heuristic::NearestCentre => {
+            Heuristic::NearestCentre | Heuristic::Hierarchical => {
                 let (near_a, near_b) = (KdTree::new(&centres_a), KdTree::new(&centres_b));
                 for (i, c) in centres_a.iter().enumerate() {
                     if let Some(j) = near_b.nearest(*c) {
@@ -522,12 +634,20 @@ fn match_children(
                 }
                 pair(&x, kids_a[i].1.as_ref(), &y, kids_b[j].1.as_ref(), ctx)?
             }
-            (Some(i), None) => {
-                with_phantom(&split(kids_a[i].0, op_a, deg_a[i]), kids_a[i].1.clone(), Side::Source, ctx)?
-            }
-            (None, Some(j)) => {
-                with_phantom(&split(kids_b[j].0, op_b, deg_b[j]), kids_b[j].1.clone(), Side::Target, ctx)?
-            }
+            (Some(i), None) => with_phantom(
+                &split(kids_a[i].0, op_a, deg_a[i]),
+                kids_a[i].1.clone(),
+                Side::Source,
+                None,
+                ctx,
+            )?,
+            (None, Some(j)) => with_phantom(
+                &split(kids_b[j].0, op_b, deg_b[j]),
+                kids_b[j].1.clone(),
+                Side::Target,
+                None,
+                ctx,
+            )?,
             (None, None) => continue,
         };
         out.push(pair);
@@ -607,11 +727,14 @@ pub fn split(node: &Node, op: NaryOp, m: usize) -> Node {
     }
 }
 
-/// Pairs `node` (on `side`) with its own phantom on the other side, node by node.
+/// Pairs `node` (on `side`) with its own phantom on the other side, node
+/// by node; the animator's [`Phantom`] for a node reshapes the phantom's
+/// primitives below it (`reshape`: the one inherited from above).
 fn with_phantom(
     node: &Node,
     path: Option<NodePath>,
     side: Side,
+    reshape: Option<Reshape>,
     ctx: &mut Ctx<'_>,
 ) -> Result<Pair, BlobMorphError> {
     let (pa, pb) = if side == Side::Source { (path.as_ref(), None) } else { (None, path.as_ref()) };
@@ -619,13 +742,29 @@ fn with_phantom(
     if let Node::Primitive(p) = node {
         ctx.reserve_leaf(p, p, pa, pb)?;
     }
-    let phantom = node.phantom();
+    let mut reshape = reshape;
+    if let Some(p) = &path
+        && let Some(&ph) = ctx.phantoms.get(&(side, p.clone()))
+    {
+        ctx.phantoms_used.insert((side, p.clone()));
+        reshape = Some(Reshape {
+            shift: ph.position.map_or(Vec3::ZERO, |q| Vec3::from_array(q) - node.centre()),
+            radius: ph.radius,
+            stiffness: ph.stiffness,
+        });
+    }
+    let mut phantom = node.phantom();
+    if let (Node::Primitive(p), Some(r)) = (&mut phantom, reshape) {
+        p.frame = glam::Affine3A::from_translation(r.shift) * p.frame;
+        p.kernel.radius = r.radius.unwrap_or(p.kernel.radius);
+        p.kernel.stiffness = r.stiffness.unwrap_or(p.kernel.stiffness);
+    }
     let origin = match side {
         Side::Source => Origin { a: path.clone(), b: None },
         Side::Target => Origin { a: None, b: path.clone() },
     };
     let (x, y) = if side == Side::Source { (node, &phantom) } else { (&phantom, node) };
-    let mut kids = |i: usize| with_phantom(node.children()[i], child(path.as_ref(), i), side, ctx);
+    let mut kids = |i: usize| with_phantom(node.children()[i], child(path.as_ref(), i), side, reshape, ctx);
     Ok(match (x, y) {
         (Node::Primitive(a), Node::Primitive(b)) => {
             Pair::Leaf { a: Box::new(a.clone()), b: Box::new(b.clone()), origin }
@@ -678,12 +817,13 @@ mod tests {
         #![proptest_config(ProptestConfig { cases: 40, ..ProptestConfig::default() })]
 
         /// A' ≡ A and B' ≡ B (same field everywhere) and A', B' overlap, for
-        /// both heuristics.
+        /// every heuristic.
         #[test]
-        fn decomposition_is_equivalent_and_overlapping(a in testutil::tree(), b in testutil::tree(), all in any::<bool>()) {
+        fn decomposition_is_equivalent_and_overlapping(a in testutil::tree(), b in testutil::tree(), h in 0usize..3) {
             let corr = Correspondence {
                 links: vec![],
-                heuristic: if all { Heuristic::AllChildren } else { Heuristic::NearestCentre },
+                heuristic: [Heuristic::AllChildren, Heuristic::NearestCentre, Heuristic::Hierarchical][h],
+                phantoms: vec![],
             };
             let pair = decompose(&a, 0.5, &b, 0.5, &corr).unwrap();
             let (a2, b2) = (pair.side(Side::Source), pair.side(Side::Target));
@@ -712,7 +852,7 @@ mod tests {
                 .filter(|(i, j)| *i < ca.len() && *j < cb.len())
                 .map(|(i, j)| Link { a: NodePath(vec![i]), b: NodePath(vec![j]) })
                 .collect();
-            let corr = Correspondence { links, heuristic: Heuristic::NearestCentre };
+            let corr = Correspondence { links, heuristic: Heuristic::NearestCentre, phantoms: vec![] };
             let pair = decompose(&a, 0.5, &b, 0.5, &corr).unwrap();
             let (a2, b2) = (pair.side(Side::Source), pair.side(Side::Target));
             prop_assert!(same_structure(&a2, &b2));
@@ -736,6 +876,7 @@ mod tests {
                 Link { a: NodePath(vec![0]), b: NodePath(vec![1]) },
             ],
             heuristic: Heuristic::NearestCentre,
+            phantoms: vec![],
         };
         let pair = decompose(&a, 0.5, &b, 0.5, &corr).unwrap();
         // 2 links + A's child 1 with a phantom + B's child 2 with a phantom.
@@ -749,6 +890,33 @@ mod tests {
         assert_eq!(intensities, vec![0.5, 0.5, 1.0, 0.0]);
     }
 
+    /// Hierarchical matching pairs the parts of two groups that moved
+    /// together by their places in the groups, where nearest centres in
+    /// world space pair both source groups with one target group.
+    #[test]
+    fn hierarchical_matching_follows_the_parents() {
+        let group = |x: f32| Node::blend(vec![ball(Vec3::new(x, 0.3, 0.0)), ball(Vec3::new(x, -0.3, 0.0))]);
+        let a = Node::blend(vec![group(-1.0), group(1.0)]);
+        let b = Node::blend(vec![group(2.0), group(4.0)]);
+        let corr = |heuristic| Correspondence { links: vec![], heuristic, phantoms: vec![] };
+        let nearest = decompose(&a, 0.5, &b, 0.5, &corr(Heuristic::NearestCentre)).unwrap();
+        assert!(nearest.leaf_count() > 4, "nearest centres split a group");
+        let hierarchical = decompose(&a, 0.5, &b, 0.5, &corr(Heuristic::Hierarchical)).unwrap();
+        assert_eq!(hierarchical.leaf_count(), 4, "a bijection, group to group and ball to ball");
+        let Pair::Nary { children, .. } = &hierarchical else { panic!("{hierarchical:?}") };
+        for (k, group) in children.iter().enumerate() {
+            assert_eq!(group.origin(), &Origin { a: Some(NodePath(vec![k])), b: Some(NodePath(vec![k])) });
+            let Pair::Nary { children: balls, .. } = group else { panic!("{group:?}") };
+            for (j, ball) in balls.iter().enumerate() {
+                assert_eq!(ball.origin().a, Some(NodePath(vec![k, j])));
+                assert_eq!(ball.origin().b, Some(NodePath(vec![k, j])));
+            }
+        }
+        assert_eq!(serde_json::to_string(&Heuristic::Hierarchical).unwrap(), "\"hierarchical\"");
+        check_equivalent(&a, &hierarchical.side(Side::Source)).unwrap();
+        check_equivalent(&b, &hierarchical.side(Side::Target)).unwrap();
+    }
+
     #[test]
     fn bad_links_are_errors() {
         let a = Node::blend(vec![Node::union(vec![ball(Vec3::ZERO)]), ball(Vec3::X)]);
@@ -756,6 +924,7 @@ mod tests {
         let corr = |a: Vec<usize>, b: Vec<usize>| Correspondence {
             links: vec![Link { a: NodePath(a), b: NodePath(b) }],
             heuristic: Heuristic::NearestCentre,
+            phantoms: vec![],
         };
         assert!(matches!(
             decompose(&a, 0.5, &b, 0.5, &corr(vec![5], vec![0])),
@@ -783,7 +952,7 @@ mod tests {
     #[test]
     fn all_children_on_wide_nodes_is_refused() {
         let a = wide(1500);
-        let corr = Correspondence { links: vec![], heuristic: Heuristic::AllChildren };
+        let corr = Correspondence { links: vec![], heuristic: Heuristic::AllChildren, phantoms: vec![] };
         match decompose(&a, 0.5, &a, 0.5, &corr) {
             Err(BlobMorphError::TooManyPairs { what, a, b, limit }) => {
                 assert_eq!(
@@ -809,7 +978,7 @@ mod tests {
             };
             Node::blend((0..n).map(b).collect())
         };
-        let corr = Correspondence { links: vec![], heuristic: Heuristic::AllChildren };
+        let corr = Correspondence { links: vec![], heuristic: Heuristic::AllChildren, phantoms: vec![] };
         assert!(matches!(
             decompose(&boxes(100), 0.5, &boxes(100), 0.5, &corr),
             Err(BlobMorphError::TooManyPairs { what: "skeleton vertex pairs", limit: MAX_VERTEX_PAIRS, .. })

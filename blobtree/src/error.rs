@@ -210,17 +210,16 @@ pub enum BlobMorphError {
         /// Target node.
         b: NodePath,
     },
-    /// A speed curve is malformed (NaN, outside `[0, 1]`, or empty interval).
-    #[error("speed curve for {a} ↔ {b}: start {start} and end {end} must satisfy 0 ≤ start < end ≤ 1")]
+    /// A speed curve is malformed (NaN, outside `[0, 1]`, an empty window,
+    /// free-form points that are not monotone).
+    #[error("speed curve for {a} ↔ {b}: {problem}")]
     InvalidSpeed {
         /// Source node.
         a: NodePath,
         /// Target node.
         b: NodePath,
-        /// Start time.
-        start: f32,
-        /// End time.
-        end: f32,
+        /// What is wrong.
+        problem: &'static str,
     },
     /// A speed curve or trajectory names a pair of nodes that the
     /// correspondence never matched.
@@ -245,6 +244,16 @@ pub enum BlobMorphError {
         b: NodePath,
         /// The offending coordinate.
         value: f32,
+    },
+    /// A trajectory's key frames are malformed.
+    #[error("trajectory for {a} ↔ {b}: {problem}")]
+    InvalidKeys {
+        /// Source node.
+        a: NodePath,
+        /// Target node.
+        b: NodePath,
+        /// What is wrong.
+        problem: &'static str,
     },
     /// The decomposition would need more than `limit` node pairs
     /// ([`crate::correspond::MAX_PAIRS`]) or skeleton vertex pairs
@@ -274,6 +283,27 @@ pub enum BlobMorphError {
         /// Why (printed as the error's source, not in its message).
         source: TransformError,
     },
+    /// A phantom's parameters in the links spec are invalid, or name a
+    /// node that gets no phantom (it has a partner).
+    #[error("phantom for {side} node {path}: {problem}")]
+    Phantom {
+        /// The side of the node the phantom partners.
+        side: Side,
+        /// The node.
+        path: NodePath,
+        /// What is wrong.
+        problem: &'static str,
+    },
+    /// One segment of a morph through key shapes failed to build (segment
+    /// `index` goes from key shape `index` to `index + 1`; the source is
+    /// key 0, the target the last).
+    #[error("segment {index} of the morph (key shape {index} → {next})", next = index + 1)]
+    Segment {
+        /// The segment.
+        index: usize,
+        /// Why (printed as the error's source).
+        source: Box<BlobMorphError>,
+    },
 }
 
 impl From<GridError> for BlobMorphError {
@@ -286,6 +316,7 @@ impl MorphFailure for BlobMorphError {
     fn shared(&self) -> Option<&isomorph_common::MorphError> {
         match self {
             BlobMorphError::Morph(e) => Some(e),
+            BlobMorphError::Segment { source, .. } => source.shared(),
             _ => None,
         }
     }

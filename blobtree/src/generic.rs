@@ -1,35 +1,43 @@
 //! The generic BlobTree `C(t)` (§4.4) and its [`Morph`] implementation.
 
-use crate::correspond::{Correspondence, Heuristic, Link, Origin, Pair, decompose};
+use crate::correspond::{Correspondence, Heuristic, Link, Origin, Pair, Phantom, decompose};
 use crate::error::{BlobMorphError, NodePath};
 use crate::minkowski::MinkowskiPath;
 use crate::node::{MAX_MAGNITUDE, NaryOp, Node, Primitive};
 use crate::skeleton::Skeleton;
 use crate::tree::BlobTree;
 use crate::warp::Warp;
-use glam::{Affine3A, Vec3};
+use glam::{Affine3A, Quat, Vec3};
 use isomorph_common::{Aabb, AffineParts};
 use isomorph_common::{Control, Frame, Morph, MorphReport, Outcome, Side, Solid, Stages};
 use serde::{Deserialize, Serialize};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
-/// A speed curve `s(t)`: 0 before `start`, 1 after `end`, in between linear
-/// or smooth (`3u² − 2u³`, zero speed at both ends).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+/// A speed curve `s(t)` (§4.4): 0 before `start`, 1 after `end`, and in
+/// between a curve of the window's local time `u = (t − start)/(end − start)`:
+/// `u` itself (linear), `3u² − 2u³` (`smooth`: zero speed at both ends), or,
+/// when `points` are given, the free-form monotone piecewise cubic through
+/// `(0, 0)`, the points `(u, s)` and `(1, 1)` (Fritsch–Carlson tangents:
+/// never decreasing, never overshooting `[0, 1]`, C¹).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct Speed {
-    /// When the node starts to change.
+    /// When the node starts to change (`t`, in `[0, 1]`).
     pub start: f32,
-    /// When the node reaches its target.
+    /// When the node reaches its target (`t`, in `[0, 1]`, after `start`).
     pub end: f32,
     /// Ease in and out.
     pub smooth: bool,
+    /// Inner points `(u, s)` of a free-form curve: `u` strictly increasing
+    /// in `(0, 1)`, `s` non-decreasing in `[0, 1]` (not with `smooth`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub points: Vec<[f32; 2]>,
 }
 
 impl Default for Speed {
     /// `s(t) = t`.
     fn default() -> Self {
-        Self { start: 0.0, end: 1.0, smooth: false }
+        Self { start: 0.0, end: 1.0, smooth: false, points: Vec::new() }
     }
 }
 
@@ -37,11 +45,71 @@ impl Speed {
     /// `s(t)`.
     pub fn at(&self, t: f32) -> f32 {
         let u = ((t - self.start) / (self.end - self.start)).clamp(0.0, 1.0);
-        if self.smooth { u * u * (3.0 - 2.0 * u) } else { u }
+        if self.smooth {
+            u * u * (3.0 - 2.0 * u)
+        } else if self.points.is_empty() || u == 0.0 || u == 1.0 {
+            u
+        } else {
+            self.free_form(u)
+        }
     }
 
-    fn valid(&self) -> bool {
-        (0.0..=1.0).contains(&self.start) && (0.0..=1.0).contains(&self.end) && self.start < self.end
+    /// The monotone cubic through `(0, 0)`, the points and `(1, 1)` at `u ∈ (0, 1)`.
+    fn free_form(&self, u: f32) -> f32 {
+        let knots: Vec<[f32; 2]> =
+            std::iter::once([0.0, 0.0]).chain(self.points.iter().copied()).chain([[1.0, 1.0]]).collect();
+        let n = knots.len() - 1;
+        let secant: Vec<f32> = knots.windows(2).map(|w| (w[1][1] - w[0][1]) / (w[1][0] - w[0][0])).collect();
+        // Fritsch–Carlson: averaged secants, zero at flat steps and local
+        // extrema, then limited so that each piece stays monotone.
+        let mut tangent = vec![0.0f32; n + 1];
+        tangent[0] = secant[0];
+        tangent[n] = secant[n - 1];
+        for i in 1..n {
+            tangent[i] =
+                if secant[i - 1] * secant[i] <= 0.0 { 0.0 } else { 0.5 * (secant[i - 1] + secant[i]) };
+        }
+        for i in 0..n {
+            if secant[i] == 0.0 {
+                (tangent[i], tangent[i + 1]) = (0.0, 0.0);
+                continue;
+            }
+            let (alpha, beta) = (tangent[i] / secant[i], tangent[i + 1] / secant[i]);
+            let norm = alpha.hypot(beta);
+            if norm > 3.0 {
+                tangent[i] = 3.0 / norm * alpha * secant[i];
+                tangent[i + 1] = 3.0 / norm * beta * secant[i];
+            }
+        }
+        let i = knots[1..n].iter().take_while(|k| k[0] <= u).count();
+        let ([x0, y0], [x1, y1]) = (knots[i], knots[i + 1]);
+        let h = x1 - x0;
+        let v = (u - x0) / h;
+        let (v2, v3) = (v * v, v * v * v);
+        let value = (2.0 * v3 - 3.0 * v2 + 1.0) * y0
+            + (v3 - 2.0 * v2 + v) * h * tangent[i]
+            + (-2.0 * v3 + 3.0 * v2) * y1
+            + (v3 - v2) * h * tangent[i + 1];
+        value.clamp(y0, y1)
+    }
+
+    /// What is wrong with this curve, if anything.
+    fn problem(&self) -> Option<&'static str> {
+        let window =
+            (0.0..=1.0).contains(&self.start) && (0.0..=1.0).contains(&self.end) && self.start < self.end;
+        if !window {
+            return Some("start and end must satisfy 0 ≤ start < end ≤ 1");
+        }
+        if self.smooth && !self.points.is_empty() {
+            return Some("give either `smooth` or `points`, not both");
+        }
+        let knots: Vec<[f32; 2]> =
+            std::iter::once([0.0, 0.0]).chain(self.points.iter().copied()).chain([[1.0, 1.0]]).collect();
+        let monotone = knots.windows(2).all(|w| w[0][0] < w[1][0] && w[0][1] <= w[1][1]);
+        if !monotone || self.points.iter().flatten().any(|v| !v.is_finite()) {
+            return Some("points (u, s) need u strictly increasing in (0, 1) and s non-decreasing in [0, 1]");
+        }
+        None
     }
 }
 
@@ -56,17 +124,155 @@ pub struct SpeedCurve {
     pub speed: Speed,
 }
 
-/// The trajectory of the frame origin of the generic leaf made from source
-/// primitive `a` and target primitive `b`: a cubic Bézier curve with these
-/// two inner control points.
+/// The trajectory of the frame made from source node `a` and target node
+/// `b` (§3.4: "the animator controls the location and the orientation of
+/// intermediate coordinate systems"): the local frame of a generic leaf
+/// (primitive) or the map of a generic affine node. By default the origin
+/// moves uniformly on a straight line, the orientation by slerp and the
+/// stretch linearly; `handles` bend the origin's path into a cubic Bézier
+/// curve, or `keys` make it pass through key positions (a cubic spline)
+/// and key orientations (slerp between consecutive keys) at given local
+/// times `s`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Trajectory {
     /// Source node path.
     pub a: NodePath,
     /// Target node path.
     pub b: NodePath,
-    /// The two inner Bézier control points (world units).
-    pub handles: [[f32; 3]; 2],
+    /// The two inner Bézier control points of the origin's path (world
+    /// units; not with keyed positions).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub handles: Option<[[f32; 3]; 2]>,
+    /// Key frames at increasing local times `s ∈ (0, 1)`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub keys: Vec<FrameKey>,
+}
+
+/// One key frame of a [`Trajectory`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrameKey {
+    /// The node's local time (after its speed curve), in `(0, 1)`.
+    pub s: f32,
+    /// The frame origin at `s` (world units; for an affine node, its translation).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position: Option<[f32; 3]>,
+    /// The frame orientation at `s`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rotate: Option<Orientation>,
+}
+
+/// An orientation as a rotation about `axis` by `degrees` (from the world axes).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Orientation {
+    /// The rotation axis (any non-zero length).
+    pub axis: [f32; 3],
+    /// The angle in degrees (right-handed about `axis`).
+    pub degrees: f32,
+}
+
+/// A frame's path over the local time `s`, from a [`Trajectory`].
+#[derive(Debug, Clone, Default)]
+struct FramePath {
+    /// Inner Bézier control points of the origin's path.
+    handles: Option<[Vec3; 2]>,
+    /// Inner origin keys `(s, position)`.
+    positions: Vec<(f32, Vec3)>,
+    /// Inner orientation keys `(s, rotation)`.
+    rotations: Vec<(f32, Quat)>,
+}
+
+impl FramePath {
+    /// The checked path of `tr`.
+    fn new(tr: &Trajectory) -> Result<Self, BlobMorphError> {
+        let fail = |problem| BlobMorphError::InvalidKeys { a: tr.a.clone(), b: tr.b.clone(), problem };
+        if let Some(&value) = tr
+            .handles
+            .iter()
+            .flatten()
+            .flatten()
+            .chain(tr.keys.iter().filter_map(|k| k.position.as_ref()).flatten())
+            .find(|v| !v.is_finite() || v.abs() > MAX_MAGNITUDE)
+        {
+            return Err(BlobMorphError::InvalidTrajectory { a: tr.a.clone(), b: tr.b.clone(), value });
+        }
+        let times = std::iter::once(0.0).chain(tr.keys.iter().map(|k| k.s)).chain([1.0]).collect::<Vec<_>>();
+        if !times.windows(2).all(|w| w[0] < w[1]) {
+            return Err(fail("key times s must increase strictly within (0, 1)"));
+        }
+        let positions: Vec<(f32, Vec3)> =
+            tr.keys.iter().filter_map(|k| Some((k.s, Vec3::from_array(k.position?)))).collect();
+        if tr.handles.is_some() && !positions.is_empty() {
+            return Err(fail("give either `handles` or key positions, not both"));
+        }
+        let mut rotations = Vec::new();
+        for k in &tr.keys {
+            if let Some(o) = &k.rotate {
+                let axis = Vec3::from_array(o.axis);
+                let axis = axis.try_normalize().filter(|_| o.degrees.is_finite());
+                let axis =
+                    axis.ok_or_else(|| fail("a key rotation needs a finite non-zero axis and angle"))?;
+                rotations.push((k.s, Quat::from_axis_angle(axis, o.degrees.to_radians())));
+            }
+        }
+        Ok(Self { handles: tr.handles.map(|h| h.map(Vec3::from_array)), positions, rotations })
+    }
+
+    /// The frame at `s ∈ (0, 1)` between the end frames `a` and `b`.
+    fn at(&self, a: &AffineParts, b: &AffineParts, s: f32) -> AffineParts {
+        let mut parts = a.lerp(b, s);
+        if let Some([h1, h2]) = self.handles {
+            let u = 1.0 - s;
+            parts.translation = a.translation * (u * u * u)
+                + h1 * (3.0 * u * u * s)
+                + h2 * (3.0 * u * s * s)
+                + b.translation * (s * s * s);
+        } else if !self.positions.is_empty() {
+            parts.translation = spline(a.translation, &self.positions, b.translation, s);
+        }
+        if !self.rotations.is_empty() {
+            let keys: Vec<(f32, Quat)> = std::iter::once((0.0, a.rotation))
+                .chain(self.rotations.iter().copied())
+                .chain([(1.0, b.rotation)])
+                .collect();
+            let i = keys[1..keys.len() - 1].iter().take_while(|k| k.0 <= s).count();
+            let ((s0, q0), (s1, q1)) = (keys[i], keys[i + 1]);
+            parts.rotation = q0.slerp(q1, (s - s0) / (s1 - s0)).normalize();
+        }
+        parts
+    }
+}
+
+/// The cubic spline through `(0, start)`, the `keys` and `(1, end)` at
+/// `s`: Hermite pieces with Catmull–Rom tangents (central differences over
+/// the neighbouring keys, one-sided at the ends), C¹, through every key.
+fn spline(start: Vec3, keys: &[(f32, Vec3)], end: Vec3, s: f32) -> Vec3 {
+    let knots: Vec<(f32, Vec3)> =
+        std::iter::once((0.0, start)).chain(keys.iter().copied()).chain([(1.0, end)]).collect();
+    let n = knots.len() - 1;
+    let tangent = |i: usize| {
+        let (l, r) = (i.saturating_sub(1), (i + 1).min(n));
+        (knots[r].1 - knots[l].1) / (knots[r].0 - knots[l].0)
+    };
+    let i = knots[1..n].iter().take_while(|k| k.0 <= s).count();
+    let ((x0, p0), (x1, p1)) = (knots[i], knots[i + 1]);
+    let h = x1 - x0;
+    let v = (s - x0) / h;
+    let (v2, v3) = (v * v, v * v * v);
+    p0 * (2.0 * v3 - 3.0 * v2 + 1.0)
+        + tangent(i) * (h * (v3 - 2.0 * v2 + v))
+        + p1 * (-2.0 * v3 + 3.0 * v2)
+        + tangent(i + 1) * (h * (v3 - v2))
+}
+
+/// A generic affine node's end maps, decomposed, and its keyed path.
+#[derive(Debug, Clone)]
+struct AffinePath {
+    a: AffineParts,
+    b: AffineParts,
+    path: FramePath,
 }
 
 /// Everything the animator controls (the `--links` file): links, heuristic,
@@ -75,13 +281,26 @@ pub struct Trajectory {
 #[serde(default, deny_unknown_fields)]
 pub struct MorphSpec {
     /// Links between nodes.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub links: Vec<Link>,
     /// Pairing where no links are given.
     pub heuristic: Heuristic,
     /// Per-node speed curves.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub speeds: Vec<SpeedCurve>,
     /// Per-leaf origin trajectories.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub trajectories: Vec<Trajectory>,
+    /// The animator's phantom parameters (position, radius, stiffness).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub phantoms: Vec<Phantom>,
+    /// Automatic coplanar frames (§3.4, Figs. 10–11): matched pairs of
+    /// points, segments and polygons (Euclidean, similarity frames) are
+    /// interpolated in frames where both lie in one plane, so their
+    /// in-between skeletons stay segments or polygons instead of becoming
+    /// polyhedra (default off: the scene's own frames).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub coplanar_frames: bool,
 }
 
 impl MorphSpec {
@@ -101,6 +320,24 @@ impl MorphSpec {
     /// [`crate::BlobError::Parse`] (wrapped) for malformed text.
     pub fn from_json(text: &str) -> Result<Self, BlobMorphError> {
         serde_json::from_str(text).map_err(|e| crate::scene::json_error(&e, "links spec").into())
+    }
+
+    /// The spec as pretty RON; [`MorphSpec::from_ron`] reads it back.
+    ///
+    /// # Errors
+    /// [`crate::BlobError::Write`] (wrapped) if serialization fails.
+    pub fn to_ron(&self) -> Result<String, BlobMorphError> {
+        crate::scene::ron_options()
+            .to_string_pretty(self, crate::scene::ron_pretty())
+            .map_err(|e| crate::BlobError::Write(e.to_string()).into())
+    }
+
+    /// The spec as pretty JSON; [`MorphSpec::from_json`] reads it back.
+    ///
+    /// # Errors
+    /// [`crate::BlobError::Write`] (wrapped) if serialization fails.
+    pub fn to_json(&self) -> Result<String, BlobMorphError> {
+        serde_json::to_string_pretty(self).map_err(|e| crate::BlobError::Write(e.to_string()).into())
     }
 
     /// Reads a spec file: JSON for a `.json` extension, RON otherwise.
@@ -126,7 +363,7 @@ struct GLeaf {
     skeleton: MinkowskiPath,
     frame_a: AffineParts,
     frame_b: AffineParts,
-    handles: [Vec3; 2],
+    path: FramePath,
 }
 
 #[derive(Debug, Clone)]
@@ -134,7 +371,8 @@ enum GKind {
     Leaf(Box<GLeaf>),
     Nary(NaryOp, NaryOp),
     Difference(f32, f32),
-    Warp(Warp, Warp),
+    /// Source and target warps, and the keyed path of two affine maps.
+    Warp(Warp, Warp, Option<Box<AffinePath>>),
 }
 
 #[derive(Debug, Clone)]
@@ -161,9 +399,10 @@ struct GNode {
 ///   slerped rotation · stretch ([`isomorph_common::AffineParts::lerp`]);
 ///   different kinds were already split into two warps through the identity (Fig. 16);
 /// - leaves: skeleton `(1 − s) S_A ⊕ s S_B` in the time-varying local frame
-///   (origin on a cubic Bézier curve — uniform straight motion unless the
-///   animator gives handles — orientation by quaternion slerp, stretch
-///   linearly), generic topology built once ([`MinkowskiPath`]); `I, R, k`
+///   (origin uniform and straight unless the animator gives a
+///   [`Trajectory`] — Bézier handles or key frames — orientation by
+///   quaternion slerp, stretch linearly; optionally coplanar frames,
+///   [`MorphSpec::coplanar_frames`]), generic topology built once ([`MinkowskiPath`]); `I, R, k`
 ///   linear; the L^p exponent linear (§3.4.3), or `1/p` linear when one end
 ///   is `p = ∞`.
 ///
@@ -189,10 +428,20 @@ fn frame_parts(
     })
 }
 
-fn build(pair: &Pair) -> Result<GNode, BlobMorphError> {
+/// The generic node of `pair` and below; `coplanar`: automatic coplanar
+/// frames for flat leaf pairs ([`MorphSpec::coplanar_frames`]).
+fn build(pair: &Pair, coplanar: bool) -> Result<GNode, BlobMorphError> {
     let origin = pair.origin().clone();
+    let build = |p: &Pair| build(p, coplanar);
     let (kind, children) = match pair {
-        Pair::Leaf { a, b, .. } => {
+        Pair::Leaf { a: ends_a, b: ends_b, .. } => {
+            // The ends are returned as given; the in-betweens interpolate
+            // the same primitives, possibly re-expressed in coplanar frames.
+            let reframed = if coplanar { crate::coplanar::coplanar_frames(ends_a, ends_b) } else { None };
+            let (a, b) = match &reframed {
+                Some((a, b)) => (a, b),
+                None => (&**ends_a, &**ends_b),
+            };
             let pa = a
                 .skeleton
                 .polytope()
@@ -203,14 +452,13 @@ fn build(pair: &Pair) -> Result<GNode, BlobMorphError> {
                 .map_err(|p| crate::BlobError::node(&origin.b.clone().unwrap_or_default(), p))?;
             let frame_a = frame_parts(a, &origin.a, &origin.b)?;
             let frame_b = frame_parts(b, &origin.a, &origin.b)?;
-            let (oa, ob) = (frame_a.translation, frame_b.translation);
             let leaf = GLeaf {
-                a: (**a).clone(),
-                b: (**b).clone(),
+                a: (**ends_a).clone(),
+                b: (**ends_b).clone(),
                 skeleton: MinkowskiPath::new(&pa, &pb),
                 frame_a,
                 frame_b,
-                handles: [oa + (ob - oa) / 3.0, oa + (ob - oa) * (2.0 / 3.0)],
+                path: FramePath::default(),
             };
             (GKind::Leaf(Box::new(leaf)), Vec::new())
         }
@@ -220,9 +468,39 @@ fn build(pair: &Pair) -> Result<GNode, BlobMorphError> {
         Pair::Difference { a, b, left, right, .. } => {
             (GKind::Difference(*a, *b), vec![build(left)?, build(right)?])
         }
-        Pair::Warp { a, b, child, .. } => (GKind::Warp(*a, *b), vec![build(child)?]),
+        Pair::Warp { a, b, child, .. } => (GKind::Warp(*a, *b, None), vec![build(child)?]),
     };
     Ok(GNode { kind, speed: Speed::default(), origin, children })
+}
+
+/// The pairs the correspondence made under the commutative nodes of
+/// `pair` (children matched by links or the heuristic), as links: given
+/// back to [`decompose`] on trees of the same structure they make the same
+/// choices.
+fn links_of(pair: &Pair) -> Vec<Link> {
+    fn walk<'a>(pair: &'a Pair, seen: &mut HashSet<(&'a NodePath, &'a NodePath)>, out: &mut Vec<Link>) {
+        match pair {
+            Pair::Leaf { .. } => {}
+            Pair::Nary { children, .. } => {
+                for c in children {
+                    if let Origin { a: Some(a), b: Some(b) } = c.origin()
+                        && seen.insert((a, b))
+                    {
+                        out.push(Link { a: a.clone(), b: b.clone() });
+                    }
+                    walk(c, seen, out);
+                }
+            }
+            Pair::Difference { left, right, .. } => {
+                walk(left, seen, out);
+                walk(right, seen, out);
+            }
+            Pair::Warp { child, .. } => walk(child, seen, out),
+        }
+    }
+    let mut out = Vec::new();
+    walk(pair, &mut HashSet::new(), &mut out);
+    out
 }
 
 /// Applies `f` to every node whose origin `(a, b)` is a key of `wanted`,
@@ -271,13 +549,7 @@ impl GLeaf {
             let inv = lerp(1.0 / a.p, 1.0 / b.p, s);
             if inv <= 0.0 { f32::INFINITY } else { 1.0 / inv }
         };
-        let mut parts = self.frame_a.lerp(&self.frame_b, s);
-        let u = 1.0 - s;
-        let [h1, h2] = self.handles;
-        parts.translation = self.frame_a.translation * (u * u * u)
-            + h1 * (3.0 * u * u * s)
-            + h2 * (3.0 * u * s * s)
-            + self.frame_b.translation * (s * s * s);
+        let parts = self.path.at(&self.frame_a, &self.frame_b, s);
         Primitive {
             skeleton: Skeleton::Generic(self.skeleton.at(s)),
             kernel: a.kernel.lerp(&b.kernel, s),
@@ -288,11 +560,25 @@ impl GLeaf {
 }
 
 impl GNode {
-    fn at(&self, t: f32) -> Node {
+    /// The node at `t`. With `fixed`, a pair of commutative operators
+    /// outside the super-elliptic family is instantiated as the equivalent
+    /// blend of the two scaled operators, `(1 − s) N_A + s N_B` (§4.2
+    /// scaling nodes), even at `s ∈ {0, 1}`: the same value as the mix node,
+    /// with a structure that does not change with `t` (what a further
+    /// correspondence, [`BlobMorph::bezier`], needs).
+    fn at(&self, t: f32, fixed: bool) -> Node {
         let s = self.speed.at(t);
-        let kids = || self.children.iter().map(|c| c.at(t)).collect::<Vec<Node>>();
+        let kids = || self.children.iter().map(|c| c.at(t, fixed)).collect::<Vec<Node>>();
         match &self.kind {
             GKind::Leaf(leaf) => Node::Primitive(leaf.at(s)),
+            GKind::Nary(a, b)
+                if fixed && a != b && (ricci_inverse(*a).is_none() || ricci_inverse(*b).is_none()) =>
+            {
+                let children = kids();
+                let from = Node::Nary { op: *a, children: children.clone() }.scaled(1.0 - s);
+                let to = Node::Nary { op: *b, children }.scaled(s);
+                Node::Nary { op: NaryOp::Blend, children: vec![from, to] }
+            }
             GKind::Nary(a, b) => {
                 let op = if s <= 0.0 || a == b {
                     Some(*a)
@@ -315,11 +601,13 @@ impl GNode {
                 let left = k.pop().expect("two children");
                 Node::difference(left, right, lerp(*a, *b, s))
             }
-            GKind::Warp(a, b) => {
+            GKind::Warp(a, b, keyed) => {
                 let w = if s <= 0.0 {
                     *a
                 } else if s >= 1.0 {
                     *b
+                } else if let Some(k) = keyed {
+                    Warp::Affine(k.path.at(&k.a, &k.b, s).to_affine())
                 } else {
                     a.lerp(b, s).unwrap_or(*a)
                 };
@@ -338,25 +626,24 @@ impl GenericTree {
     /// bad speed curves and trajectories (handles must be finite with
     /// magnitudes ≤ [`MAX_MAGNITUDE`]).
     pub fn new(a: &BlobTree, b: &BlobTree, spec: &MorphSpec) -> Result<Self, BlobMorphError> {
-        let corr = Correspondence { links: spec.links.clone(), heuristic: spec.heuristic };
+        let corr = Correspondence {
+            links: spec.links.clone(),
+            heuristic: spec.heuristic,
+            phantoms: spec.phantoms.clone(),
+        };
         let pair = decompose(a.root(), a.threshold(), b.root(), b.threshold(), &corr)?;
-        let mut root = build(&pair)?;
+        let mut root = build(&pair, spec.coplanar_frames)?;
         // Later curves for the same pair override earlier ones.
         let mut speeds = HashMap::new();
         for (k, sc) in spec.speeds.iter().enumerate() {
-            if !sc.speed.valid() {
-                return Err(BlobMorphError::InvalidSpeed {
-                    a: sc.a.clone(),
-                    b: sc.b.clone(),
-                    start: sc.speed.start,
-                    end: sc.speed.end,
-                });
+            if let Some(problem) = sc.speed.problem() {
+                return Err(BlobMorphError::InvalidSpeed { a: sc.a.clone(), b: sc.b.clone(), problem });
             }
             speeds.insert((&sc.a, &sc.b), k);
         }
         let mut matched = vec![false; spec.speeds.len()];
         for_matching(&mut root, &speeds, &mut |k, n| {
-            n.speed = spec.speeds[k].speed;
+            n.speed = spec.speeds[k].speed.clone();
             matched[k] = true;
         });
         if let Some(sc) = spec.speeds.iter().find(|sc| !matched[speeds[&(&sc.a, &sc.b)]]) {
@@ -367,21 +654,38 @@ impl GenericTree {
             });
         }
         let mut trajectories = HashMap::new();
+        let mut paths = Vec::with_capacity(spec.trajectories.len());
         for (k, tr) in spec.trajectories.iter().enumerate() {
-            if let Some(&value) =
-                tr.handles.as_flattened().iter().find(|v| !v.is_finite() || v.abs() > MAX_MAGNITUDE)
-            {
-                return Err(BlobMorphError::InvalidTrajectory { a: tr.a.clone(), b: tr.b.clone(), value });
-            }
+            paths.push(FramePath::new(tr)?);
             trajectories.insert((&tr.a, &tr.b), k);
         }
         let mut matched = vec![false; spec.trajectories.len()];
-        for_matching(&mut root, &trajectories, &mut |k, n| {
-            if let GKind::Leaf(l) = &mut n.kind {
-                l.handles = spec.trajectories[k].handles.map(Vec3::from_array);
+        let mut failed = None;
+        for_matching(&mut root, &trajectories, &mut |k, n| match &mut n.kind {
+            GKind::Leaf(l) => {
+                l.path = paths[k].clone();
                 matched[k] = true;
             }
+            GKind::Warp(Warp::Affine(ma), Warp::Affine(mb), keyed) => {
+                let tr = &spec.trajectories[k];
+                let parts = |m: &Affine3A| {
+                    AffineParts::from_affine(m).map_err(|source| BlobMorphError::Transform {
+                        a: tr.a.clone(),
+                        b: tr.b.clone(),
+                        source,
+                    })
+                };
+                match (parts(ma), parts(mb)) {
+                    (Ok(a), Ok(b)) => *keyed = Some(Box::new(AffinePath { a, b, path: paths[k].clone() })),
+                    (Err(e), _) | (_, Err(e)) => failed = Some(e),
+                }
+                matched[k] = true;
+            }
+            _ => {}
         });
+        if let Some(e) = failed {
+            return Err(e);
+        }
         if let Some(tr) = spec.trajectories.iter().find(|tr| !matched[trajectories[&(&tr.a, &tr.b)]]) {
             return Err(BlobMorphError::UnmatchedPair {
                 what: "trajectory",
@@ -404,7 +708,13 @@ impl GenericTree {
 
     /// The instantiated tree description at `t` (unchecked `t`).
     pub fn node_at(&self, t: f32) -> Node {
-        self.root.at(t)
+        self.root.at(t, false)
+    }
+
+    /// `C(t)` with a structure independent of `t` (mix nodes as blends of
+    /// scaled operators; the same field as [`GenericTree::at`]).
+    fn at_fixed(&self, t: f32) -> Result<BlobTree, BlobMorphError> {
+        Ok(BlobTree::new(self.root.at(t, true), self.threshold_at(t))?)
     }
 
     /// The evaluable BlobTree `C(t)`.
@@ -418,12 +728,53 @@ impl GenericTree {
     }
 }
 
+/// A shape between the source and the target (`isomorph morph --via`): a
+/// key shape the chained morph passes through or a control shape of the
+/// Bézier-like morph ([`ViaMode`]), with the links spec of the pairwise
+/// generic tree that arrives at it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KeyShape {
+    /// The shape.
+    pub shape: BlobTree,
+    /// The animator's controls of the segment from the previous key shape
+    /// (or the source) to this one; node paths `a` name the previous
+    /// shape's nodes, `b` this one's.
+    pub spec: MorphSpec,
+}
+
 /// Settings of [`BlobMorph::new`]: the animator's controls.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct BlobSettings {
-    /// Links, pairing heuristic, speed curves and trajectories (default: the
-    /// nearest-centre heuristic, no links).
+    /// Links, pairing heuristic, speed curves and trajectories of the
+    /// segment that arrives at the target (the whole morph without `via`;
+    /// default: the nearest-centre heuristic, no links).
     pub spec: MorphSpec,
+    /// Key shapes between the source and the target (default none),
+    /// combined as `via_mode` says.
+    pub via: Vec<KeyShape>,
+    /// How the morph uses the key shapes `via` (default: the paper's
+    /// Bézier-like combination).
+    pub via_mode: ViaMode,
+}
+
+/// How a morph through key shapes combines the pairwise generic trees
+/// (`isomorph morph --via-mode`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ViaMode {
+    /// The paper's Bézier-like metamorphosis, "control knots replaced by
+    /// control BlobTrees" (§1, §3): the generic trees of consecutive shapes
+    /// combined by de Casteljau's construction ([`BlobMorph::bezier`]). The
+    /// source and the target are reproduced; the shapes in between are
+    /// control shapes, approached but (as Bézier control points) in general
+    /// not reached.
+    #[default]
+    Bezier,
+    /// The generic trees of consecutive shapes played one after the other
+    /// ([`BlobMorph::through`]): the morph passes through every key shape,
+    /// at evenly spaced times (continuous, with a change of speed at the
+    /// keys). Not in the paper; an interpolating alternative.
+    Chain,
 }
 
 /// The BlobTree metamorphosis as a [`Morph`]: frames are `C(t)` as fields
@@ -442,7 +793,14 @@ pub struct BlobSettings {
 /// ```
 #[derive(Debug, Clone)]
 pub struct BlobMorph {
-    generic: GenericTree,
+    /// The generic trees from each key shape to the next (one without key shapes).
+    segments: Vec<GenericTree>,
+    /// How the segments combine.
+    mode: ViaMode,
+    /// Bézier mode: for each de Casteljau level `r ≥ 2` and each `i`, the
+    /// correspondence (as links) between `P_i^{r−1}` and `P_{i+1}^{r−1}`,
+    /// computed once so the morph is continuous in `t`.
+    levels: Vec<Vec<MorphSpec>>,
     bounds: Aabb,
     report: MorphReport,
 }
@@ -481,16 +839,19 @@ impl BlobMorph {
     ) -> Result<Self, BlobMorphError> {
         let (a, b) = (as_tree(source, Side::Source)?, as_tree(target, Side::Target)?);
         let warnings = isomorph_common::validate_inputs(source, target, control)?;
+        let mut keys = settings.via.clone();
+        keys.push(KeyShape { shape: b.clone(), spec: settings.spec.clone() });
         control.install(|| {
             let mut stages = Stages::start();
             control.progress("correspondence", None, String::new);
             control.check()?;
-            let generic = GenericTree::new(a, b, &settings.spec)?;
+            let segments = Self::segments_of(a, &keys, control)?;
+            let mut morph = Self::combined(segments, settings.via_mode)?;
             stages.lap("correspondence");
-            let bounds = Self::support(&generic, control)?;
+            morph.bounds = morph.support(control)?;
             stages.lap("bounds");
-            let report = Self::report_of(&generic).with_stages(stages).with_warnings(warnings);
-            Ok(Self { generic, bounds, report })
+            morph.report = morph.report.with_stages(stages).with_warnings(warnings);
+            Ok(morph)
         })
     }
 
@@ -501,34 +862,187 @@ impl BlobMorph {
     /// As [`GenericTree::new`].
     pub fn from_trees(a: &BlobTree, b: &BlobTree, spec: &MorphSpec) -> Result<Self, BlobMorphError> {
         let generic = GenericTree::new(a, b, spec)?;
-        let bounds = Self::support(&generic, &Control::new())?;
-        let report = Self::report_of(&generic);
-        Ok(Self { generic, bounds, report })
+        Self::finished(vec![generic], ViaMode::Chain)
     }
 
-    /// The union of the supports of `C(t)` at 33 instants, padded by 5 %
-    /// against motion between samples.
-    fn support(generic: &GenericTree, control: &Control) -> Result<Aabb, BlobMorphError> {
+    /// The morph from `source` through the key shapes `keys` (the last is
+    /// the target), built by combining pairwise generic trees (§1, §3:
+    /// "genericity … enables us to combine several interpolations"): the
+    /// generic tree `C_i` of key `i → i + 1` (under key `i + 1`'s spec)
+    /// runs over `t ∈ [i/n, (i + 1)/n]` for `n` segments, so `C(i/n)` is
+    /// exactly key shape `i` and the shape is continuous in `t`. Each
+    /// segment keeps its own correspondence, speed curves and
+    /// trajectories.
+    ///
+    /// # Errors
+    /// [`isomorph_common::MorphError::BadSetting`] without key shapes;
+    /// [`BlobMorphError::Segment`] wrapping the errors of
+    /// [`GenericTree::new`] for the segment that failed.
+    pub fn through(source: &BlobTree, keys: &[KeyShape]) -> Result<Self, BlobMorphError> {
+        Self::finished(Self::segments_of(source, keys, &Control::new())?, ViaMode::Chain)
+    }
+
+    /// The Bézier-like morph (§1, §3: "combine interpolations together so
+    /// as to define a Bézier-like metamorphosis where control knots are
+    /// replaced by control BlobTree shapes") from `source` with the control
+    /// shapes `controls` (the last is the target).
+    ///
+    /// With the shapes `P_0 = source, P_1, …, P_n`, the generic trees
+    /// `C_i` of `P_i → P_{i+1}` (under `controls[i]`'s spec) are the first
+    /// level of de Casteljau's construction, `P_i^1(t) = C_i(t)`; level `r`
+    /// is the generic tree of the two shapes below it, instantiated at the
+    /// same `t`: `P_i^r(t) = (P_i^{r−1}(t) → P_{i+1}^{r−1}(t))(t)`, and the
+    /// morph is `C(t) = P_0^n(t)`. For convex skeletons and linear
+    /// parameters this is the Bernstein form: the skeleton of a primitive
+    /// matched through all the shapes is `⊕_i B_i^n(t) S_i` (Kaul &
+    /// Rossignac's Bézier Minkowski combination), its intensity, radius,
+    /// stiffness and exponent `Σ_i B_i^n(t) x_i`, the threshold likewise.
+    /// `C(0)` is the source and `C(1)` the target; the inner shapes are
+    /// control shapes, generally not reached.
+    ///
+    /// The correspondence of each level `r ≥ 2` is made once, by the
+    /// nearest-centre heuristic on the shapes at `t = ½`, and kept as links
+    /// for every `t` (instances of a generic tree share one structure, mix
+    /// nodes written as blends of scaled operators), so `C(t)` is
+    /// continuous in `t`.
+    ///
+    /// # Errors
+    /// As [`BlobMorph::through`]; a level's correspondence fails as
+    /// [`GenericTree::new`].
+    pub fn bezier(source: &BlobTree, controls: &[KeyShape]) -> Result<Self, BlobMorphError> {
+        Self::finished(Self::segments_of(source, controls, &Control::new())?, ViaMode::Bezier)
+    }
+
+    /// The morph of `segments` combined as `mode` says, with its bounds and report.
+    fn finished(segments: Vec<GenericTree>, mode: ViaMode) -> Result<Self, BlobMorphError> {
+        let mut morph = Self::combined(segments, mode)?;
+        morph.bounds = morph.support(&Control::new())?;
+        Ok(morph)
+    }
+
+    /// The morph of `segments` combined as `mode` says (Bézier: the
+    /// correspondences of the de Casteljau levels), bounds not yet computed.
+    fn combined(segments: Vec<GenericTree>, mode: ViaMode) -> Result<Self, BlobMorphError> {
+        let mut levels = Vec::new();
+        if mode == ViaMode::Bezier {
+            let mut row = segments.iter().map(|g| g.at_fixed(0.5)).collect::<Result<Vec<_>, _>>()?;
+            while row.len() > 1 {
+                let (mut specs, mut next) = (Vec::new(), Vec::new());
+                for w in row.windows(2) {
+                    let generic = GenericTree::new(&w[0], &w[1], &MorphSpec::default())?;
+                    specs.push(MorphSpec { links: links_of(generic.pair()), ..MorphSpec::default() });
+                    next.push(generic.at_fixed(0.5)?);
+                }
+                levels.push(specs);
+                row = next;
+            }
+        }
+        let report = Self::report_of(&segments, mode);
+        Ok(Self { segments, mode, levels, bounds: Aabb::EMPTY, report })
+    }
+
+    /// The generic tree of every segment `source → keys[0] → keys[1] → …`.
+    fn segments_of(
+        source: &BlobTree,
+        keys: &[KeyShape],
+        control: &Control,
+    ) -> Result<Vec<GenericTree>, BlobMorphError> {
+        if keys.is_empty() {
+            return Err(isomorph_common::MorphError::BadSetting {
+                name: "keys",
+                value: "0".into(),
+                expected: "at least one key shape (the target)".into(),
+            }
+            .into());
+        }
+        let mut from = source;
+        let mut segments = Vec::with_capacity(keys.len());
+        for (index, key) in keys.iter().enumerate() {
+            control.check()?;
+            let segment = GenericTree::new(from, &key.shape, &key.spec)
+                .map_err(|e| BlobMorphError::Segment { index, source: Box::new(e) })?;
+            segments.push(segment);
+            from = &key.shape;
+        }
+        Ok(segments)
+    }
+
+    /// The segment that plays at `t ∈ [0, 1]` and its local time: segment
+    /// `i` covers `[i/n, (i + 1)/n]`, and at a key time `i/n` (computed the
+    /// same way) the local time is exactly 0.
+    fn locate(&self, t: f32) -> (&GenericTree, f32) {
+        let n = self.segments.len();
+        let knot = |i: usize| i as f32 / n as f32;
+        let i = (1..n).rev().find(|&i| t >= knot(i)).unwrap_or(0);
+        let u = ((t - knot(i)) / (knot(i + 1) - knot(i))).clamp(0.0, 1.0);
+        (&self.segments[i], u)
+    }
+
+    /// The Bézier-like `C(t)` by de Casteljau's construction (see
+    /// [`BlobMorph::bezier`]).
+    fn casteljau(&self, t: f32) -> Result<BlobTree, BlobMorphError> {
+        let mut row = self.segments.iter().map(|g| g.at_fixed(t)).collect::<Result<Vec<_>, _>>()?;
+        for specs in &self.levels {
+            row = row
+                .windows(2)
+                .zip(specs)
+                .map(|(w, spec)| GenericTree::new(&w[0], &w[1], spec)?.at_fixed(t))
+                .collect::<Result<_, _>>()?;
+        }
+        Ok(row.pop().expect("one shape is left"))
+    }
+
+    /// `C(t)` for `t ∈ [0, 1]`.
+    fn shape_at(&self, t: f32) -> Result<BlobTree, BlobMorphError> {
+        match self.mode {
+            ViaMode::Bezier if self.segments.len() > 1 => self.casteljau(t),
+            _ => {
+                let (segment, u) = self.locate(t);
+                segment.at(u)
+            }
+        }
+    }
+
+    /// The union of the supports of `C(t)` at 33 instants per segment,
+    /// padded by 5 % against motion between samples.
+    fn support(&self, control: &Control) -> Result<Aabb, BlobMorphError> {
         let mut bounds = Aabb::EMPTY;
-        for i in 0..BOUND_SAMPLES {
-            let t = i as f32 / (BOUND_SAMPLES - 1) as f32;
+        let samples = BOUND_SAMPLES * self.segments.len() - (self.segments.len() - 1);
+        for i in 0..samples {
+            let t = i as f32 / (samples - 1) as f32;
             control.progress("bounds", Some(t), String::new);
             control.check()?;
-            bounds = bounds.union(&generic.at(t)?.support());
+            bounds = bounds.union(&self.shape_at(t)?.support());
         }
         Ok(bounds.padded(0.05))
     }
 
-    fn report_of(generic: &GenericTree) -> MorphReport {
-        let leaves = generic.pair().leaf_count();
-        MorphReport::new("blobtree", Outcome::Direct)
+    fn report_of(segments: &[GenericTree], mode: ViaMode) -> MorphReport {
+        let leaves: usize = segments.iter().map(|g| g.pair().leaf_count()).sum();
+        let report = MorphReport::new("blobtree", Outcome::Direct)
             .with_memory(leaves * size_of::<GLeaf>(), None)
-            .with_detail("generic leaves", leaves)
+            .with_detail("generic leaves", leaves);
+        if segments.len() == 1 {
+            return report;
+        }
+        let mode = match mode {
+            ViaMode::Bezier => "bezier",
+            ViaMode::Chain => "chain",
+        };
+        report.with_detail("key shapes", segments.len() + 1).with_detail("via mode", mode)
     }
 
-    /// The generic tree.
+    /// The generic tree of the first segment (of the whole morph when it
+    /// has no key shapes in between).
     pub fn generic(&self) -> &GenericTree {
-        &self.generic
+        &self.segments[0]
+    }
+
+    /// The pairwise generic trees, from each key (or control) shape to the
+    /// next: the segments of a chained morph, the first de Casteljau level
+    /// of a Bézier-like one.
+    pub fn segments(&self) -> &[GenericTree] {
+        &self.segments
     }
 }
 
@@ -541,10 +1055,11 @@ impl Morph for BlobMorph {
     }
 
     fn frame(&self, t: f32) -> Result<Frame<BlobTree>, BlobMorphError> {
-        Ok(Frame { field: self.generic.at(t)?, iso: 0.0, transform: Affine3A::IDENTITY })
+        let field = self.shape_at(isomorph_common::check_time(t)?)?;
+        Ok(Frame { field, iso: 0.0, transform: Affine3A::IDENTITY })
     }
 
-    /// The union of the supports of `C(t)` at 33 instants, padded by 5 %.
+    /// The union of the supports of `C(t)` at 33 instants per segment, padded by 5 %.
     fn field_bounds(&self) -> Aabb {
         self.bounds
     }
@@ -562,8 +1077,10 @@ impl Morph for BlobMorph {
 mod tests {
     use super::*;
     use crate::testutil;
+    use crate::{Kernel, Polytope};
     use isomorph_common::Field3;
     use proptest::prelude::*;
+    use std::f32::consts::FRAC_PI_2;
 
     proptest! {
         #![proptest_config(ProptestConfig { cases: 32, ..ProptestConfig::default() })]
@@ -582,6 +1099,327 @@ mod tests {
                 prop_assert!(mid.gradient(p).is_finite());
             }
         }
+
+        /// An in-between of random trees (mix nodes of every operator pair,
+        /// Minkowski skeletons of every dimension) saved as a scene loads back
+        /// into the same field.
+        #[test]
+        fn random_in_betweens_reload_to_the_same_field(a in testutil::tree(), b in testutil::tree(), t in 0.05f32..0.95) {
+            let (ta, tb) = (BlobTree::new(a, 0.5).unwrap(), BlobTree::new(b, 0.4).unwrap());
+            let frame = GenericTree::new(&ta, &tb, &MorphSpec::default()).unwrap().at(t).unwrap();
+            // (An in-between may have no inside; a scene file must have one.)
+            prop_assume!(frame.root().peak_bound() > frame.threshold());
+            let text = frame.to_ron().unwrap();
+            let again = BlobTree::from_ron(&text).unwrap();
+            for p in testutil::points() {
+                let (v, w) = (frame.value(p), again.value(p));
+                prop_assert!((v - w).abs() <= 1e-6 * (1.0 + v.abs()), "at {}: {} vs {}\n{}", p, v, w, text);
+            }
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 8, ..ProptestConfig::default() })]
+
+        /// The Bézier-like morph through a random control tree (mix nodes of
+        /// every operator pair written as blends of scaled operators at the
+        /// higher level) starts at the source and ends at the target; its
+        /// in-betweens are finite.
+        #[test]
+        fn bezier_endpoints_reproduce_random_trees(a in testutil::tree(), b in testutil::tree(), c in testutil::tree()) {
+            let (ta, tb, tc) =
+                (BlobTree::new(a, 0.5).unwrap(), BlobTree::new(b, 0.4).unwrap(), BlobTree::new(c, 0.45).unwrap());
+            let key = |t: &BlobTree| KeyShape { shape: t.clone(), spec: MorphSpec::default() };
+            let m = BlobMorph::bezier(&ta, &[key(&tb), key(&tc)]).unwrap();
+            let (c0, c1, mid) = (m.frame(0.0).unwrap().field, m.frame(1.0).unwrap().field, m.frame(0.37).unwrap().field);
+            for p in testutil::points() {
+                prop_assert!((c0.value(p) - ta.value(p)).abs() < 1e-5 * (1.0 + ta.value(p).abs()), "C(0) at {}", p);
+                prop_assert!((c1.value(p) - tc.value(p)).abs() < 1e-5 * (1.0 + tc.value(p).abs()), "C(1) at {}", p);
+                prop_assert!(mid.value(p).is_finite());
+            }
+        }
+    }
+
+    /// §1 "genericity": `C(t)` saved as a scene file at any `t` loads back
+    /// into the same field (mix nodes, Minkowski skeletons, interpolated
+    /// warps, frames and thresholds included), for every built-in morph.
+    #[test]
+    fn intermediate_shapes_save_and_reload_to_the_same_field() {
+        for name in crate::scenes::DEMOS {
+            let (a, b, spec) = crate::scenes::demo(name).unwrap();
+            let g = GenericTree::new(&a, &b, &spec).unwrap();
+            let support = g.at(0.5).unwrap().support();
+            for t in [0.0, 0.1, 0.37, 0.5, 0.81, 1.0] {
+                let frame = g.at(t).unwrap();
+                let ron = BlobTree::from_ron(&frame.to_ron().unwrap()).unwrap();
+                let json = BlobTree::from_json(&frame.to_json().unwrap()).unwrap();
+                assert_eq!(ron.threshold(), frame.threshold());
+                let mut worst = 0.0f32;
+                for i in 0..2000 {
+                    let u = Vec3::new(
+                        (i as f32 * 0.377).sin(),
+                        (i as f32 * 0.613).cos(),
+                        (i as f32 * 0.231).sin(),
+                    ) * 0.5
+                        + 0.5;
+                    let p = support.min + (support.max - support.min) * u;
+                    let v = frame.value(p);
+                    worst = worst.max((ron.value(p) - v).abs()).max((json.value(p) - v).abs());
+                }
+                assert!(worst <= 1e-6, "{name} at t = {t}: reloaded field differs by {worst}");
+            }
+        }
+    }
+
+    /// The Bézier-like morph through control shapes (§1, §3) against the
+    /// Bernstein form computed here from the control primitives alone:
+    /// skeleton `⊕ B_i^n(t) S_i` (the hull of the weighted vertex sums),
+    /// intensity, radius, stiffness and threshold `Σ B_i^n(t) x_i`; for
+    /// three and four control shapes. The ends are the source and the
+    /// target; an inner control shape is approached, not reached.
+    #[test]
+    fn bezier_morph_is_the_bernstein_combination_of_its_control_primitives() {
+        let shape = |skeleton: Skeleton, kernel: Kernel, at: Vec3, threshold: f32| {
+            let p = Primitive::new(skeleton, kernel).with_frame(Affine3A::from_translation(at));
+            BlobTree::new(Node::Primitive(p), threshold).unwrap()
+        };
+        let controls = [
+            (
+                Skeleton::Segment(Vec3::new(-0.3, 0.0, 0.0), Vec3::new(0.3, 0.0, 0.0)),
+                Kernel::new(1.0, 0.8, 0.5),
+                Vec3::ZERO,
+                0.5,
+            ),
+            (
+                Skeleton::Polygon(vec![
+                    Vec3::new(-0.2, -0.1, 0.0),
+                    Vec3::new(0.25, -0.1, 0.0),
+                    Vec3::new(0.0, 0.3, 0.0),
+                ]),
+                Kernel::new(1.4, 0.6, 1.0),
+                Vec3::new(0.1, 0.5, 0.0),
+                0.4,
+            ),
+            (
+                Skeleton::cuboid(Vec3::new(0.1, 0.2, 0.15)),
+                Kernel::new(0.9, 0.7, 0.2),
+                Vec3::new(0.2, -0.1, 0.3),
+                0.55,
+            ),
+            (Skeleton::Point(Vec3::ZERO), Kernel::new(1.2, 0.9, 0.0), Vec3::new(-0.3, 0.1, -0.2), 0.45),
+        ];
+        let shapes: Vec<BlobTree> =
+            controls.iter().map(|(s, k, at, th)| shape(s.clone(), *k, *at, *th)).collect();
+        let points: Vec<Vec3> = (0..400)
+            .map(|i| {
+                Vec3::new((i as f32 * 0.37).sin(), (i as f32 * 0.61).cos(), (i as f32 * 0.23).sin()) * 0.9
+            })
+            .collect();
+        for count in [3, 4] {
+            let n = count - 1;
+            let keys: Vec<KeyShape> = shapes[1..count]
+                .iter()
+                .map(|s| KeyShape { shape: s.clone(), spec: MorphSpec::default() })
+                .collect();
+            let m = BlobMorph::bezier(&shapes[0], &keys).unwrap();
+            let binomial = |i: usize| (1..=i).fold(1.0f32, |b, j| b * (n + 1 - j) as f32 / j as f32);
+            for t in [0.0f32, 0.2, 0.5, 0.77, 1.0] {
+                let w: Vec<f32> = (0..count)
+                    .map(|i| binomial(i) * t.powi(i as i32) * (1.0 - t).powi((n - i) as i32))
+                    .collect();
+                // Every weighted sum of one vertex (in world coordinates) per control skeleton.
+                let mut sums = vec![Vec3::ZERO];
+                for (i, (s, _, at, _)) in controls[..count].iter().enumerate() {
+                    let (verts, wi) = (s.vertices(), w[i]);
+                    sums =
+                        sums.iter().flat_map(|&p| verts.iter().map(move |&v| p + wi * (v + *at))).collect();
+                }
+                let blend = |f: &dyn Fn(&Kernel) -> f32| -> f32 {
+                    controls[..count].iter().zip(&w).map(|(c, wi)| wi * f(&c.1)).sum()
+                };
+                let kernel =
+                    Kernel::new(blend(&|k| k.intensity), blend(&|k| k.radius), blend(&|k| k.stiffness));
+                let threshold: f32 = controls[..count].iter().zip(&w).map(|(c, wi)| wi * c.3).sum();
+                let expected = BlobTree::new(
+                    Node::Primitive(Primitive::new(Skeleton::Generic(Polytope::hull(&sums)), kernel)),
+                    threshold,
+                )
+                .unwrap();
+                let frame = m.frame(t).unwrap().field;
+                assert!((frame.threshold() - threshold).abs() < 1e-6, "{count} shapes, t = {t}");
+                for &p in &points {
+                    let (v, e) = (frame.value(p), expected.value(p));
+                    assert!((v - e).abs() < 1e-5, "{count} shapes, t = {t}, at {p}: {v} vs Bernstein {e}");
+                }
+                if t == 0.0 || t == 1.0 {
+                    let end = if t == 0.0 { &shapes[0] } else { &shapes[n] };
+                    for &p in &points {
+                        assert!((frame.value(p) - end.value(p)).abs() < 1e-6, "{count} shapes, end t = {t}");
+                    }
+                }
+            }
+            // The first control shape is not reached at its chained time 1/n.
+            let near = m.frame(1.0 / n as f32).unwrap().field;
+            let gap =
+                points.iter().map(|&p| (near.value(p) - shapes[1].value(p)).abs()).fold(0.0f32, f32::max);
+            assert!(gap > 0.05, "{count} shapes: the control shape is interpolated ({gap})");
+        }
+    }
+
+    /// The Bézier-like morph of built-in scenes (rook, queen as the control
+    /// shape, bear): the source and target at the ends, the level-2 generic
+    /// tree of the two pairwise instances at `t = ½`, saved in-betweens
+    /// reload to the same field, and `C(t)` is continuous in `t`.
+    #[test]
+    fn bezier_morph_of_scenes_reproduces_the_ends_and_is_continuous() {
+        use crate::scenes;
+        let (source, control, target) =
+            (scenes::load("rook").unwrap(), scenes::load("queen").unwrap(), scenes::load("bear").unwrap());
+        let keys = [
+            KeyShape { shape: control.clone(), spec: scenes::demo_spec("rook", "queen").unwrap() },
+            KeyShape { shape: target.clone(), spec: MorphSpec::default() },
+        ];
+        let m = BlobMorph::bezier(&source, &keys).unwrap();
+        let chain = BlobMorph::through(&source, &keys).unwrap();
+        let bounds = m.world_bounds();
+        let points: Vec<Vec3> = (0..600)
+            .map(|i| {
+                let u = Vec3::new((i as f32 * 0.37).sin(), (i as f32 * 0.61).cos(), (i as f32 * 0.23).sin());
+                bounds.min + (bounds.max - bounds.min) * (u * 0.5 + 0.5)
+            })
+            .collect();
+        let gap = |x: &BlobTree, y: &BlobTree| {
+            points.iter().map(|&p| (x.value(p) - y.value(p)).abs()).fold(0.0, f32::max)
+        };
+        assert!(gap(&m.frame(0.0).unwrap().field, &source) < 1e-6);
+        assert!(gap(&m.frame(1.0).unwrap().field, &target) < 1e-6);
+        // De Casteljau at t = ½: the generic tree of the instances C_01(½), C_12(½).
+        let half = |g: &GenericTree| g.at(0.5).unwrap();
+        let level2 =
+            GenericTree::new(&half(&m.segments()[0]), &half(&m.segments()[1]), &MorphSpec::default())
+                .unwrap()
+                .at(0.5)
+                .unwrap();
+        let mid = m.frame(0.5).unwrap().field;
+        assert!(gap(&mid, &level2) < 1e-6, "C(½) is not the de Casteljau combination");
+        assert!(gap(&mid, &control) > 0.05, "the control shape is interpolated");
+        assert!(gap(&mid, &chain.frame(0.5).unwrap().field) > 0.05, "the same as the chained morph");
+        for t in [0.13, 0.5, 0.81] {
+            let frame = m.frame(t).unwrap().field;
+            let again = BlobTree::from_ron(&frame.to_ron().unwrap()).unwrap();
+            assert!(gap(&frame, &again) <= 1e-6, "saved in-between at t = {t}");
+        }
+        for k in 0..=10 {
+            let t = (k as f32 / 10.0).min(1.0 - 1e-3);
+            let (x, y) = (m.frame(t).unwrap().field, m.frame(t + 1e-3).unwrap().field);
+            assert!(gap(&x, &y) < 2e-2, "jump between t = {t} and {}: {}", t + 1e-3, gap(&x, &y));
+        }
+        assert!(
+            matches!(m.report().details.get("via mode"), Some(isomorph_common::Value::Text(s)) if s == "bezier")
+        );
+    }
+
+    /// A morph through key shapes (`--via`) is each key shape exactly at
+    /// its time `i/n`, the source and target at the ends, and continuous
+    /// across the keys; a failing segment is named.
+    #[test]
+    fn key_shapes_are_reproduced_at_their_times() {
+        use crate::scenes;
+        let key = |name: &str, spec: MorphSpec| KeyShape { shape: scenes::load(name).unwrap(), spec };
+        let spec = |a: &str, b: &str| scenes::demo_spec(a, b).unwrap_or_default();
+        let source = scenes::load("rook").unwrap();
+        let keys = [
+            key("queen", spec("rook", "queen")),
+            key("bear", MorphSpec::default()),
+            key("rounded_cube", MorphSpec::default()),
+        ];
+        let m = BlobMorph::through(&source, &keys).unwrap();
+        assert_eq!(m.segments().len(), 3);
+        let shapes = [&source, &keys[0].shape, &keys[1].shape, &keys[2].shape];
+        let points: Vec<Vec3> = (0..500)
+            .map(|i| Vec3::new((i as f32 * 0.37).sin(), (i as f32 * 0.61).cos(), (i as f32 * 0.23).sin()))
+            .collect();
+        for (i, shape) in shapes.iter().enumerate() {
+            let t = i as f32 / 3.0;
+            let frame = m.frame(t).unwrap().field;
+            assert_eq!(frame.threshold(), shape.threshold());
+            for &p in &points {
+                assert!((frame.value(p) - shape.value(p)).abs() < 1e-6, "key {i} at t = {t}, {p}");
+            }
+        }
+        // Continuous across a key: just before and after t = 1/3 both
+        // approach the queen.
+        let (before, after) =
+            (m.frame(1.0 / 3.0 - 1e-4).unwrap().field, m.frame(1.0 / 3.0 + 1e-4).unwrap().field);
+        for &p in &points {
+            assert!((before.value(p) - after.value(p)).abs() < 1e-2, "at {p}");
+        }
+        // The same morph through the Morph constructor and the settings' via.
+        let settings =
+            BlobSettings { spec: MorphSpec::default(), via: keys[..2].to_vec(), via_mode: ViaMode::Chain };
+        let solid = |t: &BlobTree| Solid::implicit(std::sync::Arc::new(t.clone())).unwrap();
+        let boxed =
+            BlobMorph::new(&solid(&source), &solid(&keys[2].shape), &settings, &Control::new()).unwrap();
+        assert!(matches!(boxed.report().details.get("key shapes"), Some(isomorph_common::Value::Int(4))));
+        for &p in points.iter().step_by(10) {
+            assert_eq!(boxed.frame(0.2).unwrap().field.value(p), m.frame(0.2).unwrap().field.value(p));
+        }
+        assert!(m.world_bounds().contains(Vec3::ZERO));
+        // A bad link in the second segment is named by its segment.
+        let bad = MorphSpec {
+            links: vec![Link { a: NodePath(vec![7]), b: NodePath::root() }],
+            ..MorphSpec::default()
+        };
+        let keys = [key("queen", MorphSpec::default()), key("bear", bad)];
+        let e = BlobMorph::through(&source, &keys).unwrap_err();
+        assert!(matches!(e, BlobMorphError::Segment { index: 1, .. }), "{e:?}");
+        assert_eq!(e.to_string(), "segment 1 of the morph (key shape 1 → 2)");
+        assert!(BlobMorph::through(&source, &[]).is_err());
+    }
+
+    /// Fig. 17: the animator places and sizes the phantom the rounded cube
+    /// gets for the pierced sphere's boxes; the ends stay the inputs, the
+    /// in-betweens change, and bad phantom parameters are named errors.
+    #[test]
+    fn phantom_parameters_place_and_size_the_phantom() {
+        let (a, b, _) = crate::scenes::demo("cube_sphere").unwrap();
+        let spec = MorphSpec::from_ron(
+            "(phantoms: [(target: [1], position: (0.2, 0, 0), radius: 0.3, stiffness: 2)])",
+        )
+        .unwrap();
+        let g = GenericTree::new(&a, &b, &spec).unwrap();
+        let plain = GenericTree::new(&a, &b, &MorphSpec::default()).unwrap();
+        // A' = cube − phantom(boxes): the phantom boxes are moved by 0.2 along x and resized.
+        let Node::Difference { right, .. } = g.pair().side(crate::Side::Source) else {
+            panic!("a difference")
+        };
+        let Node::Difference { right: before, .. } = plain.pair().side(crate::Side::Source) else { panic!() };
+        assert_eq!(right.leaf_count(), 3);
+        assert!((right.centre() - before.centre() - Vec3::new(0.2, 0.0, 0.0)).length() < 1e-6);
+        for leaf in right.children() {
+            let Node::Primitive(p) = leaf else { panic!("{leaf:?}") };
+            assert_eq!((p.kernel.intensity, p.kernel.radius, p.kernel.stiffness), (0.0, 0.3, 2.0));
+        }
+        let points = testutil::points();
+        let (c0, c1) = (g.at(0.0).unwrap(), g.at(1.0).unwrap());
+        for &p in &points {
+            assert!((c0.value(p) - a.value(p)).abs() < 1e-6, "C(0) at {p}");
+            assert!((c1.value(p) - b.value(p)).abs() < 1e-6, "C(1) at {p}");
+        }
+        let (mid, mid_plain) = (g.at(0.5).unwrap(), plain.at(0.5).unwrap());
+        let changed = points.iter().filter(|&&p| (mid.value(p) - mid_plain.value(p)).abs() > 1e-3).count();
+        assert!(changed > 0, "the phantom changes the in-betweens");
+        let error = |text: &str| GenericTree::new(&a, &b, &MorphSpec::from_ron(text).unwrap()).unwrap_err();
+        assert_eq!(
+            error("(phantoms: [(target: [], radius: 0.3)])").to_string(),
+            "phantom for target node root: the node is matched, it has no phantom"
+        );
+        assert!(matches!(error("(phantoms: [(target: [5])])"), BlobMorphError::NoSuchNode { .. }));
+        assert!(error("(phantoms: [(target: [1], radius: -1)])").to_string().contains("`radius` must be"));
+        assert!(error("(phantoms: [(source: [], target: [1])])").to_string().contains("exactly one"));
+        assert!(
+            error("(phantoms: [(target: [1], position: (0, NaN, 0))])").to_string().contains("`position`")
+        );
     }
 
     #[test]
@@ -659,7 +1497,7 @@ mod tests {
             speeds: vec![SpeedCurve {
                 a: NodePath::root(),
                 b: NodePath::root(),
-                speed: Speed { start: 0.5, end: 1.0, smooth: false },
+                speed: Speed { start: 0.5, end: 1.0, ..Speed::default() },
             }],
             ..MorphSpec::default()
         };
@@ -667,6 +1505,163 @@ mod tests {
         // Nothing moves before t = 0.5; halfway through the window the point is at x = 0.5.
         assert_eq!(g.at(0.4).unwrap().potential(Vec3::ZERO), 1.0);
         assert!((g.at(0.75).unwrap().potential(Vec3::new(0.5, 0.0, 0.0)) - 1.0).abs() < 1e-6);
+    }
+
+    /// Free-form speed curves pass through their points, never decrease,
+    /// stay in `[0, 1]`, are continuous, and drive a node; bad points are refused.
+    #[test]
+    fn free_form_speed_curves_are_monotone_and_interpolate() {
+        let curve =
+            Speed { points: vec![[0.3, 0.05], [0.5, 0.1], [0.6, 0.7], [0.8, 0.7]], ..Speed::default() };
+        assert!(curve.problem().is_none());
+        for [u, s] in &curve.points {
+            assert!((curve.at(*u) - s).abs() < 1e-6, "s({u}) = {} ≠ {s}", curve.at(*u));
+        }
+        assert_eq!((curve.at(0.0), curve.at(1.0)), (0.0, 1.0));
+        let mut last = 0.0;
+        for k in 0..=2000 {
+            let s = curve.at(k as f32 / 2000.0);
+            assert!((last..=1.0).contains(&s), "at {}: {s} after {last}", k as f32 / 2000.0);
+            assert!(s - last < 0.01, "a jump at {}", k as f32 / 2000.0);
+            last = s;
+        }
+        // Flat between equal values (no overshoot), inside a start/end window.
+        assert_eq!(curve.at(0.7), 0.7);
+        let windowed = Speed { start: 0.5, end: 1.0, ..curve.clone() };
+        assert_eq!((windowed.at(0.4), windowed.at(0.75)), (0.0, 0.1));
+        for bad in
+            [vec![[0.5, 0.4], [0.4, 0.5]], vec![[0.5, 0.6], [0.6, 0.5]], vec![[0.0, 0.1]], vec![[0.5, 1.5]]]
+        {
+            assert!(Speed { points: bad.clone(), ..Speed::default() }.problem().is_some(), "{bad:?}");
+        }
+        assert!(Speed { smooth: true, ..curve.clone() }.problem().is_some());
+        // Through a generic tree: the point is at x = 0.1 when t = 0.5.
+        let a = BlobTree::from_ron(r#"(root: (kind: "point", vertices: [(0,0,0)], radius: 1))"#).unwrap();
+        let b = BlobTree::from_ron(r#"(root: (kind: "point", vertices: [(1,0,0)], radius: 1))"#).unwrap();
+        let spec = MorphSpec::from_ron("(speeds: [(a: [], b: [], speed: (points: [(0.5, 0.1)]))])").unwrap();
+        let g = GenericTree::new(&a, &b, &spec).unwrap();
+        assert!((g.at(0.5).unwrap().potential(Vec3::new(0.1, 0.0, 0.0)) - 1.0).abs() < 1e-6);
+        let bad =
+            MorphSpec::from_ron("(speeds: [(a: [], b: [], speed: (points: [(0.5, 0.9), (0.6, 0.2)]))])")
+                .unwrap();
+        let e = GenericTree::new(&a, &b, &bad).unwrap_err().to_string();
+        assert!(e.starts_with("speed curve for root ↔ root: points (u, s) need"), "{e}");
+    }
+
+    /// Key-framed trajectories: a leaf's frame and an affine node's map pass
+    /// through the key positions and orientations at their local times,
+    /// move continuously, keep the ends; malformed keys are refused.
+    #[test]
+    fn key_framed_trajectories_pass_through_their_keys() {
+        let seg = |at: &str| {
+            BlobTree::from_ron(&format!(
+                r#"(root: (kind: "segment", vertices: [(0,0,0), (1,0,0)], radius: 0.5, frame: (translate: {at})))"#
+            ))
+            .unwrap()
+        };
+        let (a, b) = (seg("(0, 0, 0)"), seg("(2, 0, 0)"));
+        let spec = MorphSpec::from_ron(
+            "(trajectories: [(a: [], b: [], keys: [
+                (s: 0.25, position: (0, 1, 0)),
+                (s: 0.5, position: (1, 1, 0), rotate: (axis: (0, 0, 1), degrees: 90)),
+                (s: 0.75, position: (2, 1, 0)),
+            ])])",
+        )
+        .unwrap();
+        let g = GenericTree::new(&a, &b, &spec).unwrap();
+        let frame_at = |t: f32| {
+            let Node::Primitive(p) = g.node_at(t) else { panic!("a leaf") };
+            p.frame
+        };
+        assert!(frame_at(0.25).translation.abs_diff_eq(glam::Vec3A::new(0.0, 1.0, 0.0), 1e-6));
+        let mid = frame_at(0.5);
+        assert!(
+            mid.abs_diff_eq(
+                Affine3A::from_rotation_translation(
+                    Quat::from_rotation_z(FRAC_PI_2),
+                    Vec3::new(1.0, 1.0, 0.0)
+                ),
+                1e-5
+            ),
+            "{mid:?}"
+        );
+        // The segment's end (1, 0, 0) is carried to (1, 2, 0): the field's maximum is there.
+        assert!((g.at(0.5).unwrap().potential(Vec3::new(1.0, 2.0, 0.0)) - 1.0).abs() < 1e-5);
+        assert!(frame_at(0.75).translation.abs_diff_eq(glam::Vec3A::new(2.0, 1.0, 0.0), 1e-6));
+        for k in 0..200 {
+            let (t0, t1) = (k as f32 / 200.0, (k + 1) as f32 / 200.0);
+            let step = (frame_at(t1).translation - frame_at(t0).translation).length();
+            assert!(step < 0.05, "a jump of {step} at t = {t0}");
+        }
+        for p in testutil::points() {
+            assert!((g.at(0.0).unwrap().value(p) - a.value(p)).abs() < 1e-6);
+            assert!((g.at(1.0).unwrap().value(p) - b.value(p)).abs() < 1e-6);
+        }
+        // An affine node's map follows its keys too.
+        let placed = |x: f32| {
+            BlobTree::from_ron(&format!(
+                r#"(root: (kind: "affine", frame: (translate: ({x}, 0, 0)), children: [(kind: "point", vertices: [(0,0,0)], radius: 1)]))"#
+            ))
+            .unwrap()
+        };
+        let spec =
+            MorphSpec::from_ron("(trajectories: [(a: [], b: [], keys: [(s: 0.5, position: (0.5, 1, 0))])])")
+                .unwrap();
+        let g = GenericTree::new(&placed(0.0), &placed(1.0), &spec).unwrap();
+        assert!((g.at(0.5).unwrap().potential(Vec3::new(0.5, 1.0, 0.0)) - 1.0).abs() < 1e-5);
+        // Malformed keys.
+        let error = |text: &str| {
+            GenericTree::new(&a, &b, &MorphSpec::from_ron(text).unwrap()).unwrap_err().to_string()
+        };
+        assert!(
+            error("(trajectories: [(a: [], b: [], keys: [(s: 0.5), (s: 0.4)])])")
+                .contains("increase strictly")
+        );
+        assert!(error("(trajectories: [(a: [], b: [], keys: [(s: 1.0)])])").contains("increase strictly"));
+        assert!(
+            error("(trajectories: [(a: [], b: [], handles: ((0,0,0), (1,0,0)), keys: [(s: 0.5, position: (0,0,0))])])")
+                .contains("not both")
+        );
+        assert!(
+            error(
+                "(trajectories: [(a: [], b: [], keys: [(s: 0.5, rotate: (axis: (0, 0, 0), degrees: 10))])])"
+            )
+            .contains("non-zero axis")
+        );
+    }
+
+    /// Figs. 10–11: with automatic coplanar frames, two skew segments
+    /// interpolate through segments and a segment and a triangle in other
+    /// planes through polygons (without: a parallelogram and a
+    /// polyhedron); the ends are the inputs either way.
+    #[test]
+    fn coplanar_frames_keep_in_between_skeletons_flat() {
+        let scene = |node: &str| BlobTree::from_ron(&format!("(root: {node})")).unwrap();
+        let a = scene(r#"(kind: "segment", vertices: [(-0.5, 0, 0), (0.5, 0, 0)], radius: 0.4)"#);
+        let b = scene(r#"(kind: "segment", vertices: [(0, -0.4, 0.3), (0, 0.4, 0.5)], radius: 0.4)"#);
+        let c = scene(
+            r#"(kind: "polygon", vertices: [(0, 0, -0.4), (0, 0.5, 0.2), (0.1, -0.3, 0.3)], radius: 0.4)"#,
+        );
+        let dimension = |g: &GenericTree| {
+            let Node::Primitive(p) = g.node_at(0.5) else { panic!("a leaf") };
+            p.skeleton.polytope().unwrap().dimension()
+        };
+        let flat = MorphSpec { coplanar_frames: true, ..MorphSpec::default() };
+        for (target, own, coplanar) in [(&b, 2, 1), (&c, 3, 2)] {
+            let plain = GenericTree::new(&a, target, &MorphSpec::default()).unwrap();
+            let g = GenericTree::new(&a, target, &flat).unwrap();
+            assert_eq!((dimension(&plain), dimension(&g)), (own, coplanar));
+            for p in testutil::points() {
+                assert_eq!(g.at(0.0).unwrap().value(p), a.value(p));
+                assert_eq!(g.at(1.0).unwrap().value(p), target.value(p));
+            }
+            // Continuous: no jump from the ends into the coplanar frames.
+            for p in testutil::points() {
+                assert!((g.at(1e-4).unwrap().value(p) - a.value(p)).abs() < 1e-2, "at {p}");
+                assert!((g.at(1.0 - 1e-4).unwrap().value(p) - target.value(p)).abs() < 1e-2, "at {p}");
+            }
+        }
+        assert!(MorphSpec::from_ron("(coplanar_frames: true)").unwrap().coplanar_frames);
     }
 
     #[test]

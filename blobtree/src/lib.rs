@@ -22,51 +22,114 @@
 //! | §2 convex skeletons, L^p distances | [`Skeleton`], [`Polytope`], [`lp_norm`] |
 //! | §2 blend, union (max), intersection (min), difference, super-elliptic blend, warps `f ∘ w⁻¹` | [`Node`], [`NaryOp`], [`Primitive`], [`Warp`], [`BlobTree`] |
 //! | scene files (RON / JSON, below) | [`BlobTree::from_ron`], [`BlobTree::from_json`], [`BlobTree::to_ron`], [`BlobTree::to_json`], [`scenes::load`] |
-//! | §3.1–3.3, §4.1–4.3 correspondence, decomposition, phantoms | [`decompose`], [`Correspondence`], [`Pair`], [`Link`], [`Heuristic`], [`split`] |
+//! | §3.1–3.3, §4.1–4.3 correspondence, decomposition, phantoms | [`decompose`], [`Correspondence`], [`Pair`], [`Link`], [`Heuristic`], [`Phantom`], [`split`] |
+//! | §1, §3 genericity: saved in-betweens, morphs through key shapes | [`BlobTree::to_ron`] of a frame (`mix` nodes), [`BlobMorph::through`], [`KeyShape`]; Bézier-like control shapes: [`BlobMorph::bezier`], [`ViaMode`] |
 //! | §3.4.1 Minkowski-sum skeleton interpolation, generic topology | [`MinkowskiPath`] |
 //! | §3.4.2–3.5, §4.4 generic elements and nodes, frames, speed `s(t)`, `T(t)` | [`GenericTree`], [`BlobMorph`], [`MorphSpec`], [`SpeedCurve`], [`Trajectory`] |
 //! | §5 sequences (cube → pierced sphere, sphere → propeller, rook → queen, bear → bird) | [`scenes`] |
 //!
 //! # Scene files
 //!
-//! A scene is `(threshold: 0.5, root: (...))` in RON, or the same as JSON
-//! (`{"threshold": 0.5, "root": {...}}`); `threshold` is optional (0.5).
-//! Every node is a record with a `kind` and exactly the fields that kind
-//! uses (any other field is an error naming the node):
+//! Examples of every built-in scene and links spec ship in the crate's
+//! `scenes/` folder (`blobtree/scenes/` in the repository: `rook.ron`,
+//! `queen.ron`, `rounded_cube.ron`, `pierced_sphere.ron`, `propeller.ron`,
+//! `bear.ron`, `bird.ron`, `sphere.ron`, `torus.ron`, the rook → queen
+//! links `rook_queen.links.ron`, and `bear_bird.every_feature.links.ron`,
+//! which uses every control); a test keeps them equal to the built-ins.
+//! `isomorph blob --dump NAME [--format ron|json]` prints any built-in
+//! scene or built-in morph's links spec.
 //!
-//! | kind | fields |
+//! A scene is `(threshold: 0.5, root: (...))` in RON, or the same as JSON
+//! (`{"threshold": 0.5, "root": {...}}`). `threshold` is the iso value `T`
+//! (optional, default 0.5; in `(0, 1e6]`): the surface is where the
+//! potential equals `T`, and the field is `potential − T`, positive
+//! inside. Every node is a record with a `kind` and exactly the fields
+//! that kind uses (any other field is an error naming the node). Lengths
+//! and positions are in scene units (the world units of the meshes); angles
+//! in degrees.
+//!
+//! | kind | fields (defaults in parentheses) |
 //! |---|---|
-//! | `point`, `segment`, `polygon`, `polyhedron` | `vertices` (1, 2, 3 to 32 coplanar, 4 to 32), `radius`, optional `intensity` (1), `stiffness` (1), `p` (2; a number ≥ 1 or `"inf"`), `frame` |
-//! | `box` | `half` (half extents) instead of `vertices`; a polyhedron skeleton |
-//! | `blend`, `union`, `intersection` | `children` (≥ 1) |
-//! | `superblend` | `n` (≥ 1), `children` |
-//! | `difference` | `children` (2: left, right), optional `level` (the threshold) |
-//! | `twist`, `taper` | `rate` / `slope`, `children` (1) |
-//! | `bend` | `rate`, optional `centre` (0), `min`, `max`, `children` (1) |
-//! | `affine` | `frame`, `children` (1) |
+//! | `point`, `segment`, `polygon`, `polyhedron` | `vertices`: the skeleton, in the primitive's local frame (1, 2, 3 to 32 coplanar, 4 to 32 spanning 3D; the convex hull is used); `radius`: `R > 0`, the radius of influence (the field is 0 beyond it; an isolated primitive's surface lies `R/2` from its skeleton when `I = 1, T = 0.5`); `intensity`: `I ≥ 0` (1), the field on the skeleton; `stiffness`: `k ≥ 0` (1), Blanc–Schlick's shape parameter; `p`: the L^p exponent of the distance, a number ≥ 1 or `"inf"` (2, Euclidean; measured along the local axes); `frame`: local → world map (identity) |
+//! | `box` | `half` (half extents) instead of `vertices`; a polyhedron skeleton `[-half, half]`; other fields as above |
+//! | `blend` | `children` (≥ 1): the sum of their fields |
+//! | `union`, `intersection` | `children` (≥ 1): their maximum, minimum |
+//! | `superblend` | `n` (≥ 1): `(Σ f_i^n)^(1/n)` (`n = 1` blend, large `n` → union); `children` (≥ 1) |
+//! | `difference` | `children` (2: left minus right); `level` (the scene's threshold): the reference level `c` (see [`Node::Difference`]) |
+//! | `twist` | `rate`: radians per unit of local z, about the z axis; `children` (1) |
+//! | `taper` | `slope`: scale change per unit of z (the scale is clamped at 0.05); `children` (1) |
+//! | `bend` | `rate`: curvature (1 / units) in the y–z plane; `centre` (0), `min`, `max`: the bent range of y; `children` (1) |
+//! | `affine` | `frame`: the map applied to the child (`()` or `{}`: identity); `children` (1) |
+//! | `mix` | a generic tree's time-varying node at one instant (§4.4), as saved in-betweens contain: `from`, `to`: operators (`"blend"`, `"union"`, `"intersection"`, or a number `n ≥ 1`, a super-elliptic blend's order); `s` in `[0, 1]`: the field is `(1 − s)·from(children) + s·to(children)`; `children` (≥ 1) |
 //!
 //! A `frame` is `(translate: (x, y, z), rotate: (axis: (x, y, z), degrees: a), scale: (x, y, z))`
-//! (all optional; applied as translate · rotate · scale) or `(matrix: (...12 numbers...))`,
-//! column-major 3×4. Numbers may be written as integers; in JSON, points
-//! and matrices are arrays. Errors name the node by its path of child
-//! indices (`node root/0: …`):
+//! (all optional; applied as translate · rotate · scale, so a local point
+//! is scaled, rotated, then moved) or `(matrix: (...12 numbers...))`,
+//! column-major 3×4 (the three axes' images, then the translation).
+//! Numbers may be written as integers; in JSON, points and matrices are
+//! arrays; RON accepts `// comments`.
+//!
+//! **Node paths** name a node by the child indices leading to it from the
+//! root: `[]` is the root, `[1, 0]` the first child of the root's second
+//! child (a difference's left child is 0, its right child 1; a warp's child
+//! 0). They count the nodes as written in the file (consecutive `affine`
+//! nodes stay separate nodes). Errors name the node by its path
+//! (`node root/1/0: …`), and links specs use them.
+//!
+//! **Links specs** (`isomorph morph --method blobtree --links FILE`,
+//! [`MorphSpec`]) hold the animator's controls; every field is optional:
+//!
+//! | field | meaning |
+//! |---|---|
+//! | `links: [(a: PATH, b: PATH), …]` | source node `a` corresponds to target node `b` (§3.1); a node with several links is split (§3.2, §4.2); children of linked nodes without a link get phantom partners (§3.3); links must respect the hierarchy (a link's parents are matched) |
+//! | `heuristic: nearest_centre`, `hierarchical` or `all_children` | how children of matched nodes without links are paired (default `nearest_centre`: nearest skeleton centres; `hierarchical`: nearest centres relative to their parents, recursively; `all_children`: every child with every child) ([`Heuristic`]) |
+//! | `speeds: [(a: PATH, b: PATH, speed: (start: 0.2, end: 0.8, smooth: true)), …]` | the speed `s(t)` of the generic node made from `a` and `b` (§4.4): 0 before `start`, 1 after `end`, linear or smooth (`3u² − 2u³`) in between (defaults 0, 1, false); or free-form with `points: [(u, s), …]`, a monotone piecewise cubic through `(0, 0)`, the points and `(1, 1)` over the window ([`Speed`]) |
+//! | `trajectories: [(a: PATH, b: PATH, handles: ((x, y, z), (x, y, z))), …]` | the two inner control points (world units) of the cubic Bézier curve the frame origin of the generic leaf or affine node `a → b` follows (default: uniform straight motion, slerped orientation); or key frames `keys: [(s: 0.5, position: (x, y, z), rotate: (axis: (x, y, z), degrees: a)), …]` at increasing local times `s ∈ (0, 1)`, each with a position and/or an orientation: the origin follows the cubic spline (Catmull–Rom tangents) through the end origins and the key positions, the orientation slerps from key to key ([`Trajectory`], [`FrameKey`]) |
+//! | `coplanar_frames: true` | automatic coplanar frames (§3.4, Figs. 10–11): matched points, segments and polygons are interpolated in local frames where both lie in one plane, so in-between skeletons stay segments or polygons (default `false`) |
+//! | `phantoms: [(target: PATH, position: (x, y, z), radius: R, stiffness: k), …]` | the phantom partner of a node without correspondence (§3.3, Fig. 17; [`Phantom`]): name the node by `source: PATH` or `target: PATH`; its phantom's skeletons are centred at `position` (world units), its primitives get radius `R` and stiffness `k` (each optional; default: the node's own); its intensity stays 0 |
+//!
+//! A full scene and a links spec for it, as in the shipped files:
 //!
 //! ```
-//! use isomorph_blobtree::BlobTree;
+//! use isomorph_blobtree::{BlobMorph, BlobTree, MorphSpec, scenes};
 //! use isomorph_common::Field3;
 //!
-//! let scene = r#"(threshold: 0.5, root: (kind: "blend", children: [
-//!     (kind: "point", vertices: [(0, 0, 0)], radius: 1.0),
-//!     (kind: "segment", vertices: [(0.5, 0, 0), (1, 0, 0)], radius: 0.8, p: "inf"),
+//! let scene = r#"(threshold: 0.5, root: (kind: "union", children: [
+//!     (kind: "blend", children: [                                    // root/0
+//!         (kind: "point", vertices: [(0, 0, 0)], radius: 1.0),       // root/0/0
+//!         (kind: "segment", vertices: [(0.5, 0, 0), (1, 0, 0)], radius: 0.8, p: "inf"),
+//!     ]),
+//!     (kind: "difference", level: 0.5, children: [                  // root/1
+//!         (kind: "twist", rate: 0.5, children: [
+//!             (kind: "box", half: (0.2, 0.2, 0.5), radius: 0.4, intensity: 1.2, stiffness: 0.8,
+//!              frame: (translate: (0, 1, 0), rotate: (axis: (1, 0, 0), degrees: 30)))]),
+//!         (kind: "affine", frame: (scale: (1, 2, 1)), children: [
+//!             (kind: "polygon", vertices: [(0, 0.9, 0.5), (0.2, 0.9, 0.5), (0, 1.1, 0.5)], radius: 0.3)]),
+//!     ]),
 //! ]))"#;
-//! let tree = BlobTree::from_ron(scene)?;
-//! assert!(tree.value(glam::Vec3::ZERO) > 0.0);
+//! let a = BlobTree::from_ron(scene)?;
+//! assert!(a.value(glam::Vec3::ZERO) > 0.0);
+//! // The same scene as JSON, written and read back.
+//! assert_eq!(BlobTree::from_json(&a.to_json()?)?.root(), a.root());
+//! let b = scenes::load("rook")?;
+//! let spec = MorphSpec::from_ron(r#"(
+//!     links: [(a: [0], b: [0]), (a: [1], b: [1])],
+//!     heuristic: nearest_centre,
+//!     speeds: [(a: [1], b: [1], speed: (start: 0.2, end: 0.8, smooth: true))],
+//!     trajectories: [(a: [0, 0], b: [0, 1], handles: ((0, 0, 0.3), (0, 0, 0.6)))],
+//! )"#)?;
+//! let morph = BlobMorph::from_trees(&a, &b, &spec)?;
+//! # let _ = morph;
+//! // A shipped file is a scene like any other.
+//! let rook = BlobTree::from_ron(include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/rook.ron")))?;
+//! assert_eq!(rook.root(), b.root());
+//! // Errors name the node by its path.
 //! let bad = r#"(root: (kind: "blend", children: [(kind: "point", vertices: [(0, 0, 0)], radius: -1)]))"#;
 //! let err = BlobTree::from_ron(bad).unwrap_err();
 //! assert_eq!(err.to_string(), "node root/0: radius of influence must be positive, got -1");
 //! let typo = r#"(root: (kind: "point", vertices: [(0, 0, 0)], radius: 1, stifness: 2))"#;
 //! assert!(BlobTree::from_ron(typo).unwrap_err().to_string().contains("node root: a `point` node has no field `stifness`"));
-//! # Ok::<(), isomorph_blobtree::BlobError>(())
+//! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!
 //! # Choices where the paper leaves details open
@@ -86,9 +149,38 @@
 //!   `α^{1/n}` so their super-elliptic blend equals the original.
 //! - **Unlinked children under an intersection** are linked to the nearest
 //!   child instead of getting a phantom (a null field is not neutral for `min`).
-//! - **Trajectories**: the frame origin follows a cubic Bézier curve (default
-//!   handles give uniform straight motion); rotation by quaternion slerp,
-//!   stretch linearly ([`isomorph_common::AffineParts::lerp`]).
+//! - **Trajectories** (§3.4: the origin follows a cubic spline curve, the
+//!   orientations are interpolated by quaternion slerp): by default the origin moves uniformly on a straight line, the rotation by
+//!   slerp, the stretch linearly ([`isomorph_common::AffineParts::lerp`]);
+//!   the animator bends the origin's path into a cubic Bézier curve
+//!   (`handles`), or keys positions (a C¹ cubic spline with Catmull–Rom
+//!   tangents through the keys) and orientations (slerp from key to key),
+//!   for leaves and affine nodes alike. Keys are at the node's local time
+//!   `s`, after its speed curve.
+//! - **Phantom parameters**: position, radius and stiffness; the
+//!   intensity of a phantom stays 0 (a phantom with an intensity would
+//!   change the end shape it belongs to).
+//! - **Coplanar frames** (`coplanar_frames`): local x along a segment or a
+//!   polygon's principal axis, z along the polygon's normal (two segments:
+//!   the normal of the plane they span), origin at the skeleton's centroid,
+//!   signs chosen for the least turn; a point takes its partner's
+//!   orientation. Only for Euclidean metrics and similarity frames, where
+//!   re-expressing a primitive leaves its field unchanged.
+//! - **Hierarchical matching** compares children's centres relative to
+//!   the mean of their siblings' centres.
+//! - **Control shapes** (`--via`, [`ViaMode`]): by default the paper's
+//!   Bézier-like morph ([`BlobMorph::bezier`]): the pairwise generic trees
+//!   are combined by de Casteljau's construction, each level the generic
+//!   tree of the two instances below it at the same `t`, so a primitive
+//!   matched through all the shapes has the skeleton `⊕ B_i^n(t) S_i` and
+//!   the parameters `Σ B_i^n(t) x_i`; the source and the target are
+//!   reproduced, the shapes in between approached, not reached. The
+//!   correspondence of the levels above the first is the nearest-centre
+//!   heuristic on the shapes at `t = ½`, kept for every `t`. `--via-mode
+//!   chain` ([`BlobMorph::through`], not in the paper) joins the pairwise
+//!   generic trees end to end at evenly spaced times instead, so the morph
+//!   passes through every key shape (continuous, with a change of speed at
+//!   the keys).
 //! - **Warps**: Barr twist and taper about the local z axis, bend in the y–z
 //!   plane (put them under an affine node for other axes); the taper scale is
 //!   clamped at 0.05 to stay invertible.
@@ -150,6 +242,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+mod coplanar;
 mod correspond;
 mod error;
 mod generic;
@@ -164,10 +257,13 @@ mod tree;
 mod warp;
 
 pub use correspond::{
-    Correspondence, Heuristic, Link, MAX_PAIRS, MAX_VERTEX_PAIRS, Origin, Pair, decompose, split,
+    Correspondence, Heuristic, Link, MAX_PAIRS, MAX_VERTEX_PAIRS, Origin, Pair, Phantom, decompose, split,
 };
 pub use error::{BlobError, BlobMorphError, NodePath, NodeProblem, Side};
-pub use generic::{BlobMorph, BlobSettings, GenericTree, MorphSpec, Speed, SpeedCurve, Trajectory};
+pub use generic::{
+    BlobMorph, BlobSettings, FrameKey, GenericTree, KeyShape, MorphSpec, Orientation, Speed, SpeedCurve,
+    Trajectory, ViaMode,
+};
 pub use kernel::Kernel;
 pub use minkowski::MinkowskiPath;
 pub use node::{MAX_MAGNITUDE, MAX_SUPPORT, NaryOp, Node, Primitive};

@@ -420,8 +420,15 @@ impl Node {
                 }
                 let ops: Vec<NaryOp> = match self {
                     Node::Mix { to, s, .. } => {
-                        if !(0.0..=1.0).contains(s) {
+                        if s.is_nan() {
                             return Err(err(NodeProblem::NotFinite("s")));
+                        }
+                        if !(0.0..=1.0).contains(s) {
+                            return Err(err(NodeProblem::OutOfRange {
+                                field: "s",
+                                value: *s,
+                                expected: "0 ≤ s ≤ 1",
+                            }));
                         }
                         vec![*op, *to]
                     }

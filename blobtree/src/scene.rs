@@ -20,7 +20,7 @@
 use crate::error::{BlobError, NodePath, NodeProblem};
 use crate::kernel::Kernel;
 use crate::node::{NaryOp, Node, Primitive};
-use crate::skeleton::Skeleton;
+use crate::skeleton::{Polytope, Skeleton};
 use crate::tree::BlobTree;
 use crate::warp::Warp;
 use glam::{Affine3A, Quat, Vec3};
@@ -138,6 +138,56 @@ enum NodeSpec<C> {
         #[serde(default)]
         children: Vec<C>,
     },
+    /// A generic tree's time-varying commutative node at one instant
+    /// (§4.4): `(1 − s)·from(children) + s·to(children)`.
+    Mix {
+        /// The source operator.
+        from: Operator,
+        /// The target operator.
+        to: Operator,
+        /// The weight of `to`, in `[0, 1]`.
+        s: f32,
+        /// The children (≥ 1).
+        #[serde(default)]
+        children: Vec<C>,
+    },
+}
+
+/// A commutative operator as written in a `mix` node: `"blend"`,
+/// `"union"`, `"intersection"`, or a number `n ≥ 1`, the order of a
+/// super-elliptic blend.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(untagged)]
+enum Operator {
+    /// A super-elliptic blend's order.
+    Order(f32),
+    /// An operator's name.
+    Name(String),
+}
+
+impl Operator {
+    /// The operator as written.
+    fn of(op: NaryOp) -> Self {
+        match op {
+            NaryOp::SuperBlend(n) if n.is_finite() => Operator::Order(n),
+            // A super-elliptic blend of infinite order is the union.
+            NaryOp::SuperBlend(_) => Operator::Name("union".into()),
+            op => Operator::Name(op.name().into()),
+        }
+    }
+
+    /// The operator, or `None` for an unknown name.
+    fn read(&self) -> Option<NaryOp> {
+        match self {
+            Operator::Order(n) => Some(NaryOp::SuperBlend(*n)),
+            Operator::Name(name) => match name.as_str() {
+                "blend" => Some(NaryOp::Blend),
+                "union" => Some(NaryOp::Union),
+                "intersection" => Some(NaryOp::Intersection),
+                _ => None,
+            },
+        }
+    }
 }
 
 /// A written node: a [`NodeSpec`] whose children are written nodes.
@@ -178,16 +228,16 @@ struct BoxLeaf {
     /// Radius of influence `R`.
     radius: f32,
     /// Intensity `I` (default 1).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     intensity: Option<f32>,
     /// Stiffness `k` (default 1).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     stiffness: Option<f32>,
     /// The L^p exponent (default 2).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     p: Option<Exponent>,
     /// The primitive's frame (default: the identity).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     frame: Option<Transform>,
 }
 
@@ -343,6 +393,11 @@ pub const MAX_DEPTH: usize = 48;
 /// Nesting levels the RON reader accepts.
 const RON_NESTING: usize = 4 * MAX_DEPTH + 16;
 
+/// How scenes and links specs are written: indented records, arrays on one line.
+pub(crate) fn ron_pretty() -> ron::ser::PrettyConfig {
+    ron::ser::PrettyConfig::default().compact_arrays(true)
+}
+
 pub(crate) fn ron_options() -> ron::Options {
     ron::Options::default()
         .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
@@ -432,7 +487,7 @@ impl BlobTree {
     /// [`BlobError::Write`] if serialization fails.
     pub fn to_ron(&self) -> Result<String, BlobError> {
         ron_options()
-            .to_string_pretty(&self.to_scene(), ron::ser::PrettyConfig::default())
+            .to_string_pretty(&self.to_scene(), ron_pretty())
             .map_err(|e| BlobError::Write(e.to_string()))
     }
 
@@ -447,7 +502,7 @@ impl BlobTree {
 }
 
 /// The node kinds, as written.
-const KINDS: [&str; 14] = [
+const KINDS: [&str; 15] = [
     "point",
     "segment",
     "polygon",
@@ -462,6 +517,7 @@ const KINDS: [&str; 14] = [
     "taper",
     "bend",
     "affine",
+    "mix",
 ];
 
 /// The kind written in a node's value, if it has a readable one.
@@ -575,16 +631,38 @@ fn read_node(
             let left = c.pop().expect("two children");
             Node::difference(left, right, level.unwrap_or(threshold))
         }
-        NodeSpec::Twist { rate, children: kids } => Node::warp(Warp::Twist { rate }, unary(kids, "twist")?),
-        NodeSpec::Taper { slope, children: kids } => Node::warp(Warp::Taper { slope }, unary(kids, "taper")?),
+        // Warps are built as written, never concatenated with a child
+        // affine map ([`Node::warp`] does that), so that node paths in a
+        // links spec name the nodes of the file.
+        NodeSpec::Twist { rate, children: kids } => warped(Warp::Twist { rate }, unary(kids, "twist")?),
+        NodeSpec::Taper { slope, children: kids } => warped(Warp::Taper { slope }, unary(kids, "taper")?),
         NodeSpec::Bend { rate, centre, min, max, children: kids } => {
-            Node::warp(Warp::Bend { rate, centre: centre.unwrap_or(0.0), min, max }, unary(kids, "bend")?)
+            warped(Warp::Bend { rate, centre: centre.unwrap_or(0.0), min, max }, unary(kids, "bend")?)
         }
         NodeSpec::Affine { frame, children: kids } => {
             let map = transform(&frame).map_err(err)?;
-            Node::warp(Warp::Affine(map), unary(kids, "affine")?)
+            warped(Warp::Affine(map), unary(kids, "affine")?)
+        }
+        NodeSpec::Mix { from, to, s, children: kids } => {
+            let op = |o: &Operator, field: &str| {
+                o.read().ok_or_else(|| BlobError::Parse {
+                    format,
+                    what: "scene",
+                    message: format!(
+                        "node {path}: `{field}` must be \"blend\", \"union\", \"intersection\" or a \
+                         super-elliptic blend's order n ≥ 1, got {o:?}"
+                    ),
+                })
+            };
+            let (from, to) = (op(&from, "from")?, op(&to, "to")?);
+            Node::Mix { from, to, s, children: children(kids, "≥ 1", at_least_one, "mix")? }
         }
     })
+}
+
+/// `warp` over `child`, as one node.
+fn warped(warp: Warp, child: Node) -> Node {
+    Node::Warp { warp, child: Box::new(child) }
 }
 
 fn vertex_count(path: &NodePath, kind: &'static str, expected: &'static str, got: usize) -> BlobError {
@@ -650,27 +728,68 @@ fn matrix(m: &Affine3A) -> Transform {
     Transform { matrix: Some(cols), ..Transform::default() }
 }
 
+/// A frame as written: `translate` alone when the map is a translation
+/// (read back exactly), else the matrix.
+fn frame_of(m: &Affine3A) -> Transform {
+    if m.matrix3 == glam::Mat3A::IDENTITY {
+        Transform { translate: Some(m.translation.to_array()), ..Transform::default() }
+    } else {
+        matrix(m)
+    }
+}
+
+/// `Some(v)` unless `v` is the field's default (left out of written files).
+fn unless_default(v: f32, default: f32) -> Option<f32> {
+    (v != default).then_some(v)
+}
+
 fn write_node(node: &Node) -> Written {
     let a = |v: &Vec3| v.to_array();
     let kids = |children: &[Node]| children.iter().map(write_node).collect();
     Written(match node {
         Node::Primitive(p) => {
-            let leaf = Leaf {
-                vertices: p.skeleton.vertices().iter().map(a).collect(),
-                radius: p.kernel.radius,
-                intensity: Some(p.kernel.intensity),
-                stiffness: Some(p.kernel.stiffness),
-                p: Some(if p.p.is_infinite() { Exponent::Text("inf".into()) } else { Exponent::Number(p.p) }),
-                frame: (p.frame != Affine3A::IDENTITY).then(|| matrix(&p.frame)),
+            let vertices = p.skeleton.vertices();
+            // An instant of a Minkowski interpolation is written as the
+            // kind its vertices' hull has, which is how it is read back.
+            let kind = match &p.skeleton {
+                Skeleton::Generic(_) => {
+                    ["point", "segment", "polygon", "polyhedron"][Polytope::hull(&vertices).dimension()]
+                }
+                s => s.kind(),
             };
-            match p.skeleton.kind() {
+            let leaf = Leaf {
+                vertices: vertices.iter().map(a).collect(),
+                radius: p.kernel.radius,
+                intensity: unless_default(p.kernel.intensity, 1.0),
+                stiffness: unless_default(p.kernel.stiffness, 1.0),
+                p: (p.p != 2.0).then(|| {
+                    if p.p.is_infinite() { Exponent::Text("inf".into()) } else { Exponent::Number(p.p) }
+                }),
+                frame: (p.frame != Affine3A::IDENTITY).then(|| frame_of(&p.frame)),
+            };
+            let half = vertices.last().copied().unwrap_or_default();
+            match kind {
+                "polyhedron" if p.skeleton == Skeleton::cuboid(half) => NodeSpec::Box(BoxLeaf {
+                    half: half.to_array(),
+                    radius: leaf.radius,
+                    intensity: leaf.intensity,
+                    stiffness: leaf.stiffness,
+                    p: leaf.p,
+                    frame: leaf.frame,
+                }),
                 "point" => NodeSpec::Point(leaf),
                 "segment" => NodeSpec::Segment(leaf),
                 "polygon" => NodeSpec::Polygon(leaf),
                 _ => NodeSpec::Polyhedron(leaf),
             }
         }
-        Node::Nary { op, children } | Node::Mix { from: op, children, .. } => match *op {
+        Node::Mix { from, to, s, children } => NodeSpec::Mix {
+            from: Operator::of(*from),
+            to: Operator::of(*to),
+            s: *s,
+            children: kids(children),
+        },
+        Node::Nary { op, children } => match *op {
             NaryOp::Blend => NodeSpec::Blend { children: kids(children) },
             NaryOp::Union => NodeSpec::Union { children: kids(children) },
             NaryOp::Intersection => NodeSpec::Intersection { children: kids(children) },
@@ -687,7 +806,7 @@ fn write_node(node: &Node) -> Written {
                 Warp::Bend { rate, centre, min, max } => {
                     NodeSpec::Bend { rate, centre: Some(centre), min, max, children }
                 }
-                Warp::Affine(m) => NodeSpec::Affine { frame: matrix(&m), children },
+                Warp::Affine(m) => NodeSpec::Affine { frame: frame_of(&m), children },
             }
         }
     })
@@ -906,6 +1025,72 @@ mod tests {
                 .to_string(),
             r#"node root/0: unknown kind "Point""#
         );
+    }
+
+    /// Node paths in a links spec name the nodes of the file as written:
+    /// consecutive affine nodes are read as separate nodes (they used to
+    /// be concatenated, which shifted every path below them).
+    #[test]
+    fn consecutive_affine_nodes_keep_their_paths() {
+        let pair = r#"(kind: "blend", children: [
+            (kind: "point", vertices: [(0,0,0)], radius: 0.5), (kind: "point", vertices: [(0.3,0,0)], radius: 0.5)])"#;
+        let a = ron(&format!(
+            r#"(root: (kind: "affine", frame: (translate: (0.1, 0, 0)), children: [
+                (kind: "affine", frame: (scale: (2, 2, 2)), children: [{pair}])]))"#
+        ));
+        assert!(matches!(a.root().get(&NodePath(vec![0])), Some(Node::Warp { warp: Warp::Affine(_), .. })));
+        assert!(matches!(a.root().get(&NodePath(vec![0, 0, 1])), Some(Node::Primitive(_))));
+        // The same field as the concatenated map.
+        let merged = Node::affine(
+            Affine3A::from_translation(Vec3::new(0.1, 0.0, 0.0)),
+            Node::affine(
+                Affine3A::from_scale(Vec3::splat(2.0)),
+                ron(&format!("(root: {pair})")).root().clone(),
+            ),
+        );
+        assert!(matches!(&merged, Node::Warp { child, .. } if matches!(**child, Node::Nary { .. })));
+        let merged = BlobTree::new(merged, 0.5).unwrap();
+        for i in 0..100 {
+            let p = Vec3::new((i as f32 * 0.37).sin(), (i as f32 * 0.61).cos(), (i as f32 * 0.23).sin());
+            assert!((a.value(p) - merged.value(p)).abs() < 1e-6, "at {p}");
+        }
+        // A links spec written against the file finds its nodes.
+        let b = ron(&format!("(root: {pair})"));
+        let spec =
+            crate::MorphSpec::from_ron("(links: [(a: [0, 0, 1], b: [0]), (a: [0, 0, 0], b: [1])])").unwrap();
+        let g = crate::GenericTree::new(&a, &b, &spec).unwrap();
+        assert_eq!(g.pair().leaf_count(), 2);
+        let wrong = crate::MorphSpec::from_ron("(links: [(a: [0, 1], b: [0])])").unwrap();
+        assert!(crate::GenericTree::new(&a, &b, &wrong).is_err());
+    }
+
+    /// The time-varying `mix` node is a scene kind: written and read back
+    /// to the same node, its operators by name or super-elliptic order,
+    /// with bad operators and weights refused by node.
+    #[test]
+    fn mix_nodes_round_trip_and_are_checked() {
+        let ball = |x: f32| format!(r#"(kind: "point", vertices: [({x}, 0, 0)], radius: 1)"#);
+        let text = format!(
+            r#"(root: (kind: "mix", from: "union", to: 2.5, s: 0.25, children: [{}, {}]))"#,
+            ball(0.0),
+            ball(0.4)
+        );
+        let t = ron(&text);
+        assert!(matches!(
+            t.root(),
+            Node::Mix { from: NaryOp::Union, to: NaryOp::SuperBlend(n), s, .. } if *n == 2.5 && *s == 0.25
+        ));
+        assert_eq!(BlobTree::from_ron(&t.to_ron().unwrap()).unwrap().root(), t.root());
+        assert_eq!(BlobTree::from_json(&t.to_json().unwrap()).unwrap().root(), t.root());
+        let e = BlobTree::from_ron(&text.replace(r#""union""#, r#""max""#)).unwrap_err().to_string();
+        assert!(e.contains("node root: `from` must be"), "{e}");
+        let (p, e) = problem(&text.replace("0.25", "1.5"));
+        assert_eq!(
+            (p, e),
+            (vec![], NodeProblem::OutOfRange { field: "s", value: 1.5, expected: "0 ≤ s ≤ 1" })
+        );
+        let (_, e) = problem(&text.replace("2.5", "0.5"));
+        assert_eq!(e, NodeProblem::OrderBelowOne(0.5));
     }
 
     /// Every built-in scene is written and read back to the same tree.

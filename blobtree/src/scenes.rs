@@ -260,7 +260,11 @@ pub fn demo(name: &str) -> Option<(BlobTree, BlobTree, MorphSpec)> {
             for c in carvings {
                 let (a, b) = (NodePath(vec![1, 1, slot]), NodePath(vec![1, 1, c]));
                 spec.links.push(Link { a: a.clone(), b: b.clone() });
-                spec.speeds.push(SpeedCurve { a, b, speed: Speed { start: 0.0, end: 0.5, smooth: false } });
+                spec.speeds.push(SpeedCurve {
+                    a,
+                    b,
+                    speed: Speed { start: 0.0, end: 0.5, ..Speed::default() },
+                });
             }
         }
     }
@@ -408,6 +412,100 @@ mod tests {
         let (a, _, _) = demo("sphere_propeller").unwrap();
         let p = surface_along(&a, Vec3::ZERO, Vec3::X, 1.2);
         assert!((p.x - 0.6).abs() < 1e-4, "{p}");
+    }
+
+    /// The shipped links spec that uses every control of [`MorphSpec`]
+    /// (hand-written, for [`bear`] → [`bird`]).
+    const EVERY_FEATURE: &str = "bear_bird.every_feature.links.ron";
+
+    /// The folder of shipped example files (`blobtree/scenes/`).
+    fn shipped() -> std::path::PathBuf {
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
+    }
+
+    /// Checks `text` against the shipped file `name`, or writes it there when
+    /// `ISOMORPH_BLESS` is set (to regenerate the folder after a change).
+    fn check_shipped(name: &str, text: &str) {
+        let path = shipped().join(name);
+        if std::env::var_os("ISOMORPH_BLESS").is_some() {
+            std::fs::write(&path, text).unwrap();
+            return;
+        }
+        let file = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        assert!(
+            file == text,
+            "{} differs from the built-in; rerun with ISOMORPH_BLESS=1 to regenerate it",
+            path.display()
+        );
+    }
+
+    /// Every built-in scene and built-in links spec ships as a RON file in
+    /// `blobtree/scenes/` that is exactly what `to_ron` writes for it and
+    /// loads back into the same tree; the folder holds nothing else but the
+    /// hand-written example spec.
+    #[test]
+    fn shipped_files_equal_the_built_ins() {
+        let mut expected = vec![EVERY_FEATURE.to_string()];
+        for name in NAMES {
+            let tree = load(name).unwrap();
+            let file = format!("{name}.ron");
+            check_shipped(&file, &tree.to_ron().unwrap());
+            let again = load(shipped().join(&file).to_str().unwrap()).unwrap();
+            assert_eq!(again.root(), tree.root(), "{file}");
+            assert_eq!(again.threshold(), tree.threshold(), "{file}");
+            expected.push(file);
+        }
+        for name in DEMOS {
+            let (_, _, spec) = demo(name).unwrap();
+            if spec == MorphSpec::default() {
+                continue;
+            }
+            let file = format!("{name}.links.ron");
+            check_shipped(&file, &spec.to_ron().unwrap());
+            assert_eq!(MorphSpec::load(&shipped().join(&file)).unwrap(), spec, "{file}");
+            expected.push(file);
+        }
+        let mut present: Vec<String> = std::fs::read_dir(shipped())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        present.sort();
+        expected.sort();
+        assert_eq!(present, expected, "blobtree/scenes/ holds exactly the built-ins and the example spec");
+    }
+
+    /// The shipped example spec sets every field of [`MorphSpec`] and
+    /// drives a bear → bird morph that reproduces both ends.
+    #[test]
+    fn the_every_feature_spec_uses_every_control() {
+        let spec = MorphSpec::load(&shipped().join(EVERY_FEATURE)).unwrap();
+        // Every field given (a field added to MorphSpec must be added to the file).
+        let MorphSpec { links, heuristic: _, speeds, trajectories, phantoms, coplanar_frames } = &spec;
+        assert!(
+            !links.is_empty()
+                && !speeds.is_empty()
+                && !trajectories.is_empty()
+                && !phantoms.is_empty()
+                && *coplanar_frames,
+            "{spec:?}"
+        );
+        assert!(speeds.iter().any(|c| c.speed.smooth) && speeds.iter().any(|c| !c.speed.points.is_empty()));
+        assert!(trajectories.iter().any(|t| t.handles.is_some()));
+        assert!(
+            trajectories.iter().any(|t| t.keys.iter().any(|k| k.position.is_some() && k.rotate.is_some()))
+        );
+        let text = std::fs::read_to_string(shipped().join(EVERY_FEATURE)).unwrap();
+        assert!(text.contains("heuristic:"));
+        let (a, b) = (bear(), bird());
+        let m = BlobMorph::from_trees(&a, &b, &spec).unwrap();
+        for i in 0..300 {
+            let p = Vec3::new((i as f32 * 0.37).sin(), (i as f32 * 0.61).cos(), (i as f32 * 0.23).sin());
+            assert!((m.frame(0.0).unwrap().field.value(p) - a.value(p)).abs() < 1e-5, "C(0) at {p}");
+            assert!((m.frame(1.0).unwrap().field.value(p) - b.value(p)).abs() < 1e-5, "C(1) at {p}");
+        }
+        for k in 0..=8 {
+            assert_eq!(components(&m, k as f32 / 8.0, 40), 1, "t = {}", k as f32 / 8.0);
+        }
     }
 
     /// An endless stream is refused after MAX_FILE_BYTES instead of filling

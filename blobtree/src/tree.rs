@@ -57,6 +57,13 @@ pub struct BlobTree {
     pruning: bool,
 }
 
+/// Two trees are equal when their descriptions (nodes and threshold) are.
+impl PartialEq for BlobTree {
+    fn eq(&self, other: &Self) -> bool {
+        self.root == other.root && self.threshold == other.threshold
+    }
+}
+
 impl BlobTree {
     /// Validates and compiles `root` with iso threshold `threshold`.
     ///

@@ -3,9 +3,9 @@
 
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
-use isomorph_common::Control;
 use isomorph_common::alignment::{AlignMode, Alignment, PrincipalFrame, align};
 use isomorph_common::glam::Mat4;
+use isomorph_common::{Control, Landmarks};
 use isomorph_io::inputs::{LoadOptions, load_solid};
 use isomorph_io::mesh::{MeshFormat, write_mesh};
 use serde_json::{Value, json};
@@ -36,7 +36,7 @@ impl From<Mode> for AlignMode {
 #[derive(Debug, Args)]
 pub struct AlignArgs {
     /// Source: a built-in shape (sphere, torus, ball, c-shape, mug, chain,
-    /// cube, holed-cube) or a closed mesh file (.obj, .ply, .stl), in its own coordinates.
+    /// cube, holed-cube, apple) or a closed mesh file (.obj, .ply, .stl), in its own coordinates.
     pub source: String,
     /// Target: a built-in shape or a closed mesh file, as for the source.
     pub target: String,
@@ -47,6 +47,12 @@ pub struct AlignArgs {
     /// (meshes use their exact moments) and for polygonizing a built-in source.
     #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(8..=512))]
     pub res: u32,
+    /// Fit the map to landmark pairs instead of the moments: the
+    /// least-squares affine map carrying the source points onto the target
+    /// points (a JSON list of `{"source": [x, y, z], "target": [x, y, z]}`),
+    /// printed with its largest and mean misfit (world units).
+    #[arg(long)]
+    pub landmarks: Option<PathBuf>,
     /// Where to write the aligned source mesh (.ply, .obj or .stl).
     #[arg(long, default_value = "aligned.ply")]
     pub out: PathBuf,
@@ -61,6 +67,25 @@ pub fn run(args: &AlignArgs) -> anyhow::Result<()> {
     let own = LoadOptions { fit: false, ..LoadOptions::default() };
     let control = Control::new();
     let source = load_solid(&args.source, &own)?;
+    if let Some(path) = &args.landmarks {
+        let landmarks = Landmarks::load(path).context("invalid landmarks")?;
+        let map = landmarks.affine();
+        let misfit: Vec<f32> =
+            landmarks.pairs().iter().map(|&(p, q)| map.transform_point3(p).distance(q)).collect();
+        let mesh = source.surface(args.res, &control)?.transformed(&map);
+        write_mesh(&mesh, &args.out, format)
+            .with_context(|| format!("cannot write {}", args.out.display()))?;
+        let report = json!({
+            "mode": "landmarks",
+            "matrix": matrix_rows(Mat4::from(map)),
+            "landmarks": landmarks.pairs().len(),
+            "max_misfit": misfit.iter().copied().fold(0.0f32, f32::max),
+            "mean_misfit": misfit.iter().sum::<f32>() / misfit.len() as f32,
+            "output": args.out.display().to_string(),
+        });
+        println!("{}", serde_json::to_string_pretty(&report)?);
+        return Ok(());
+    }
     let target = load_solid(&args.target, &own)?;
     let alignment = align(
         &source.moments(args.res, &control).with_context(|| format!("cannot measure {}", args.source))?,
@@ -76,6 +101,11 @@ pub fn run(args: &AlignArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// A matrix as 4 rows of 4 numbers (what `--align MAP.json` reads).
+fn matrix_rows(m: Mat4) -> Vec<[f32; 4]> {
+    (0..4).map(|r| m.row(r).to_array()).collect()
+}
+
 /// The map as JSON: `matrix` (4×4, row-major, acting on column vectors
 /// `(x, y, z, 1)`), its parts `translation`, `rotation` (unit quaternion
 /// `[x, y, z, w]`) and `scale` (along the source's principal axes, the rows
@@ -83,7 +113,6 @@ pub fn run(args: &AlignArgs) -> anyhow::Result<()> {
 /// principal frames.
 fn alignment_json(a: &Alignment) -> Value {
     let parts = a.parts();
-    let rows = |m: Mat4| (0..4).map(|r| m.row(r).to_array()).collect::<Vec<_>>();
     let frame = |f: &PrincipalFrame| {
         json!({
             "centroid": f.centroid.to_array(),
@@ -95,7 +124,7 @@ fn alignment_json(a: &Alignment) -> Value {
     };
     json!({
         "mode": a.mode,
-        "matrix": rows(Mat4::from(a.map)),
+        "matrix": matrix_rows(Mat4::from(a.map)),
         "translation": parts.translation.to_array(),
         "rotation": parts.rotation.to_array(),
         "scale": a.scale.to_array(),

@@ -60,19 +60,20 @@ fn parse_methods(s: &str) -> Result<MethodList, String> {
 pub fn run(args: &CompareArgs, matches: &ArgMatches) -> anyhow::Result<()> {
     let methods = &args.methods.0;
     refuse_foreign(matches, methods)?;
-    let (control, bar) = progress::control("compare", args.io.threads.map(|n| n as usize))?;
-    let settings = args.io.settings(&args.options)?;
+    let io = args.io.for_options(&args.options);
+    let (control, bar) = progress::control("compare", io.threads.map(|n| n as usize))?;
+    let settings = io.settings(&args.options)?;
     // The shared references: the inputs as the non-BlobTree methods read them.
-    let shared = args.io.inputs(Method::Baseline);
+    let shared = io.inputs(Method::Baseline);
     let export = match &shared {
-        Ok(inputs) => args.io.export(args.out.clone(), inputs, &control)?,
-        Err(_) => args.io.export(args.out.clone(), &args.io.inputs(Method::Blobtree)?, &control)?,
+        Ok(inputs) => io.export(args.out.clone(), inputs, &control)?,
+        Err(_) => io.export(args.out.clone(), &io.inputs(Method::Blobtree)?, &control)?,
     };
     let candidates = methods
         .iter()
-        .map(|&method| candidate(method, args, &settings, &control))
+        .map(|&method| candidate(method, &io, &settings, &control))
         .collect::<anyhow::Result<Vec<_>>>()?;
-    let comparison = compare(&args.io.source, &args.io.target, candidates, &export, &control);
+    let comparison = compare(&io.source, &io.target, candidates, &export, &control);
     bar.finish_and_clear();
     let comparison =
         comparison.with_context(|| format!("cannot write the comparison to {}", args.out.display()))?;
@@ -84,17 +85,17 @@ pub fn run(args: &CompareArgs, matches: &ArgMatches) -> anyhow::Result<()> {
 /// `method` on the inputs as it reads them, or why it cannot run.
 fn candidate(
     method: Method,
-    args: &CompareArgs,
+    io: &Io,
     settings: &isomorph_cli::methods::Settings,
     control: &Control,
 ) -> anyhow::Result<Candidate> {
     let name = method.name().to_string();
-    let inputs = match args.io.inputs(method) {
+    let inputs = match io.inputs(method) {
         Ok(inputs) => inputs,
         Err(e) => return Ok(Candidate { name, build: Err(format!("{e:#}")), references: None }),
     };
     let references = if method == Method::Blobtree {
-        Some(reference_surfaces(&inputs.0, &inputs.1, args.io.resolution(), control)?)
+        Some(reference_surfaces(&inputs.0, &inputs.1, io.resolution(), control)?)
     } else {
         None
     };

@@ -5,12 +5,16 @@
 
 use isomorph_blobtree::{BlobMorph, BlobSettings, BlobTree, scenes};
 use isomorph_common::glam::Vec3;
-use isomorph_common::{BlendSettings, BoxedError, BoxedMorph, Control, DistanceBlend, MorphExt, Solid};
+use isomorph_common::{
+    Aabb, BlendSettings, BoxedError, BoxedMorph, Control, DistanceBlend, Landmarks, MorphExt, Solid,
+};
 use isomorph_io::inputs::{InputError, LoadOptions, load_solid_with_warnings};
-use isomorph_levelset::{LevelSetMorph, LevelSetSettings};
-use isomorph_rbf::{RbfMorph, RbfSettings, WarpedMorph, WarpedSettings};
+use isomorph_levelset::{LevelSetMorph, LevelSetSettings, Warp};
+use isomorph_rbf::{
+    DisplacementWarp, FitSettings, InfluencePath, RbfMorph, RbfSettings, WarpedMorph, WarpedSettings,
+};
 use isomorph_tspline::{TsplineMorph, TsplineSettings};
-use isomorph_warp::{WarpMorph, WarpMorphSettings};
+use isomorph_warp::{WarpMorph, WarpMorphSettings, WorldMap};
 use std::sync::Arc;
 
 /// The morph methods.
@@ -73,6 +77,10 @@ pub struct Settings {
     /// when given, the shapes are warped half-way to each other first (the
     /// paper's appendix, [`WarpedMorph`]).
     pub rbf_correspondences: Vec<(Vec3, Vec3)>,
+    /// One or two influence shapes for the variational implicit (§7): when
+    /// given, the morph runs from the source to the target pulled towards
+    /// them ([`InfluencePath::from_solids`]).
+    pub rbf_influence: Vec<Solid>,
     /// True's B-spline warp with a cross-dissolve.
     pub warp: WarpMorphSettings,
     /// Yang & Jüttler's T-spline level sets.
@@ -90,6 +98,48 @@ impl Settings {
         self.warp.resolution = res;
         self
     }
+}
+
+/// Which map carries the level set's speed through landmark pairs (Breen
+/// & Whitaker's generalized warp `W`, §6.2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum LandmarkWarp {
+    /// Turk & O'Brien's displacement warp: interpolates the pairs, with an
+    /// affine part, smooth everywhere.
+    #[default]
+    Rbf,
+    /// True's trivariate cubic B-spline warp, fitted to the pairs by
+    /// minimum-norm direct manipulation from the identity: local (the
+    /// identity far from the landmarks).
+    Bspline,
+}
+
+/// The warp `W` through `landmarks` for [`Align::Warp`](isomorph_levelset::Align::Warp).
+/// For [`LandmarkWarp::Bspline`] the control lattice covers the landmarks'
+/// box padded by half its size, with a control point every
+/// `control_spacing` of its 64 voxels along the longest edge.
+///
+/// # Errors
+/// The fit's errors (e.g. landmarks that no warp of the kind interpolates).
+pub fn landmark_warp(
+    landmarks: &Landmarks,
+    kind: LandmarkWarp,
+    control_spacing: u32,
+) -> Result<Warp, BoxedError> {
+    Ok(match kind {
+        LandmarkWarp::Rbf => {
+            let warp = DisplacementWarp::from_landmarks(landmarks, &FitSettings::default())
+                .map_err(BoxedError::new)?;
+            Arc::new(move |x| warp.apply(x))
+        }
+        LandmarkWarp::Bspline => {
+            let box_of = landmarks.pairs().iter().fold(Aabb::EMPTY, |b, &(p, q)| b.including(p).including(q));
+            let bounds = box_of.expanded(0.5 * box_of.size().max_element());
+            let map =
+                WorldMap::from_landmarks(&bounds, 64, control_spacing, landmarks).map_err(BoxedError::new)?;
+            Arc::new(move |x| map.apply(x))
+        }
+    })
 }
 
 /// Errors of [`load_input`].
@@ -163,6 +213,11 @@ pub fn build(
         }
         Method::LevelSet => {
             LevelSetMorph::new(source, target, &settings.level_set, control).map_err(BoxedError::new)?.boxed()
+        }
+        Method::Rbf if !settings.rbf_influence.is_empty() => {
+            InfluencePath::from_solids(source, target, &settings.rbf_influence, &settings.rbf, control)
+                .map_err(BoxedError::new)?
+                .boxed()
         }
         Method::Rbf if !settings.rbf_correspondences.is_empty() => {
             let warped = WarpedSettings {

@@ -6,9 +6,10 @@ use crate::raw::RawArgs;
 use anyhow::Context;
 use clap::{ArgMatches, Args, ValueEnum};
 use isomorph_cli::methods::{Method, Settings, build, load_input_with_warnings};
-use isomorph_common::{Control, Solid};
-use isomorph_io::export::{ExportSettings, Report, export_sequence, reference_surfaces};
-use isomorph_io::inputs::LoadOptions;
+use isomorph_common::mesh::color::ColorLookup;
+use isomorph_common::{Control, Solid, TriMesh};
+use isomorph_io::export::{ExportSettings, FrameColors, Report, export_sequence, reference_surfaces};
+use isomorph_io::inputs::{LoadOptions, UNCOLORED, builtin_color};
 use isomorph_io::mesh::MeshFormat;
 use std::path::{Path, PathBuf};
 
@@ -39,7 +40,7 @@ impl Format {
 #[derive(Debug, Clone, Args)]
 pub struct Io {
     /// Source: a built-in shape (sphere, torus, ball, c-shape, mug, chain,
-    /// cube, holed-cube, bunny), a mesh file (.obj, .ply, .stl), a `.npy`
+    /// cube, holed-cube, apple, bunny), a mesh file (.obj, .ply, .stl), a `.npy`
     /// volume (signed distance, positive inside, placed by its JSON
     /// sidecar; u8 densities with the surface at 127.5), a `.raw` volume
     /// (with `--raw-dims`, `--raw-type`), or a BlobTree scene
@@ -58,7 +59,8 @@ pub struct Io {
     #[arg(long, default_value_t = 9, value_parser = clap::value_parser!(u32).range(2..=1000))]
     pub frames: u32,
     /// Keep mesh and volume inputs in their own coordinates instead of
-    /// fitting each into the built-in shapes' box (centred, longest side 0.9).
+    /// fitting each into the built-in shapes' box (centred, longest side
+    /// 0.9); implied by landmarks, which are given in those coordinates.
     #[arg(long)]
     pub keep_scale: bool,
     /// The surface level of volume inputs: values above it are inside (the
@@ -78,6 +80,13 @@ pub struct Io {
     /// Do not write preview.gif (the frames' renders as a loop).
     #[arg(long)]
     pub no_preview: bool,
+    /// Colour the frames even when no input mesh has vertex colours:
+    /// built-in shapes in their own colours, other inputs light grey.
+    /// Frames are always coloured when an input mesh has vertex colours
+    /// (PLY `red green blue`, OBJ `v x y z r g b`): each vertex blends the
+    /// source's and the target's colour at their closest points by t.
+    #[arg(long, visible_alias = "color")]
+    pub colour: bool,
 }
 
 impl Io {
@@ -91,16 +100,26 @@ impl Io {
     /// # Errors
     /// Unreadable or unknown inputs.
     pub fn inputs(&self, method: Method) -> anyhow::Result<(Solid, Solid)> {
+        Ok((self.load(method, &self.source)?, self.load(method, &self.target)?))
+    }
+
+    /// Loads the input `spec` for `method` as the source and target are
+    /// read, printing what the readers noticed.
+    fn load(&self, method: Method, spec: &str) -> anyhow::Result<Solid> {
         let options = LoadOptions { fit: !self.keep_scale, iso: self.iso, raw: self.raw.layout() };
-        let load = |spec: &str| -> anyhow::Result<Solid> {
-            let (solid, warnings) =
-                load_input_with_warnings(method, spec, &options).with_context(|| format!("input {spec}"))?;
-            for warning in warnings {
-                eprintln!("warning: {spec}: {warning}");
-            }
-            Ok(solid)
-        };
-        Ok((load(&self.source)?, load(&self.target)?))
+        let (solid, warnings) =
+            load_input_with_warnings(method, spec, &options).with_context(|| format!("input {spec}"))?;
+        for warning in warnings {
+            eprintln!("warning: {spec}: {warning}");
+        }
+        Ok(solid)
+    }
+
+    /// These inputs as `options` need them: landmarks are points in the
+    /// inputs' own coordinates, so with landmarks mesh and volume inputs keep
+    /// their scale (as with `--keep-scale`).
+    pub fn for_options(&self, options: &MethodArgs) -> Io {
+        Io { keep_scale: self.keep_scale || options.has_landmarks(), ..self.clone() }
     }
 
     /// The method settings: the libraries' defaults, `--res` where given,
@@ -113,11 +132,18 @@ impl Io {
         if let Some(res) = self.res {
             settings = settings.with_resolution(res);
         }
-        options.apply(settings, &self.source, &self.target)
+        let mut settings = options.apply(settings, &self.source, &self.target)?;
+        settings.rbf_influence = options
+            .influence
+            .iter()
+            .map(|spec| self.load(Method::Rbf, spec))
+            .collect::<anyhow::Result<_>>()?;
+        Ok(settings)
     }
 
     /// Export settings writing into `out`, with the inputs' surfaces as
-    /// references for the endpoint distances.
+    /// references for the endpoint distances and, when frames are coloured
+    /// (`--colour` or an input with vertex colours), as colour sources.
     ///
     /// # Errors
     /// Inputs whose surface cannot be made.
@@ -128,6 +154,18 @@ impl Io {
         control: &Control,
     ) -> anyhow::Result<ExportSettings> {
         let (source, target) = reference_surfaces(&inputs.0, &inputs.1, self.resolution(), control)?;
+        let colors = (self.colour || source.colors.is_some() || target.colors.is_some())
+            .then(|| -> anyhow::Result<FrameColors> {
+                let lookup = |spec: &str, surface: &TriMesh| {
+                    ColorLookup::new(surface, builtin_color(spec).unwrap_or(UNCOLORED))
+                        .with_context(|| format!("the colours of {spec}"))
+                };
+                Ok(FrameColors {
+                    source: lookup(&self.source, &source)?,
+                    target: lookup(&self.target, &target)?,
+                })
+            })
+            .transpose()?;
         Ok(ExportSettings {
             frames: self.frames as usize,
             resolution: self.resolution(),
@@ -138,6 +176,7 @@ impl Io {
             preview: !self.no_preview,
             source_reference: Some(source),
             target_reference: Some(target),
+            colors,
             ..ExportSettings::default()
         })
     }
@@ -169,12 +208,13 @@ pub struct MorphArgs {
 /// options of other methods).
 pub fn run(args: &MorphArgs, matches: &ArgMatches) -> anyhow::Result<()> {
     refuse_foreign(matches, &[args.method])?;
-    let settings = args.io.settings(&args.options)?;
-    let report = morph(args.method, &args.io, &settings, &args.out)?;
+    let io = args.io.for_options(&args.options);
+    let settings = io.settings(&args.options)?;
+    let report = morph(args.method, &io, &settings, &args.out)?;
     if args.report {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
-        print_summary(&report, &args.io, &args.out);
+        print_summary(&report, &io, &args.out);
     }
     Ok(())
 }
@@ -229,10 +269,16 @@ pub fn print_summary(report: &Report, io: &Io, out: &Path) {
         report.resolution,
         report.export_seconds
     );
-    println!("  {:>5} {:>9} {:>10} {:>5} {:>5}", "t", "vertices", "triangles", "comp", "genus");
+    println!(
+        "  {:>5} {:>9} {:>10} {:>5} {:>5} {:>5}",
+        "t", "vertices", "triangles", "comp", "voids", "genus"
+    );
     for f in &report.frames {
         let genus = f.genus.map_or("-".to_string(), |g| g.to_string());
-        println!("  {:>5.2} {:>9} {:>10} {:>5} {:>5}", f.t, f.vertices, f.triangles, f.components, genus);
+        println!(
+            "  {:>5.2} {:>9} {:>10} {:>5} {:>5} {:>5}",
+            f.t, f.vertices, f.triangles, f.components, f.voids, genus
+        );
     }
     for (name, e) in [("source", report.endpoints.source), ("target", report.endpoints.target)] {
         if let Some(e) = e {

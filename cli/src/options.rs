@@ -6,15 +6,18 @@ use anyhow::{Context, bail};
 use clap::parser::ValueSource;
 use clap::{ArgMatches, Args, ValueEnum};
 use isomorph_blobtree::MorphSpec;
-use isomorph_cli::methods::{Method, Settings};
+use isomorph_cli::methods::{LandmarkWarp, Method, Settings, landmark_warp};
 use isomorph_cli::parse::{parse_pair, read_map};
+use isomorph_common::Landmarks;
 use isomorph_common::alignment::AlignMode;
 use isomorph_common::glam::Vec3;
+use isomorph_io::compare::error_chain;
 use isomorph_levelset::{Align, LevelSetSettings, SolverKind};
 use isomorph_rbf::{Kernel, RbfSettings};
 use isomorph_tspline::{Align as TsplineAlign, Speed, TsplineSettings};
-use isomorph_warp::{WarpMorphSettings, WarpSpec};
+use isomorph_warp::{WarpMorphSettings, WarpSpec, WorldMap};
 use std::path::PathBuf;
+use std::sync::Arc;
 
 /// Method options (each belongs to one method).
 #[derive(Debug, Clone, Args)]
@@ -34,6 +37,15 @@ pub struct MethodArgs {
     /// Most evolution iterations.
     #[arg(long, help_heading = "Level set (Breen & Whitaker)", default_value_t = LevelSetSettings::default().max_iterations)]
     pub max_iterations: usize,
+    /// Which warp carries the target's distance through the landmarks
+    /// (`--landmarks`/`--landmark`): Breen & Whitaker's generalized warp
+    /// `W` (§6.2), frames placed by `(1 − α) x + α W(x)`.
+    #[arg(long, help_heading = "Level set (Breen & Whitaker)", value_enum, default_value_t = LandmarkWarp::Rbf)]
+    pub landmark_warp: LandmarkWarp,
+    /// A B-spline map as `isomorph warp` writes it (`map.json`) used as the
+    /// generalized warp `W` from source to target space (§6.2).
+    #[arg(long, help_heading = "Level set (Breen & Whitaker)")]
+    pub warp_map: Option<PathBuf>,
     /// Largest share (0–1) of the target's inside that may lie in parts the
     /// source does not overlap: the morph goes on without them and warns up
     /// to it, and is refused above it.
@@ -49,6 +61,12 @@ pub struct MethodArgs {
     /// The radial kernel.
     #[arg(long, help_heading = "RBF (Turk & O'Brien)", value_enum, default_value_t = KernelArg::from(RbfSettings::default().kernel))]
     pub kernel: KernelArg,
+    /// An influence shape (§7; repeat for a second): the morph runs from the
+    /// source to the target through one implicit of all the shapes, pulled
+    /// towards this one (a built-in shape, a mesh or a volume, read as the
+    /// inputs are).
+    #[arg(long, help_heading = "RBF (Turk & O'Brien)")]
+    pub influence: Vec<String>,
     /// Fit to this tolerance through greedily chosen centres (FastRBF)
     /// instead of interpolating every constraint: relative to the normal
     /// constraints' value, 0.001–1; allows up to 250000 --points.
@@ -62,10 +80,15 @@ pub struct MethodArgs {
     pub warp_spec: WarpSpecArg,
     /// A correspondence `X,Y,Z:X,Y,Z` (source point : target point, world
     /// units); repeat for several. The volume warp carries the source by
-    /// them; the RBF method warps both shapes half-way by them (at least 4,
-    /// not all on one plane).
-    #[arg(long = "landmark", help_heading = "Volume warp (True)", value_parser = parse_pair, allow_hyphen_values = true)]
-    pub landmarks: Vec<(Vec3, Vec3)>,
+    /// them; the RBF method warps both shapes half-way by them; the level
+    /// set evolves towards the target seen through the warp they define
+    /// (at least 4, not all on one plane).
+    #[arg(long, help_heading = "Volume warp (True)", value_parser = parse_pair, allow_hyphen_values = true)]
+    pub landmark: Vec<(Vec3, Vec3)>,
+    /// A landmarks file: a JSON list of `{"source": [x, y, z], "target":
+    /// [x, y, z]}` pairs (world units), used as `--landmark` pairs are.
+    #[arg(long, help_heading = "Volume warp (True)")]
+    pub landmarks: Option<PathBuf>,
     /// Voxels between B-spline control points.
     #[arg(long, help_heading = "Volume warp (True)", default_value_t = WarpMorphSettings::default().control_spacing)]
     pub control_spacing: u32,
@@ -120,6 +143,23 @@ pub struct MethodArgs {
     /// correspondence, without it.
     #[arg(long, help_heading = "BlobTree (Galin et al.)")]
     pub links: Option<PathBuf>,
+
+    /// A control (key) shape between the source and the target (a BlobTree
+    /// scene file or a built-in scene); repeat for several, in order. The
+    /// generic trees of each pair of consecutive shapes are combined as
+    /// --via-mode says. Each pair uses its built-in spec (a built-in pair)
+    /// or automatic correspondence.
+    #[arg(long, help_heading = "BlobTree (Galin et al.)", conflicts_with = "links")]
+    pub via: Vec<String>,
+
+    /// How the --via shapes are used: `bezier` (the paper's Bézier-like
+    /// morph: de Casteljau's combination of the pairwise generic trees; the
+    /// --via shapes are control shapes, approached but in general not
+    /// reached) or `chain` (the pairwise morphs one after the other: the
+    /// morph is each key shape at evenly spaced times; with two, the source
+    /// at 0, the keys at 1/3 and 2/3, the target at 1).
+    #[arg(long, help_heading = "BlobTree (Galin et al.)", value_enum, default_value_t = ViaModeArg::Bezier)]
+    pub via_mode: ViaModeArg,
 }
 
 /// Which options belong to which method (by their argument ids).
@@ -129,12 +169,16 @@ const OWNERS: &[(&str, &[Method])] = &[
     ("curvature", &[Method::LevelSet]),
     ("max_iterations", &[Method::LevelSet]),
     ("max_unreached", &[Method::LevelSet]),
+    ("landmark_warp", &[Method::LevelSet]),
+    ("warp_map", &[Method::LevelSet]),
     ("points", &[Method::Rbf]),
     ("separation", &[Method::Rbf]),
     ("kernel", &[Method::Rbf]),
     ("tolerance", &[Method::Rbf]),
+    ("influence", &[Method::Rbf]),
     ("warp_spec", &[Method::Warp]),
-    ("landmarks", &[Method::Warp, Method::Rbf]),
+    ("landmark", &[Method::Warp, Method::Rbf, Method::LevelSet]),
+    ("landmarks", &[Method::Warp, Method::Rbf, Method::LevelSet]),
     ("control_spacing", &[Method::Warp]),
     ("speed", &[Method::Tspline]),
     ("nt", &[Method::Tspline]),
@@ -149,6 +193,8 @@ const OWNERS: &[(&str, &[Method])] = &[
     ("refine", &[Method::Tspline]),
     ("refine_rounds", &[Method::Tspline]),
     ("links", &[Method::Blobtree]),
+    ("via", &[Method::Blobtree]),
+    ("via_mode", &[Method::Blobtree]),
 ];
 
 /// The options given on the command line that belong to no method in
@@ -185,13 +231,31 @@ impl MethodArgs {
     /// inputs, for the BlobTree demo specs).
     ///
     /// # Errors
-    /// An unreadable alignment map or links file.
+    /// An unreadable alignment map, landmarks or links file; landmarks
+    /// together with `--align`.
     pub fn apply(&self, mut settings: Settings, source: &str, target: &str) -> anyhow::Result<Settings> {
+        let landmarks = self.landmark_pairs()?;
         let l = &mut settings.level_set;
-        l.align = match &self.align {
-            AlignArg::None => Align::None,
-            AlignArg::Auto => Align::Auto,
-            AlignArg::File(path) => Align::Map(read_map(path)?),
+        l.align = match (&self.align, &landmarks, &self.warp_map) {
+            (AlignArg::None, None, None) => Align::None,
+            (AlignArg::Auto, None, None) => Align::Auto,
+            (AlignArg::File(path), None, None) => Align::Map(read_map(path)?),
+            (AlignArg::None, Some(landmarks), None) => Align::Warp(
+                landmark_warp(landmarks, self.landmark_warp, self.control_spacing)
+                    .map_err(|e| anyhow::anyhow!(error_chain(&e)))
+                    .context("cannot fit a warp through the landmarks")?,
+            ),
+            (AlignArg::None, None, Some(path)) => {
+                let map =
+                    WorldMap::load(path).with_context(|| format!("invalid warp map {}", path.display()))?;
+                Align::Warp(Arc::new(move |x| map.apply(x)))
+            }
+            (_, _, Some(_)) => {
+                bail!("--warp-map places the source on the target: give it without --align or landmarks")
+            }
+            (_, Some(_), None) => {
+                bail!("--align and landmarks both place the source on the target: give one")
+            }
         };
         l.solver = match self.solver {
             SolverArg::Sparse => SolverKind::SparseField,
@@ -206,11 +270,12 @@ impl MethodArgs {
         r.separation = self.separation;
         r.kernel = self.kernel.into();
         r.tolerance = self.tolerance;
-        settings.rbf_correspondences.clone_from(&self.landmarks);
+        let pairs = landmarks.as_ref().map(|l| l.pairs().to_vec()).unwrap_or_default();
+        settings.rbf_correspondences.clone_from(&pairs);
 
         let w = &mut settings.warp;
         w.spec = match self.warp_spec {
-            _ if !self.landmarks.is_empty() => WarpSpec::Landmarks(self.landmarks.clone()),
+            _ if !pairs.is_empty() => WarpSpec::Landmarks(pairs),
             WarpSpecArg::Identity => WarpSpec::Identity,
             WarpSpecArg::Align => WarpSpec::Align,
         };
@@ -244,9 +309,47 @@ impl MethodArgs {
             Some(path) => {
                 MorphSpec::load(path).with_context(|| format!("invalid links file {}", path.display()))?
             }
-            None => isomorph_blobtree::scenes::demo_spec(source, target).unwrap_or_default(),
+            None => {
+                let last = self.via.last().map_or(source, String::as_str);
+                isomorph_blobtree::scenes::demo_spec(last, target).unwrap_or_default()
+            }
         };
+        settings.blobtree.via_mode = match self.via_mode {
+            ViaModeArg::Bezier => isomorph_blobtree::ViaMode::Bezier,
+            ViaModeArg::Chain => isomorph_blobtree::ViaMode::Chain,
+        };
+        let mut from = source;
+        settings.blobtree.via = Vec::with_capacity(self.via.len());
+        for name in &self.via {
+            let shape = isomorph_blobtree::scenes::load(name).with_context(|| format!("--via {name}"))?;
+            let spec = isomorph_blobtree::scenes::demo_spec(from, name).unwrap_or_default();
+            settings.blobtree.via.push(isomorph_blobtree::KeyShape { shape, spec });
+            from = name;
+        }
         Ok(settings)
+    }
+}
+
+impl MethodArgs {
+    /// Whether landmark pairs are given (`--landmark` or `--landmarks`).
+    pub fn has_landmarks(&self) -> bool {
+        !self.landmark.is_empty() || self.landmarks.is_some()
+    }
+
+    /// The `--landmark` pairs and those of the `--landmarks` file,
+    /// validated together; `None` when neither is given.
+    ///
+    /// # Errors
+    /// An unreadable file or an invalid set ([`Landmarks::new`]).
+    fn landmark_pairs(&self) -> anyhow::Result<Option<Landmarks>> {
+        let mut pairs = self.landmark.clone();
+        if let Some(path) = &self.landmarks {
+            pairs.extend_from_slice(Landmarks::load(path)?.pairs());
+        }
+        if pairs.is_empty() {
+            return Ok(None);
+        }
+        Ok(Some(Landmarks::new(&pairs).context("invalid landmarks")?))
     }
 }
 
@@ -275,6 +378,15 @@ fn parse_align(s: &str) -> Result<AlignArg, String> {
 fn parse_weight(s: &str) -> Result<f32, String> {
     let w: f32 = s.parse().map_err(|e| format!("{e}"))?;
     if (0.0..=100.0).contains(&w) { Ok(w) } else { Err(format!("{w} is not in [0, 100]")) }
+}
+
+/// How a BlobTree morph uses its `--via` shapes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ViaModeArg {
+    /// The paper's Bézier-like morph: control shapes, approached.
+    Bezier,
+    /// The pairwise morphs one after the other: key shapes, passed through.
+    Chain,
 }
 
 /// The level-set solvers.

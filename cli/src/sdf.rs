@@ -13,7 +13,7 @@ use std::time::Instant;
 /// Arguments of `isomorph sdf`.
 #[derive(Debug, Args)]
 pub struct SdfArgs {
-    /// A built-in shape (sphere, torus, ball, c-shape, mug, chain, cube, holed-cube) or a
+    /// A built-in shape (sphere, torus, ball, c-shape, mug, chain, cube, holed-cube, apple) or a
     /// mesh file (.obj, .ply, .stl; closed and outward oriented), kept in its
     /// own coordinates.
     pub input: String,

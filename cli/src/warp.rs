@@ -21,7 +21,7 @@ use std::time::Instant;
 /// Arguments of `isomorph warp`.
 #[derive(Debug, Args)]
 pub struct WarpArgs {
-    /// A built-in shape (sphere, torus, ball, c-shape, mug, chain, cube, holed-cube), a
+    /// A built-in shape (sphere, torus, ball, c-shape, mug, chain, cube, holed-cube, apple), a
     /// mesh file (.obj, .ply, .stl), kept in its own coordinates, or a volume:
     /// `.npy` (u8 densities 0–255, surface at 127.5; or f32/f64 fields,
     /// positive inside, surface at 0; placed by its `.json` sidecar if any,
@@ -187,6 +187,11 @@ fn warp_density<T: Density>(
     let warped = as_f32(target)?;
     let npy_path = args.out.join("warped.npy");
     npy::save_npy(&warped, &npy_path)?;
+    // The map in world coordinates: `morph --method level-set --warp-map`
+    // reads it as Breen & Whitaker's generalized warp.
+    let map_path = args.out.join("map.json");
+    std::fs::write(&map_path, warp.world_map().to_json())
+        .with_context(|| format!("cannot write {}", map_path.display()))?;
     let before = marching_cubes(&as_f32(&density)?, 0.5);
     let after = marching_cubes(&warped, 0.5);
     for (mesh, name) in [(&before, "source.obj"), (&after, "warped.obj")] {
@@ -215,7 +220,7 @@ fn warp_density<T: Density>(
         args.filter,
         start.elapsed().as_secs_f64()
     );
-    println!("  wrote {} (+ .json), source.obj, warped.obj, before_after.png", npy_path.display());
+    println!("  wrote {} (+ .json), map.json, source.obj, warped.obj, before_after.png", npy_path.display());
     if let Some(frames) = args.frames {
         let animation = WarpAnimation::new(density, warp.map().clone(), settings, full / 2.0)?;
         let export = ExportSettings {

@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{isomorph, read_json, scratch};
+use common::{assert_ok, isomorph, morph, read_json, scratch, stderr};
 use std::path::Path;
 
 fn bunny() -> String {
@@ -13,7 +13,7 @@ fn bunny() -> String {
 fn demo_writes_frames_sheet_and_report() {
     let out = scratch("demo");
     let o = isomorph(&["demo", "--res", "32", "--frames", "4", "--out", out.to_str().unwrap()]);
-    assert!(o.status.success(), "demo failed: {}", String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "demo failed: {}", stderr(&o));
     let dir = out.join("baseline_mug_to_chain");
     for f in ["frame_000.ply", "frame_003.ply", "contact_sheet.png", "report.json"] {
         assert!(dir.join(f).is_file(), "missing {f}");
@@ -23,7 +23,7 @@ fn demo_writes_frames_sheet_and_report() {
     assert_eq!(report["resolution"], 32);
     let frames = report["frames"].as_array().unwrap();
     assert_eq!(frames.len(), 4);
-    for key in ["t", "vertices", "triangles", "components", "genus", "area", "volume", "seconds"] {
+    for key in ["t", "vertices", "triangles", "components", "voids", "genus", "area", "volume", "seconds"] {
         assert!(frames[0].get(key).is_some(), "frame key {key} missing");
     }
     for end in ["source", "target"] {
@@ -42,6 +42,12 @@ fn demo_writes_frames_sheet_and_report() {
     }
     assert!(level_set["endpoints"]["target"]["mean_voxels"].as_f64().unwrap() < 0.5);
     assert!(out.join("level_set_mug_to_chain/contact_sheet.png").is_file());
+    // Colour through the morph: the painted bunny's and torus's colours.
+    let painted = out.join("level_set_colour_bunny_to_torus");
+    for f in ["frame_000.ply", "frame_003.ply"] {
+        let frame = isomorph_io::mesh::read_mesh(painted.join(f)).unwrap();
+        assert!(frame.colors.is_some(), "{f} has no colours");
+    }
     // The rook becomes the queen in one piece (its built-in links and speeds).
     let blob: serde_json::Value = read_json(out.join("blobtree_rook_to_queen/report.json"));
     for f in blob["frames"].as_array().unwrap() {
@@ -79,7 +85,7 @@ fn demo_writes_frames_sheet_and_report() {
 #[test]
 fn info_prints_bunny_metrics_as_json() {
     let o = isomorph(&["info", &bunny(), "--json"]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_ok(&o);
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["vertices"], 1839);
     assert_eq!(v["triangles"], 3674);
@@ -95,24 +101,13 @@ fn info_prints_bunny_metrics_as_json() {
 #[test]
 fn morph_of_a_mesh_into_a_builtin_shape() {
     let out = scratch("morph");
-    let o = isomorph(&[
-        "morph",
-        "--method",
+    let o = morph(
         "baseline",
-        "--source",
         &bunny(),
-        "--target",
         "sphere",
-        "--res",
-        "24",
-        "--frames",
-        "3",
-        "--format",
-        "obj",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        &["--res", "24", "--frames", "3", "--format", "obj", "--out", out.to_str().unwrap()],
+    );
+    assert_ok(&o);
     assert!(out.join("frame_002.obj").is_file());
     let _ = std::fs::remove_dir_all(&out);
 }
@@ -121,7 +116,7 @@ fn morph_of_a_mesh_into_a_builtin_shape() {
 fn bad_input_is_one_clear_line_and_nonzero_exit() {
     let o = isomorph(&["morph", "--source", "no-such-shape", "--target", "sphere"]);
     assert!(!o.status.success());
-    let err = String::from_utf8_lossy(&o.stderr);
+    let err = stderr(&o);
     assert!(err.starts_with("error: "), "{err}");
     assert!(err.contains("no-such-shape") && err.contains("sphere"), "{err}");
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
@@ -130,53 +125,27 @@ fn bad_input_is_one_clear_line_and_nonzero_exit() {
     std::fs::write(&garbage, b"ply\nformat ascii 1.0\nelement vertex 99999999999\nend_header\n1 2").unwrap();
     let o = isomorph(&["info", garbage.to_str().unwrap()]);
     assert!(!o.status.success());
-    assert!(String::from_utf8_lossy(&o.stderr).starts_with("error: "));
+    assert!(stderr(&o).starts_with("error: "));
     let _ = std::fs::remove_file(&garbage);
 
     let o = isomorph(&["morph", "--source", "sphere", "--target", "torus", "--res", "2"]);
     assert!(!o.status.success(), "resolution below the minimum is rejected");
 
-    let o = isomorph(&[
-        "morph", "--method", "tspline", "--source", "sphere", "--target", "torus", "--refine", "0",
-    ]);
+    let o = morph("tspline", "sphere", "torus", &["--refine", "0"]);
     assert!(!o.status.success(), "a zero refinement tolerance is rejected");
-    assert!(String::from_utf8_lossy(&o.stderr).contains("tolerance"));
+    assert!(stderr(&o).contains("tolerance"));
 
     // Options of another method are refused, naming them; the level set's
     // curvature is a weight in [0, 100].
     let tspline = ["morph", "--method", "tspline", "--source", "sphere", "--target", "torus"];
     let o = isomorph(&[&tspline[..], &["--curvature", "2"]].concat());
     assert!(!o.status.success());
-    let err = String::from_utf8_lossy(&o.stderr);
+    let err = stderr(&o);
     assert!(err.contains("--curvature (level-set)") && err.contains("tspline"), "{err}");
-    let o = isomorph(&[
-        "morph",
-        "--method",
-        "level-set",
-        "--source",
-        "sphere",
-        "--target",
-        "torus",
-        "--curvature",
-        "sometimes",
-    ]);
+    let o = morph("level-set", "sphere", "torus", &["--curvature", "sometimes"]);
     assert!(!o.status.success());
-    let o = isomorph(&[
-        "morph",
-        "--method",
-        "level-set",
-        "--source",
-        "sphere",
-        "--target",
-        "torus",
-        "--points",
-        "10",
-    ]);
-    assert!(
-        String::from_utf8_lossy(&o.stderr).contains("--points (rbf)"),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let o = morph("level-set", "sphere", "torus", &["--points", "10"]);
+    assert!(stderr(&o).contains("--points (rbf)"), "{}", stderr(&o));
 }
 
 /// Splits `.npy` bytes into the header text and the f32 values.
@@ -197,7 +166,7 @@ fn sdf_writes_npy_and_sidecar() {
     std::fs::create_dir_all(&out).unwrap();
     let npy = out.join("sphere.npy");
     let o = isomorph(&["sdf", "sphere", "--res", "24", "--pad", "0.1", "--out", npy.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_ok(&o);
     assert!(String::from_utf8_lossy(&o.stdout).contains("24 x 24 x 24 nodes"));
     let meta: serde_json::Value = read_json(out.join("sphere.json"));
     assert_eq!(meta["sign"], "positive inside");
@@ -222,7 +191,7 @@ fn sdf_writes_npy_and_sidecar() {
     // A mesh keeps its own coordinates; the box is its bounds padded 10 %.
     let npy = out.join("bunny.npy");
     let o = isomorph(&["sdf", &bunny(), "--res", "16", "--out", npy.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_ok(&o);
     let meta: serde_json::Value = read_json(out.join("bunny.json"));
     let dims: Vec<u64> = meta["dims"].as_array().unwrap().iter().map(|v| v.as_u64().unwrap()).collect();
     assert_eq!(dims[0], 16, "x is the bunny's longest side");
@@ -236,7 +205,7 @@ fn sdf_writes_npy_and_sidecar() {
 /// Runs `isomorph align ARGS`, expecting success, and parses its JSON.
 fn align_json(args: &[&str]) -> serde_json::Value {
     let o = isomorph(&[&["align"], args].concat());
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_ok(&o);
     serde_json::from_slice(&o.stdout).unwrap()
 }
 
@@ -295,11 +264,11 @@ fn align_puts_a_moved_mesh_back() {
     // Errors: an open mesh has no volume to measure, an unknown extension.
     let teapot = Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/teapot.ply");
     let o = isomorph(&["align", teapot.to_str().unwrap(), "sphere", "--out", mesh.to_str().unwrap()]);
-    let err = String::from_utf8_lossy(&o.stderr);
+    let err = stderr(&o);
     assert!(!o.status.success() && err.starts_with("error: ") && err.contains("not closed"), "{err}");
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
     let o = isomorph(&["align", "sphere", "torus", "--out", out.join("x.vtk").to_str().unwrap()]);
-    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains(".ply, .obj or .stl"));
+    assert!(!o.status.success() && stderr(&o).contains(".ply, .obj or .stl"));
     let _ = std::fs::remove_dir_all(&out);
 }
 
@@ -322,7 +291,7 @@ fn warp_drags_a_sphere_point_and_writes_volume_meshes_and_png() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "warp failed: {}", String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "warp failed: {}", stderr(&o));
     for f in ["warped.npy", "warped.json", "source.obj", "warped.obj", "before_after.png"] {
         assert!(out.join(f).is_file(), "missing {f}");
     }
@@ -344,7 +313,7 @@ fn warp_drags_a_sphere_point_and_writes_volume_meshes_and_png() {
     assert!((after.min.x - before.min.x).abs() < 0.02, "far side stays: {} vs {}", before.min.x, after.min.x);
     // A malformed drag is one clear error line.
     let o = isomorph(&["warp", "sphere", "--drag", "1,2:3,4,5", "--out", out.to_str().unwrap()]);
-    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("three finite numbers"));
+    assert!(!o.status.success() && stderr(&o).contains("three finite numbers"));
     let _ = std::fs::remove_dir_all(&out);
 }
 
@@ -361,7 +330,7 @@ fn level_set_morph_takes_an_align_file_and_prints_its_report() {
         ["morph", "--method", "level-set", "--source", "mug", "--target", "chain", "--align", map_arg];
     let o =
         isomorph(&[&morph[..], &["--res", "32", "--frames", "3", "--report", "--out", frames_arg]].concat());
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_ok(&o);
     let report: serde_json::Value = serde_json::from_slice(&o.stdout).expect("stdout is the JSON report");
     assert_eq!(report["method"], "level-set");
     assert_eq!(report["frames"].as_array().unwrap().len(), 3);
@@ -376,11 +345,7 @@ fn level_set_morph_takes_an_align_file_and_prints_its_report() {
     std::fs::write(&map, r#"{"matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[1,0,0,1]]}"#).unwrap();
     let o = isomorph(&[&morph[..], &["--out", frames_arg]].concat());
     assert!(!o.status.success());
-    assert!(
-        String::from_utf8_lossy(&o.stderr).contains("last row"),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    assert!(stderr(&o).contains("last row"), "{}", stderr(&o));
     let _ = std::fs::remove_dir_all(&out);
 }
 
@@ -392,7 +357,7 @@ fn warp_and_morph_take_npy_and_raw_volumes() {
     // An f32 distance volume with its sidecar, written by `isomorph sdf`.
     let npy = out.join("sphere.npy");
     let o = isomorph(&["sdf", "sphere", "--res", "32", "--pad", "0.2", "--out", npy.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_ok(&o);
     let warped = out.join("from-npy");
     let o = isomorph(&[
         "warp",
@@ -404,7 +369,7 @@ fn warp_and_morph_take_npy_and_raw_volumes() {
         "--out",
         warped.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_ok(&o);
     let before = read_mesh(warped.join("source.obj")).unwrap().bounds();
     let after = read_mesh(warped.join("warped.obj")).unwrap().bounds();
     // The volume keeps its world placement from the sidecar.
@@ -423,13 +388,13 @@ fn warp_and_morph_take_npy_and_raw_volumes() {
     let moved = out.join("from-raw");
     let args = ["warp", raw.to_str().unwrap(), "--move", "3,3,3:0,0,2", "--out", moved.to_str().unwrap()];
     let o = isomorph(&[&args[..], &["--raw-dims", "24,24,24"]].concat());
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_ok(&o);
     assert!(moved.join("warped.npy").is_file() && moved.join("before_after.png").is_file());
     // Without dimensions, or with the wrong ones, one clear error line.
     let o = isomorph(&args);
-    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("--raw-dims"));
+    assert!(!o.status.success() && stderr(&o).contains("--raw-dims"));
     let o = isomorph(&[&args[..], &["--raw-dims", "24,24,23"]].concat());
-    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("bytes"));
+    assert!(!o.status.success() && stderr(&o).contains("bytes"));
     // `morph` takes both volumes: the density cube (fitted like a mesh,
     // its level kept) into the distance-volume sphere.
     let morphed = out.join("morph");
@@ -437,12 +402,12 @@ fn warp_and_morph_take_npy_and_raw_volumes() {
     let args = [&args[..], &[npy.to_str().unwrap(), "--res", "32", "--frames", "3", "--out"]].concat();
     let args = [&args[..], &[morphed.to_str().unwrap()]].concat();
     let o = isomorph(&[&args[..], &["--raw-dims", "24,24,24"]].concat());
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_ok(&o);
     let report: serde_json::Value = read_json(morphed.join("report.json"));
     assert_eq!(report["morph"]["converged"], true, "{report}");
     assert!(report["endpoints"]["target"]["mean_voxels"].as_f64().unwrap() < 0.5, "{report}");
     let o = isomorph(&args);
-    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("--raw-dims"));
+    assert!(!o.status.success() && stderr(&o).contains("--raw-dims"));
     let _ = std::fs::remove_dir_all(&out);
 }
 
@@ -464,40 +429,88 @@ fn blob_polygonizes_a_scene_and_morph_takes_blobtrees() {
         "--out",
         out.join("one").to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_ok(&o);
     let mesh = isomorph_io::mesh::read_mesh(out.join("one/surface.ply")).unwrap();
     assert_eq!((mesh.connected_components(), mesh.genus()), (1, Some(0)));
     assert!(out.join("one/preview.png").is_file());
     // The capsule into the built-in rook, automatic correspondence.
     let frames = out.join("morph");
-    let o = isomorph(&[
-        "morph",
-        "--method",
+    let o = morph(
         "blobtree",
-        "--source",
         scene.to_str().unwrap(),
-        "--target",
         "rook",
-        "--res",
-        "32",
-        "--frames",
-        "3",
-        "--report",
-        "--out",
-        frames.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        &["--res", "32", "--frames", "3", "--report", "--out", frames.to_str().unwrap()],
+    );
+    assert_ok(&o);
     let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(report["method"], "blobtree");
     for end in ["source", "target"] {
         let e = &report["endpoints"][end];
         assert!(e["mean_voxels"].as_f64().unwrap() < 0.5, "{end}: {e}");
     }
+    // The queen as a key shape (chain: reached at t = 0.5) and, by default,
+    // as a Bézier control shape (approached, not reached).
+    let queen = isomorph_blobtree::scenes::queen().mesh(32).unwrap();
+    for mode in [&["--via-mode", "chain"][..], &[]] {
+        let out = frames.to_str().unwrap();
+        let args: [&[&str]; 2] = [
+            &["--via", "queen", "--res", "32", "--frames", "3", "--no-preview", "--report", "--out", out],
+            mode,
+        ];
+        let o = morph("blobtree", "rook", "bear", &args.concat());
+        assert_ok(&o);
+        let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(report["morph"]["details"]["key shapes"], 3, "{report}");
+        let middle = isomorph_io::mesh::read_mesh(frames.join("frame_001.ply")).unwrap();
+        let reached = (middle.signed_volume() - queen.signed_volume()).abs() < 0.15 * queen.signed_volume();
+        let chain = !mode.is_empty();
+        assert_eq!(
+            report["morph"]["details"]["via mode"],
+            if chain { "chain" } else { "bezier" },
+            "{report}"
+        );
+        assert_eq!(
+            reached,
+            chain,
+            "queen volume {} at t = 0.5: {}",
+            queen.signed_volume(),
+            middle.signed_volume()
+        );
+        if chain {
+            assert_eq!(middle.genus(), queen.genus());
+        }
+    }
+    let o = isomorph(&[
+        "morph",
+        "--method",
+        "level-set",
+        "--source",
+        "sphere",
+        "--via",
+        "torus",
+        "--target",
+        "ball",
+    ]);
+    assert!(!o.status.success() && stderr(&o).contains("--via"));
+    // Any built-in scene or links spec is dumped as the shipped file (RON) or as JSON.
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../blobtree/scenes");
+    let o = isomorph(&["blob", "--dump", "rook"]);
+    assert_ok(&o);
+    let rook = std::fs::read_to_string(shipped.join("rook.ron")).unwrap();
+    assert_eq!(String::from_utf8_lossy(&o.stdout).trim_end(), rook.trim_end());
+    let o = isomorph(&["blob", "--dump", "queen", "--format", "json"]);
+    let queen = isomorph_blobtree::BlobTree::from_json(&String::from_utf8_lossy(&o.stdout)).unwrap();
+    assert_eq!(queen.root(), isomorph_blobtree::scenes::queen().root());
+    let o = isomorph(&["blob", "--dump", "rook_queen"]);
+    let links = std::fs::read_to_string(shipped.join("rook_queen.links.ron")).unwrap();
+    assert_eq!(String::from_utf8_lossy(&o.stdout).trim_end(), links.trim_end());
+    let o = isomorph(&["blob", "--help"]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("Scene files"));
     // A scene with a negative radius is one error line naming the node.
     std::fs::write(&scene, r#"(root: (kind: "point", vertices: [(0, 0, 0)], radius: -1.0))"#).unwrap();
     let o = isomorph(&["blob", scene.to_str().unwrap(), "--out", out.to_str().unwrap()]);
     assert!(!o.status.success());
-    let err = String::from_utf8_lossy(&o.stderr);
+    let err = stderr(&o);
     assert!(err.contains("radius") && err.lines().count() == 1, "{err}");
     let _ = std::fs::remove_dir_all(&out);
 }
@@ -506,40 +519,28 @@ fn blob_polygonizes_a_scene_and_morph_takes_blobtrees() {
 fn contours_and_rbf_morph_run_and_refuse_bad_input() {
     let out = scratch("contours");
     let o = isomorph(&["contours", "x", "o", "--frames", "3", "--res", "32", "--out", out.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_ok(&o);
     for f in ["frame_000.png", "frame_002.png", "contact_sheet.png", "spacetime.ply", "spacetime.png"] {
         assert!(out.join(f).is_file(), "missing {f}");
     }
     let o = isomorph(&["contours", "x", "no-such.png", "--out", out.to_str().unwrap()]);
-    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("no-such.png"));
+    assert!(!o.status.success() && stderr(&o).contains("no-such.png"));
     // The paper's comparison row: the distance blend writes the same
     // frames and sheet (it has no space-time surface).
     let blend = out.join("baseline");
     let args = ["contours", "x", "o", "--frames", "3", "--res", "32", "--method", "baseline", "--out"];
     let o = isomorph(&[&args[..], &[blend.to_str().unwrap()]].concat());
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_ok(&o);
     assert!(blend.join("frame_001.png").is_file() && !blend.join("spacetime.ply").exists());
     // RBF morph with a mesh: the bunny into the sphere, the report says rbf.
     let frames = out.join("morph");
-    let o = isomorph(&[
-        "morph",
-        "--method",
+    let o = morph(
         "rbf",
-        "--source",
         "bunny",
-        "--target",
         "sphere",
-        "--points",
-        "150",
-        "--res",
-        "24",
-        "--frames",
-        "2",
-        "--report",
-        "--out",
-        frames.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        &["--points", "150", "--res", "24", "--frames", "2", "--report", "--out", frames.to_str().unwrap()],
+    );
+    assert_ok(&o);
     let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(report["method"], "rbf");
     assert_eq!(report["frames"][1]["components"], 1);
@@ -570,23 +571,13 @@ fn landmarks_warp_the_rbf_transformation() {
         isomorph(&all)
     };
     let o = run(&["--out", out.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_ok(&o);
     let report: serde_json::Value = read_json(out.join("report.json"));
     assert_eq!(report["method"], "rbf-warp");
     assert_eq!(report["morph"]["details"]["correspondences"], 8);
-    let o = isomorph(&[
-        "morph",
-        "--method",
-        "tspline",
-        "--source",
-        "sphere",
-        "--target",
-        "torus",
-        "--landmark",
-        "0,0,0:0,0,0",
-    ]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success() && err.contains("--landmarks (warp, rbf)"), "{err}");
+    let o = morph("tspline", "sphere", "torus", &["--landmark", "0,0,0:0,0,0"]);
+    let err = stderr(&o);
+    assert!(!o.status.success() && err.contains("--landmark (warp, rbf, level-set)"), "{err}");
     let _ = std::fs::remove_dir_all(&out);
 }
 
@@ -614,7 +605,7 @@ fn reconstruct_takes_a_slices_file_and_a_folder_of_pngs() {
     let surface = out.join("from-json");
     let o =
         isomorph(&["reconstruct", file.to_str().unwrap(), "--res", "48", "--out", surface.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_ok(&o);
     let mesh = read_mesh(surface.join("surface.ply")).unwrap();
     assert_eq!((mesh.connected_components(), mesh.genus()), (1, Some(0)));
     let size = mesh.bounds().size();
@@ -635,14 +626,14 @@ fn reconstruct_takes_a_slices_file_and_a_folder_of_pngs() {
     let lens = out.join("from-pngs");
     let o =
         isomorph(&["reconstruct", pngs.to_str().unwrap(), "--res", "40", "--out", lens.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_ok(&o);
     let mesh = read_mesh(lens.join("surface.ply")).unwrap();
     assert_eq!((mesh.connected_components(), mesh.genus()), (1, Some(0)));
 
     // A slice with two planes is one error line naming the slice.
     std::fs::write(&file, r#"{"slices": [{"z": 0, "origin": [0, 0, 0], "polylines": []}]}"#).unwrap();
     let o = isomorph(&["reconstruct", file.to_str().unwrap(), "--out", surface.to_str().unwrap()]);
-    let err = String::from_utf8_lossy(&o.stderr);
+    let err = stderr(&o);
     assert!(!o.status.success() && err.contains("slice 0") && err.contains("either `z`"), "{err}");
     let _ = std::fs::remove_dir_all(&out);
 }
@@ -655,7 +646,7 @@ fn usd_format_writes_one_stage_with_a_sample_per_frame() {
         &[&args[..], &["--frames", "3", "--format", "usd", "--no-preview", "--out", out.to_str().unwrap()]]
             .concat(),
     );
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_ok(&o);
     assert!(!out.join("frame_000.ply").exists() && !out.join("preview.gif").exists());
     let text = std::fs::read_to_string(out.join("morph.usda")).unwrap();
     assert!(text.starts_with("#usda 1.0") && text.contains("endTimeCode = 2"), "{}", &text[..300]);
@@ -679,7 +670,7 @@ fn rbf_tolerance_fits_many_points_through_fewer_centres() {
     ];
     let greedy = ["--points", "1500", "--tolerance", "0.05", "--no-preview", "--out", out.to_str().unwrap()];
     let o = isomorph(&[&args[..], &greedy[..]].concat());
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_ok(&o);
     let report: serde_json::Value = read_json(out.join("report.json"));
     let morph = &report["morph"];
     assert_eq!(morph["outcome"], "converged", "{morph}");
@@ -688,9 +679,45 @@ fn rbf_tolerance_fits_many_points_through_fewer_centres() {
     assert!(morph["residual"]["value"].as_f64().unwrap() <= 0.05, "{morph}");
     // Without a tolerance, 9000 points are over the exact fit's limit.
     let o = isomorph(&[&args[..], &["--points", "9000", "--out", out.to_str().unwrap()]].concat());
-    let err = String::from_utf8_lossy(&o.stderr);
+    let err = stderr(&o);
     assert!(!o.status.success() && err.contains("points"), "{err}");
     let o = isomorph(&[&args[..], &["--tolerance", "0", "--out", out.to_str().unwrap()]].concat());
-    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("tolerance"));
+    assert!(!o.status.success() && stderr(&o).contains("tolerance"));
     let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
+fn rbf_influence_shapes_from_the_command_line() {
+    let out = scratch("rbf_influence");
+    let dir = out.to_str().unwrap();
+    let run = |extra: &[&str]| {
+        let base = ["morph", "--source", "sphere", "--target", "torus", "--res", "24", "--frames", "3"];
+        isomorph(&[&base[..], extra, &["--no-preview", "--report", "--out", dir][..]].concat())
+    };
+    let o = run(&["--method", "rbf", "--points", "100", "--influence", "cube"]);
+    assert_ok(&o);
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(report["morph"]["method"], "rbf-influence", "{report}");
+    assert_eq!(report["morph"]["details"]["shapes"], 3, "{report}");
+    for end in ["source", "target"] {
+        let e = &report["endpoints"][end];
+        assert!(e["mean_voxels"].as_f64().unwrap() < 0.5, "{end}: {e}");
+    }
+    let o = run(&[
+        "--method",
+        "rbf",
+        "--points",
+        "50",
+        "--influence",
+        "cube",
+        "--influence",
+        "ball",
+        "--influence",
+        "mug",
+    ]);
+    let err = stderr(&o);
+    assert!(!o.status.success() && err.contains("one or two influence shapes"), "{err}");
+    let o = run(&["--method", "level-set", "--influence", "cube"]);
+    let err = stderr(&o);
+    assert!(!o.status.success() && err.contains("--influence (rbf)"), "{err}");
 }

@@ -3,19 +3,14 @@
 
 mod common;
 
-use common::isomorph;
+use common::{isomorph, morph, stderr};
 use std::path::PathBuf;
-use std::process::Output;
 
 /// An empty scratch folder.
 fn scratch(name: &str) -> PathBuf {
     let dir = common::scratch(&format!("hostile-{name}"));
     std::fs::create_dir_all(&dir).unwrap();
     dir
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
 /// A unit cube as OBJ text, faces reversed when `inside_out`.
@@ -52,21 +47,12 @@ fn unusable_meshes_are_refused_by_every_method() {
     for method in ["baseline", "level-set", "rbf", "warp", "tspline"] {
         for (input, expected) in [(&triangle, "empty"), (&flipped, "inside out"), (&polygon, "empty")] {
             let out = dir.join(format!("{method}-out"));
-            let o = isomorph(&[
-                "morph",
-                "--method",
+            let o = morph(
                 method,
-                "--source",
                 input.to_str().unwrap(),
-                "--target",
                 "sphere",
-                "--res",
-                "24",
-                "--frames",
-                "3",
-                "--out",
-                out.to_str().unwrap(),
-            ]);
+                &["--res", "24", "--frames", "3", "--out", out.to_str().unwrap()],
+            );
             let err = stderr(&o);
             assert!(!o.status.success(), "{method} accepted {}: {err}", input.display());
             assert!(err.contains(expected) && err.contains("source"), "{method}, {}: {err}", input.display());
@@ -121,19 +107,7 @@ fn user_numbers_that_would_wrap_or_mislead_are_refused() {
         out.to_str().unwrap(),
     ]);
     assert!(!o.status.success() && stderr(&o).contains("positive radius"), "{}", stderr(&o));
-    let o = isomorph(&[
-        "morph",
-        "--method",
-        "tspline",
-        "--source",
-        "sphere",
-        "--target",
-        "torus",
-        "--step",
-        "1e-300",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = morph("tspline", "sphere", "torus", &["--step", "1e-300", "--out", out.to_str().unwrap()]);
     let err = stderr(&o);
     assert!(!o.status.success() && err.contains("1e-300") && err.len() < 300, "{err}");
     let _ = std::fs::remove_dir_all(&dir);
@@ -149,5 +123,19 @@ fn lenient_reads_are_reported() {
     let o = isomorph(&["info", obj.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).starts_with("warning: ") && stderr(&o).contains("normal"), "{}", stderr(&o));
+    // A volume without its sidecar is placed in voxel units, and says so.
+    let npy = dir.join("sphere.npy");
+    let o = isomorph(&["sdf", "sphere", "--res", "16", "--out", npy.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    std::fs::remove_file(dir.join("sphere.json")).unwrap();
+    let frames = dir.join("frames");
+    let o = morph(
+        "baseline",
+        npy.to_str().unwrap(),
+        "sphere",
+        &["--res", "16", "--frames", "2", "--no-preview", "--out", frames.to_str().unwrap()],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no sidecar") && stderr(&o).contains("voxel units"), "{}", stderr(&o));
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{isomorph, read_json, scratch};
+use common::{assert_ok, isomorph, morph, read_json, scratch, stderr};
 use isomorph_common::glam::{Affine3A, Quat, Vec3};
 use isomorph_common::marching_cubes::polygonize;
 use isomorph_common::{Aabb, Shape};
@@ -43,7 +43,7 @@ fn write_pair(dir: &Path) -> (String, String) {
 fn morph_report(args: &[&str]) -> serde_json::Value {
     let base = ["morph", "--method", "tspline", "--res", "32", "--frames", "3", "--report", "--keep-scale"];
     let o = isomorph(&[&base[..], args].concat());
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_ok(&o);
     serde_json::from_slice(&o.stdout).expect("stdout is the JSON report")
 }
 
@@ -147,7 +147,7 @@ fn tspline_knobs_reach_the_settings_and_bad_values_name_their_range() {
                 .concat(),
         );
         assert!(!o.status.success(), "{extra:?} was accepted");
-        String::from_utf8_lossy(&o.stderr).into_owned()
+        stderr(&o)
     };
     let err = run(&["--depth", "9"]);
     assert!(err.contains("--depth") && err.contains("1..=7"), "{err}");
@@ -158,18 +158,8 @@ fn tspline_knobs_reach_the_settings_and_bad_values_name_their_range() {
     let err = run(&["--distance-weight=-1"]);
     assert!(err.contains("distance_weight = -1"), "{err}");
     // The knobs belong to the T-spline method.
-    let o = isomorph(&[
-        "morph",
-        "--method",
-        "level-set",
-        "--source",
-        "sphere",
-        "--target",
-        "torus",
-        "--max-steps",
-        "3",
-    ]);
-    let err = String::from_utf8_lossy(&o.stderr);
+    let o = morph("level-set", "sphere", "torus", &["--max-steps", "3"]);
+    let err = stderr(&o);
     assert!(!o.status.success() && err.contains("--max-steps (tspline)"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -184,8 +174,8 @@ fn the_paper_speed_stall_is_printed_and_reported() {
         ["morph", "--method", "tspline", "--speed", "paper", "--source", "sphere", "--target", "chain"];
     let more = ["--res", "32", "--frames", "3", "--depth", "3", "--out", out.to_str().unwrap()];
     let o = isomorph(&[&args[..], &more[..]].concat());
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let err = String::from_utf8_lossy(&o.stderr);
+    assert_ok(&o);
+    let err = stderr(&o);
     assert!(err.contains("stalled") && err.contains("robust speed"), "{err}");
     let report: serde_json::Value = read_json(out.join("report.json"));
     assert_eq!(report["morph"]["outcome"], "stalled", "{}", report["morph"]);

@@ -1014,7 +1014,7 @@ mod tests {
         assert_eq!(nan_moments.principal_frame(), Err(AlignError::NonFinite));
         let no_volume = Moments { volume: 0.0, ..good };
         assert_eq!(no_volume.principal_frame(), Err(AlignError::Empty));
-        let bad = TriMesh { positions: vec![Vec3::ZERO], triangles: vec![[0, 0, 1]], normals: None };
+        let bad = TriMesh { positions: vec![Vec3::ZERO], triangles: vec![[0, 0, 1]], ..TriMesh::default() };
         assert!(matches!(Moments::from_mesh(&bad), Err(AlignError::Mesh(_))));
     }
 

@@ -89,6 +89,10 @@ where
             m1.frame_mesh(t, expect.resolution).is_err_and(|e| is_time_error(&e)),
             "{name}: frame_mesh({t}) is not an InvalidTime error"
         );
+        assert!(
+            m1.world_transform(t).is_err_and(|e| is_time_error(&e)),
+            "{name}: world_transform({t}) is not an InvalidTime error"
+        );
     }
 
     // The report.
@@ -131,6 +135,9 @@ where
             world.expanded(slack).contains(b.min) && world.expanded(slack).contains(b.max),
             "{name}: frame {t} ({b:?}) leaves the world bounds {world:?}"
         );
+        let placed = m1.frame(t).unwrap_or_else(|e| panic!("{name}: frame {t}: {e}")).transform;
+        let transform = m1.world_transform(t).unwrap_or_else(|e| panic!("{name}: world_transform {t}: {e}"));
+        assert_eq!(transform, placed, "{name}: world_transform({t}) is not frame({t}).transform");
         let again = m2.frame_mesh(t, expect.resolution).unwrap_or_else(|e| panic!("{name}: frame {t}: {e}"));
         assert!(
             again.positions == mesh.positions && again.triangles == mesh.triangles,

@@ -66,6 +66,7 @@ mod control;
 pub mod fast_marching;
 mod field;
 mod grid;
+mod landmarks;
 pub mod marching_cubes;
 pub mod marching_squares;
 pub mod mesh;
@@ -85,6 +86,7 @@ pub use grid::{
     Bytes, DEFAULT_MEMORY_LIMIT, Grid2, Grid3, GridError, MemoryLimitError, lattice_for_box, memory_limit,
     reserve_memory, set_memory_limit,
 };
+pub use landmarks::{LandmarkError, Landmarks, MIN_LANDMARKS};
 pub use mesh::trimesh::{MeshError, TriMesh};
 pub use morph::{
     BlendSettings, BoxedError, BoxedMorph, ContourBlend, Details, DistanceBlend, DynField, Frame, MissedPart,

@@ -4,12 +4,14 @@
 //! superellipsoids, cylinders and tori as in the paper's Figs. 4 and 16; their
 //! exact proportions are not given in the paper, so these are our own.
 
+use crate::Landmarks;
 use crate::shape::Shape;
 use glam::{Quat, Vec3};
 use std::f32::consts::FRAC_PI_2;
 
 /// Names accepted by [`by_name`], in display order.
-pub const NAMES: [&str; 8] = ["sphere", "torus", "ball", "c-shape", "mug", "chain", "cube", "holed-cube"];
+pub const NAMES: [&str; 9] =
+    ["sphere", "torus", "ball", "c-shape", "mug", "chain", "cube", "holed-cube", "apple"];
 
 /// The built-in model called `name` (see [`NAMES`]), or `None`.
 pub fn by_name(name: &str) -> Option<Shape> {
@@ -22,6 +24,7 @@ pub fn by_name(name: &str) -> Option<Shape> {
         "chain" => chain(),
         "cube" => cube(),
         "holed-cube" => holed_cube(),
+        "apple" => apple(),
         _ => return None,
     })
 }
@@ -52,6 +55,21 @@ pub fn holed_cube() -> Shape {
         .subtract(drill(Quat::IDENTITY, Vec3::new(0.12, -0.12, 0.0)))
         .subtract(drill(Quat::from_rotation_y(FRAC_PI_2), Vec3::new(0.0, 0.12, -0.12)))
         .subtract(drill(Quat::from_rotation_x(FRAC_PI_2), Vec3::new(-0.12, 0.0, 0.12)))
+}
+
+/// Yang & Jüttler's Example 3 source (Fig. 7, apple → teapot): an apple
+/// upright along y, a flattened ellipsoid (half width 0.3, half height
+/// 0.26) with a spherical dimple at the top (radius 0.1) and a shallower one
+/// at the bottom, and a stem (radius 0.02) rising from the top dimple to
+/// y = 0.36. Genus 0.
+pub fn apple() -> Shape {
+    let body = Shape::superellipsoid(Vec3::new(0.3, 0.26, 0.3), 1.0, 1.0);
+    let top = Shape::sphere(0.1).translated(Vec3::new(0.0, 0.3, 0.0));
+    let bottom = Shape::sphere(0.07).translated(Vec3::new(0.0, -0.3, 0.0));
+    let stem = Shape::cylinder(0.02, 0.08)
+        .rotated(Quat::from_rotation_x(-FRAC_PI_2))
+        .translated(Vec3::new(0.0, 0.28, 0.0));
+    body.subtract(top).subtract(bottom).union(stem)
 }
 
 /// Breen's ball (Fig. 4): a small sphere lying mostly inside the left half of
@@ -99,6 +117,32 @@ pub fn chain() -> Shape {
     link(-1).union(link(0)).union(link(1))
 }
 
+/// Radius of [`finned_ball`]'s ball.
+pub const FIN_BALL_RADIUS: f32 = 0.25;
+
+/// A ball (radius [`FIN_BALL_RADIUS`]) with a fin reaching to x = 0.58,
+/// turned by `angle` (radians) about z: `finned_ball(0.0)` →
+/// `finned_ball(π/2)` is a part that should travel a quarter circle, the
+/// kind of morph Breen & Whitaker's landmarks exist for (§6.2, the dart's
+/// fins becoming the X-29's wings).
+pub fn finned_ball(angle: f32) -> Shape {
+    let fin = Shape::rounded_cuboid(Vec3::new(0.2, 0.06, 0.06), 0.03).translated(Vec3::new(0.38, 0.0, 0.0));
+    Shape::sphere(FIN_BALL_RADIUS).union(fin).rotated(Quat::from_rotation_z(angle))
+}
+
+/// Landmarks for `finned_ball(0.0)` → `finned_ball(π/2)`: the fin's tip and
+/// a point on its side go round with it, four points of the ball stay.
+pub fn fin_turn_landmarks() -> Landmarks {
+    let turn = Quat::from_rotation_z(FRAC_PI_2);
+    let r = FIN_BALL_RADIUS;
+    let moving = [Vec3::new(0.58, 0.0, 0.0), Vec3::new(0.4, 0.06, 0.0)];
+    let fixed =
+        [Vec3::new(0.0, 0.0, r), Vec3::new(0.0, 0.0, -r), Vec3::new(-r, 0.0, 0.0), Vec3::new(0.0, -r, 0.0)];
+    let pairs: Vec<(Vec3, Vec3)> =
+        moving.iter().map(|&p| (p, turn * p)).chain(fixed.iter().map(|&p| (p, p))).collect();
+    Landmarks::new(&pairs).expect("four ball points off the fin's plane and two fin points")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -130,6 +174,12 @@ mod tests {
         assert!(mug.distance(Vec3::new(0.0, -0.27, 0.0)) > 0.0, "floor");
         assert!(mug.distance(Vec3::new(0.41, 0.0, 0.0)) > 0.0, "handle");
         assert!(mug.distance(Vec3::new(0.32, 0.0, 0.0)) < 0.0, "hole of the handle");
+        let apple = apple();
+        assert!(apple.distance(Vec3::ZERO) > 0.0, "solid");
+        assert!(apple.distance(Vec3::new(0.0, 0.23, 0.05)) < 0.0, "top dimple");
+        assert!(apple.distance(Vec3::new(0.0, -0.245, 0.03)) < 0.0, "bottom dimple");
+        assert!(apple.distance(Vec3::new(0.0, 0.33, 0.0)) > 0.0, "stem");
+        assert!(apple.distance(Vec3::new(0.0, 0.37, 0.0)) < 0.0, "stem top");
         let chain = chain();
         assert!(chain.distance(Vec3::new(-0.19, 0.14, 0.0)) > 0.0, "left link");
         assert!(chain.distance(Vec3::new(0.0, 0.0, 0.14)) > 0.0, "middle link");

@@ -51,7 +51,8 @@ pub trait Implicit: Field3 + fmt::Debug + Send + Sync + 'static {
 
 #[derive(Debug)]
 enum Repr {
-    Mesh { mesh: TriMesh, sdf: MeshSdf },
+    // The distance structure boxed: it is most of the variant's size.
+    Mesh { mesh: TriMesh, sdf: Box<MeshSdf> },
     Volume(Grid3<f32>),
     Shape(Shape),
     Implicit { field: Arc<dyn Implicit>, bounds: Aabb },
@@ -117,7 +118,7 @@ impl Solid {
     pub fn mesh(mesh: TriMesh) -> Result<Self, MorphError> {
         mesh.validate()?;
         let sdf = MeshSdf::new(&mesh)?;
-        Ok(Self(Arc::new(Repr::Mesh { mesh, sdf })))
+        Ok(Self(Arc::new(Repr::Mesh { mesh, sdf: Box::new(sdf) })))
     }
 
     /// A signed distance volume (positive inside, world units) on its grid.
@@ -228,7 +229,7 @@ impl Solid {
                         ));
                     }
                 } else {
-                    if !probe(sdf)?.0 {
+                    if !probe(&**sdf)?.0 {
                         return Err(empty(format!(
                             "the open mesh ({} boundary edges) encloses nothing: no node of a {PROBE_RESOLUTION}³ \
                              probe grid over its box has winding number above ½",

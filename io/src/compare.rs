@@ -110,6 +110,8 @@ pub struct Row {
     pub volume: Vec<f64>,
     /// Components per frame.
     pub components: Vec<usize>,
+    /// Of those, walls of enclosed cavities per frame.
+    pub voids: Vec<usize>,
     /// The largest Hausdorff distance between consecutive frames (world voxels).
     pub largest_step_voxels: Option<f32>,
 }
@@ -137,6 +139,7 @@ impl Row {
             area: Vec::new(),
             volume: Vec::new(),
             components: Vec::new(),
+            voids: Vec::new(),
             largest_step_voxels: None,
         }
     }
@@ -163,6 +166,7 @@ impl Row {
             area: report.frames.iter().map(|f| f.area).collect(),
             volume: report.frames.iter().map(|f| f.volume).collect(),
             components: report.frames.iter().map(|f| f.components).collect(),
+            voids: report.frames.iter().map(|f| f.voids).collect(),
             largest_step_voxels: report.largest_step_voxels,
             ..Self::new(method, Status::Ok, None)
         }

@@ -26,10 +26,28 @@
 //! Hausdorff distance from the frame before (how far the surface jumped);
 //! `largest_step` the largest of them. `morph` is the method's
 //! [`MorphReport`].
+//!
+//! # Colour
+//! With [`ExportSettings::colors`], every frame carries per-vertex colours
+//! (Breen & Whitaker Fig. 13): a vertex `p` of the frame at `t` is taken
+//! back to where the morph places the same field point in the frames at 0
+//! and 1 ([`Morph::ends_of`]: `W(0) · W(t)⁻¹ p` and `W(1) · W(t)⁻¹ p` for a
+//! placement `W` = [`Morph::world_transform`], the identity for methods that
+//! do not place their frames; the inverse of Breen's `T(x, α)` for a level
+//! set placed by a warp), and gets `(1 − t) · source colour at the surface
+//! point closest to the first + t · target colour at the one closest to the
+//! second` ([`ColorLookup`]), sRGB components blended linearly. At `t = 0` a
+//! vertex thus gets exactly the source's colour at its closest source
+//! point, at `t = 1` the target's. Frame files (PLY `uchar red green blue`,
+//! OBJ `v x y z r g b`), `morph.usda` (per-vertex `displayColor`), the
+//! contact sheet and `preview.gif` then show them. Without it nothing about
+//! the output changes.
 
 use crate::mesh::{MeshFormat, write_mesh};
 use crate::render::{Camera, Image, RenderSettings, contact_sheet, render, write_gif};
 use crate::usd::{UsdSettings, write_usda};
+use isomorph_common::glam::Vec3;
+use isomorph_common::mesh::color::ColorLookup;
 use isomorph_common::mesh::distance::{SurfaceDistance, surface_distance};
 use isomorph_common::{Aabb, Control, Morph, MorphError, Solid, TriMesh};
 use isomorph_common::{BoxedError, MorphReport};
@@ -82,6 +100,34 @@ pub struct ExportSettings {
     pub distance_samples: usize,
     /// Surface samples per mesh for the distance between consecutive frames.
     pub step_samples: usize,
+    /// Colour the frames from the inputs' colours (see the [module
+    /// docs](self)); `None` (the default) writes no colours.
+    pub colors: Option<FrameColors>,
+}
+
+/// The inputs' colours, for [`ExportSettings::colors`].
+#[derive(Debug, Clone)]
+pub struct FrameColors {
+    /// The source's colours (in the source's world placement).
+    pub source: ColorLookup,
+    /// The target's colours (in the target's world placement).
+    pub target: ColorLookup,
+}
+
+impl FrameColors {
+    /// Colours `mesh`, the world-space frame at `t`, whose vertices sit at
+    /// `on_source` and `on_target` in the frames at 0 and 1
+    /// ([`Morph::ends_of`]).
+    fn paint(&self, mesh: &mut TriMesh, t: f32, [on_source, on_target]: [Vec<Vec3>; 2]) {
+        let lookup = |lookup: &ColorLookup, points: &[Vec3]| {
+            let mut colors = vec![Vec3::ZERO; points.len()];
+            lookup.colors_at(points, &mut colors);
+            colors
+        };
+        let from_source = lookup(&self.source, &on_source);
+        let from_target = lookup(&self.target, &on_target);
+        mesh.colors = Some(from_source.iter().zip(&from_target).map(|(s, g)| s.lerp(*g, t)).collect());
+    }
 }
 
 impl Default for ExportSettings {
@@ -101,6 +147,7 @@ impl Default for ExportSettings {
             target_reference: None,
             distance_samples: 20_000,
             step_samples: 4_000,
+            colors: None,
         }
     }
 }
@@ -160,8 +207,10 @@ pub struct FrameReport {
     pub vertices: usize,
     /// Triangle count.
     pub triangles: usize,
-    /// Connected components.
+    /// Connected components (outer shells and cavity walls).
     pub components: usize,
+    /// Of those, walls of enclosed cavities ([`MeshMetrics::voids`](isomorph_common::mesh::metrics::MeshMetrics::voids)).
+    pub voids: usize,
     /// Genus, when the frame is a closed 2-manifold.
     pub genus: Option<i64>,
     /// Surface area (world units²).
@@ -240,6 +289,12 @@ impl Report {
         self.frames.iter().map(|f| f.components).max().unwrap_or(0)
     }
 
+    /// The largest number of outer shells (components that are not cavity
+    /// walls) over all frames.
+    pub fn max_shells(&self) -> usize {
+        self.frames.iter().map(|f| f.components - f.voids).max().unwrap_or(0)
+    }
+
     /// Genus per frame.
     pub fn genus_sequence(&self) -> Vec<Option<i64>> {
         self.frames.iter().map(|f| f.genus).collect()
@@ -296,9 +351,15 @@ fn export_on_pool<M: Morph + ?Sized>(
             control.check()?;
             let frame_start = Instant::now();
             let t = i as f32 / (total - 1) as f32;
-            let mesh = morph
+            let mut mesh = morph
                 .frame_mesh(t, settings.resolution)
                 .map_err(|e| ExportError::Frame { t, source: BoxedError::new(e) })?;
+            if let Some(colors) = &settings.colors {
+                let ends = morph
+                    .ends_of(t, &mesh.positions)
+                    .map_err(|e| ExportError::Frame { t, source: BoxedError::new(e) })?;
+                colors.paint(&mut mesh, t, ends);
+            }
             let file = if settings.frame_files {
                 let file = format!("frame_{i:03}.{}", settings.format.extension());
                 write_mesh(&mesh, dir.join(&file), settings.format)?;
@@ -315,6 +376,7 @@ fn export_on_pool<M: Morph + ?Sized>(
                 vertices: m.vertices,
                 triangles: m.triangles,
                 components: m.components,
+                voids: m.voids,
                 genus: m.genus,
                 area: m.area,
                 volume: m.volume,

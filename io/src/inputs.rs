@@ -99,6 +99,40 @@ pub enum InputError {
     },
 }
 
+/// The sRGB colour (components in `[0, 1]`) of an input without vertex
+/// colours that is not a built-in shape, when frames are coloured: a light
+/// grey.
+pub const UNCOLORED: Vec3 = Vec3::splat(0.75);
+
+/// The colour a built-in input (`isomorph_common::models` names and
+/// `bunny`) shows when frames are coloured (sRGB, components in `[0, 1]`);
+/// `None` for other names. Each shape has its own, so that a morph between
+/// two built-ins shows which colour came from where:
+///
+/// | shape | colour | | shape | colour |
+/// |---|---|---|---|---|
+/// | sphere | brick red (0.85, 0.33, 0.25) | | mug | cream (0.9, 0.82, 0.62) |
+/// | torus | sky blue (0.25, 0.55, 0.85) | | chain | steel (0.55, 0.6, 0.68) |
+/// | ball | amber (0.95, 0.7, 0.2) | | cube | purple (0.55, 0.35, 0.7) |
+/// | c-shape | green (0.3, 0.7, 0.4) | | holed-cube | teal (0.2, 0.65, 0.65) |
+/// | bunny | fawn (0.8, 0.6, 0.45) | | apple | apple red (0.75, 0.15, 0.15) |
+pub fn builtin_color(name: &str) -> Option<Vec3> {
+    let [r, g, b] = match name {
+        "sphere" => [0.85, 0.33, 0.25],
+        "torus" => [0.25, 0.55, 0.85],
+        "ball" => [0.95, 0.7, 0.2],
+        "c-shape" => [0.3, 0.7, 0.4],
+        "mug" => [0.9, 0.82, 0.62],
+        "chain" => [0.55, 0.6, 0.68],
+        "cube" => [0.55, 0.35, 0.7],
+        "holed-cube" => [0.2, 0.65, 0.65],
+        "apple" => [0.75, 0.15, 0.15],
+        BUNNY => [0.8, 0.6, 0.45],
+        _ => return None,
+    };
+    Some(Vec3::new(r, g, b))
+}
+
 /// The built-in shape names [`load_solid`] accepts.
 pub fn builtin_names() -> Vec<&'static str> {
     models::NAMES.iter().copied().chain([BUNNY]).collect()
@@ -141,9 +175,17 @@ pub fn load_solid_with_warnings(
     }
     let solid_error = |source| InputError::Solid { spec: spec.to_string(), source };
     let path = Path::new(spec);
+    let mut warnings = Vec::new();
     let volume = if !path.is_file() {
         None
     } else if has_extension(path, "npy") {
+        let sidecar = crate::npy::sidecar_path(path);
+        if !sidecar.is_file() {
+            warnings.push(format!(
+                "no sidecar {}: the volume is placed in voxel units (spacing 1) with its first voxel at the origin",
+                sidecar.display()
+            ));
+        }
         Some(load_npy(path)?)
     } else if has_extension(path, "raw") {
         let layout = options.raw.ok_or_else(|| InputError::RawLayoutMissing { spec: spec.to_string() })?;
@@ -168,7 +210,7 @@ pub fn load_solid_with_warnings(
             Some(iso) => Solid::level_volume(&values, iso),
             None => Solid::volume(values),
         };
-        return Ok((solid.map_err(solid_error)?, Vec::new()));
+        return Ok((solid.map_err(solid_error)?, warnings));
     }
     if spec == BUNNY || path.is_file() {
         let MeshRead { mut mesh, warnings } = if spec == BUNNY {
@@ -213,6 +255,16 @@ mod tests {
     use super::*;
     use crate::npy::save_npy;
     use isomorph_common::{Control, Field3, Shape};
+
+    #[test]
+    fn every_builtin_has_its_own_colour() {
+        let colors: Vec<Vec3> = builtin_names().iter().map(|n| builtin_color(n).expect(n)).collect();
+        for (i, a) in colors.iter().enumerate() {
+            assert!(a.cmpge(Vec3::ZERO).all() && a.cmple(Vec3::ONE).all(), "{a}");
+            assert!(colors[..i].iter().all(|b| (*a - *b).abs().max_element() > 0.05), "{a} repeats");
+        }
+        assert_eq!(builtin_color("teapot.ply"), None);
+    }
 
     #[test]
     fn names_meshes_and_volumes_load() {

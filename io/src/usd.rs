@@ -38,7 +38,9 @@ pub struct UsdSettings {
     pub up_axis: &'static str,
     /// The stage's documentation string (e.g. the method and inputs).
     pub doc: String,
-    /// sRGB display colour of the surface, 0–1.
+    /// sRGB display colour of the surface, 0–1, unless every frame has
+    /// vertex colours ([`TriMesh::colors`]): those are then written as a
+    /// per-vertex `primvars:displayColor` sample per frame.
     pub color: [f32; 3],
 }
 
@@ -99,11 +101,22 @@ pub fn write_usda(frames: &[TriMesh], settings: &UsdSettings, mut out: impl Writ
     writeln!(out, "        normal3f[] normals (\n            interpolation = \"vertex\"\n        )")?;
     attribute(&mut out, "normal3f[] normals", &|m, s| push_vectors(s, m.vertex_normals().iter()))?;
     attribute(&mut out, "point3f[] points", &|m, s| push_vectors(s, m.positions.iter()))?;
-    let [r, g, b] = settings.color;
+    if frames.iter().all(|m| m.colors.is_some()) {
+        writeln!(
+            out,
+            "        color3f[] primvars:displayColor (\n            interpolation = \"vertex\"\n        )"
+        )?;
+        attribute(&mut out, "color3f[] primvars:displayColor", &|m, s| {
+            push_vectors(s, m.colors.iter().flatten());
+        })?;
+    } else {
+        let [r, g, b] = settings.color;
+        writeln!(out, "        color3f[] primvars:displayColor = [({r}, {g}, {b})]")?;
+    }
     write!(
         out,
-        "        color3f[] primvars:displayColor = [({r}, {g}, {b})]\n        uniform token orientation = \
-         \"rightHanded\"\n        uniform token subdivisionScheme = \"none\"\n    }}\n}}\n"
+        "        uniform token orientation = \"rightHanded\"\n        uniform token subdivisionScheme = \
+         \"none\"\n    }}\n}}\n"
     )
 }
 
@@ -164,6 +177,25 @@ mod tests {
             assert_eq!(normals[i].len(), 3 * mesh.positions.len());
         }
         assert!(text.contains("endTimeCode = 1") && text.contains("upAxis = \"Y\""));
+        assert!(text.contains("primvars:displayColor = [(0.55, 0.65, 0.8)]"), "uncoloured: one colour");
+
+        // Coloured frames: one colour per vertex and frame.
+        let colored: Vec<TriMesh> = frames
+            .iter()
+            .map(|m| {
+                let colors = m.positions.iter().map(|p| p.abs().min(Vec3::ONE)).collect();
+                m.clone().with_colors(colors).unwrap()
+            })
+            .collect();
+        let mut bytes = Vec::new();
+        write_usda(&colored, &UsdSettings::default(), &mut bytes).unwrap();
+        let text = String::from_utf8(bytes).unwrap();
+        let colors = samples(&text, "color3f[] primvars:displayColor");
+        for (i, mesh) in colored.iter().enumerate() {
+            let want: Vec<f32> = mesh.colors.iter().flatten().flat_map(|c| c.to_array()).collect();
+            assert_eq!(colors[i], want, "colours of frame {i}");
+        }
+        assert!(!text.contains("displayColor = ["));
         assert!(write_usda(&[], &UsdSettings::default(), Vec::new()).is_err());
     }
 }

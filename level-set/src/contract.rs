@@ -2,16 +2,20 @@
 //! glue of Breen & Whitaker's pipeline — alignment, true signed distances
 //! for the initial embedding and the speed, the evolution, the placement.
 
-use crate::{Curvature, EvolveSettings, FrameSchedule, LevelSetError, LevelSetMorph, Placement, Response};
+use crate::{
+    Curvature, EvolveSettings, FrameSchedule, LevelSetError, LevelSetMorph, Placement, Response, Warp,
+};
 use crate::{SolverKind, SpeedGrid, evolve};
 use isomorph_common::alignment::{AlignMode, align};
-use isomorph_common::glam::Affine3A;
+use isomorph_common::glam::{Affine3A, Vec3};
 use isomorph_common::{
-    AffinePath, Control, Morph, MorphError, Solid, Stages, check, lattice_for_box, validate_inputs,
+    Aabb, AffinePath, Control, Morph, MorphError, Solid, Stages, check, lattice_for_box, validate_inputs,
 };
+use std::fmt;
+use std::sync::Arc;
 
 /// How the source is placed on the target before evolving (Breen §6.2).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Clone, Default)]
 pub enum Align {
     /// Both shapes where they are.
     #[default]
@@ -21,10 +25,39 @@ pub enum Align {
     Auto,
     /// A user's affine map from source space to target space.
     Map(Affine3A),
+    /// A generalized warp `W` from source space to target space (Breen
+    /// §6.2), e.g. through landmark pairs: the speed is the target's
+    /// distance at `W(x)`, `γ_B(x) = D_B(W(x))`, and frames are placed by
+    /// `T(x, α) = (1 − α) x + α W(x)`. `W` should be smooth and one-to-one
+    /// near the shapes.
+    Warp(Warp),
+}
+
+impl fmt::Debug for Align {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Align::None => f.write_str("None"),
+            Align::Auto => f.write_str("Auto"),
+            Align::Map(m) => f.debug_tuple("Map").field(m).finish(),
+            Align::Warp(_) => f.write_str("Warp(..)"),
+        }
+    }
+}
+
+/// Warps are equal when they are the same map (the same `Arc`).
+impl PartialEq for Align {
+    fn eq(&self, other: &Self) -> bool {
+        match (self, other) {
+            (Align::None, Align::None) | (Align::Auto, Align::Auto) => true,
+            (Align::Map(a), Align::Map(b)) => a == b,
+            (Align::Warp(a), Align::Warp(b)) => Arc::ptr_eq(a, b),
+            _ => false,
+        }
+    }
 }
 
 /// Settings of [`LevelSetMorph::new`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct LevelSetSettings {
     /// Grid nodes along the longest edge of the evolution box (8–1024;
     /// default 64).
@@ -81,7 +114,7 @@ impl LevelSetSettings {
         if let Some(w) = self.curvature {
             check::range("curvature", f64::from(w), 0.0, 100.0)?;
         }
-        if let Align::Map(m) = self.align
+        if let Align::Map(m) = &self.align
             && !(m.is_finite() && m.matrix3.determinant().abs() > 1e-12)
         {
             return Err(MorphError::bad_setting("align", format!("{m:?}"), "a finite, invertible map"));
@@ -114,8 +147,11 @@ impl LevelSetMorph {
         let warnings = validate_inputs(source, target, control)?;
         let mut stages = Stages::start();
         let res = settings.resolution;
+        if let Align::Warp(warp) = &settings.align {
+            return Self::warped(source, target, warp, settings, control, warnings, stages);
+        }
         let map = match settings.align {
-            Align::None => Affine3A::IDENTITY,
+            Align::None | Align::Warp(_) => Affine3A::IDENTITY,
             Align::Map(m) => m,
             Align::Auto => {
                 control.progress("alignment", None, String::new);
@@ -153,26 +189,108 @@ impl LevelSetMorph {
         } else {
             AffinePath::from_identity(&map).map_err(MorphError::from)?.into()
         };
-        let evolve_settings = EvolveSettings {
-            solver: settings.solver,
-            max_iterations: settings.max_iterations,
-            // λ = exp(−(D/ℓ)²) with ℓ half the box, as Yang & Jüttler's
-            // exp(−d²) on their [−1, 1]³ domain.
-            curvature: settings
-                .curvature
-                .map(|weight| Curvature { weight, length: 0.5 * bounds.size().max_element() }),
-            frames: FrameSchedule::EveryIterations(settings.keep_every),
-            max_unreached_share: settings.max_unreached_share,
-            ..EvolveSettings::default()
-        };
-        let mut morph = evolve(&embedding, &speed, placement, &evolve_settings, control)?;
-        let evolution = std::mem::take(&mut morph.report_mut().stages);
-        let mut report = morph.report().clone().with_stages(stages).with_warnings(warnings);
-        report.stages.extend(evolution);
-        if let Align::Auto | Align::Map(_) = settings.align {
-            report = report.with_detail("aligned", true);
-        }
-        *morph.report_mut() = report;
+        let mut morph = evolve(&embedding, &speed, placement, &evolve_settings(settings, &bounds), control)?;
+        finish_report(&mut morph, settings, stages, warnings);
         Ok(morph)
     }
+
+    /// [`LevelSetMorph::new`] with [`Align::Warp`]: the evolution box holds
+    /// the source and the points that `W` carries into the target's box,
+    /// the speed is `D_B(W(x))` and frames are placed by `T(x, α)`.
+    fn warped(
+        source: &Solid,
+        target: &Solid,
+        warp: &Warp,
+        settings: &LevelSetSettings,
+        control: &Control,
+        warnings: Vec<String>,
+        mut stages: Stages,
+    ) -> Result<Self, LevelSetError> {
+        let bounds = warp_bounds(&source.bounds(), &target.bounds(), warp)?.padded(settings.padding);
+        control.progress("distance volumes", Some(0.0), String::new);
+        let embedding = source.distance_volume(&bounds, settings.resolution, control)?;
+        control.progress("distance volumes", Some(0.5), String::new);
+        let (dims, ..) = lattice_for_box(&bounds, settings.resolution)?;
+        let field = target.distance_field(dims.max_element(), control)?;
+        let speed =
+            control.install(|| SpeedGrid::sample(&embedding, &field, |x| warp(x), Response::Identity))?;
+        stages.lap("distance volumes");
+        let placement = Placement::Warp(Arc::clone(warp));
+        let mut morph = evolve(&embedding, &speed, placement, &evolve_settings(settings, &bounds), control)?;
+        finish_report(&mut morph, settings, stages, warnings);
+        Ok(morph)
+    }
+}
+
+/// The evolution's settings from the morph's, on the box `bounds`.
+fn evolve_settings(settings: &LevelSetSettings, bounds: &Aabb) -> EvolveSettings {
+    EvolveSettings {
+        solver: settings.solver,
+        max_iterations: settings.max_iterations,
+        // λ = exp(−(D/ℓ)²) with ℓ half the box, as Yang & Jüttler's
+        // exp(−d²) on their [−1, 1]³ domain.
+        curvature: settings
+            .curvature
+            .map(|weight| Curvature { weight, length: 0.5 * bounds.size().max_element() }),
+        frames: FrameSchedule::EveryIterations(settings.keep_every),
+        max_unreached_share: settings.max_unreached_share,
+        ..EvolveSettings::default()
+    }
+}
+
+/// Puts the pipeline's stages (before the evolution's own), the input
+/// warnings and whether the shapes were aligned into `morph`'s report.
+fn finish_report(
+    morph: &mut LevelSetMorph,
+    settings: &LevelSetSettings,
+    stages: Stages,
+    warnings: Vec<String>,
+) {
+    let evolution = std::mem::take(&mut morph.report_mut().stages);
+    let mut report = morph.report().clone().with_stages(stages).with_warnings(warnings);
+    report.stages.extend(evolution);
+    match settings.align {
+        Align::Auto | Align::Map(_) => report = report.with_detail("aligned", true),
+        Align::Warp(_) => report = report.with_detail("warped", true),
+        Align::None => {}
+    }
+    *morph.report_mut() = report;
+}
+
+/// Lattice points per axis of the search for `W⁻¹(target box)`.
+const WARP_PROBES: usize = 33;
+
+/// The box of the source and of the points `x` whose image `W(x)` lies in
+/// the target's box, found on a lattice over the two boxes widened by their
+/// size on every side (a warp through landmarks near the shapes moves
+/// points by at most about that much), grown by one lattice step.
+fn warp_bounds(source: &Aabb, target: &Aabb, warp: &Warp) -> Result<Aabb, MorphError> {
+    let both = source.union(target);
+    let search = both.expanded(both.size().max_element());
+    let step = search.size() / (WARP_PROBES - 1) as f32;
+    let mut found = *source;
+    let mut any = false;
+    for k in 0..WARP_PROBES {
+        for j in 0..WARP_PROBES {
+            for i in 0..WARP_PROBES {
+                let x = search.min + step * Vec3::new(i as f32, j as f32, k as f32);
+                let y = warp(x);
+                if !y.is_finite() {
+                    return Err(MorphError::InvalidInput(format!(
+                        "the warp sends {x} to a non-finite point"
+                    )));
+                }
+                if target.contains(y) {
+                    found = found.including(x);
+                    any = true;
+                }
+            }
+        }
+    }
+    if !any {
+        return Err(MorphError::InvalidInput(
+            "the warp carries no point near the shapes into the target's box; check the landmarks".into(),
+        ));
+    }
+    Ok(found.expanded(step.max_element()))
 }

@@ -5,12 +5,13 @@ use crate::band::BandFrame;
 use crate::solver::{Curvature, Solver, StepParams, StepStats};
 use crate::stencil::Lattice;
 use crate::{DenseSolver, LevelSetError, Placement, SparseFieldSolver, SpeedGrid};
-use isomorph_common::glam::{UVec3, Vec3};
+use isomorph_common::glam::{Affine3A, UVec3, Vec3};
 use isomorph_common::marching_cubes::marching_cubes;
 use isomorph_common::{Aabb, Grid3, TriMesh};
 use isomorph_common::{
     Control, Frame, MissedPart, Morph, MorphError, MorphReport, Outcome, Residual, Stages, check, check_time,
 };
+use rayon::prelude::*;
 
 /// Which solver integrates the level-set equation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
@@ -489,5 +490,31 @@ impl Morph for LevelSetMorph {
         let mut mesh = marching_cubes(&self.frame_grid(n)?, 0.0);
         self.placement.apply(&mut mesh, self.alpha(n));
         Ok(mesh)
+    }
+
+    /// `T(·, n/(N − 1))`'s affine part, without making the frame.
+    fn world_transform(&self, t: f32) -> Result<Affine3A, LevelSetError> {
+        Ok(self.placement.affine_at(self.alpha(self.index(check_time(t)?))))
+    }
+
+    /// Each point's field point `x` (`T(x, α) = p`, [`Placement::unplace`])
+    /// placed at `α = 0` and `α = 1`: exact for a warp too, where the default
+    /// (affine parts only) would read the inputs' colours where the frame
+    /// lies, not where its surface came from.
+    fn ends_of(&self, t: f32, points: &[Vec3]) -> Result<[Vec<Vec3>; 2], LevelSetError> {
+        let alpha = self.alpha(self.index(check_time(t)?));
+        let Placement::Warp(warp) = &self.placement else {
+            // An affine placement: two maps, computed once.
+            let back = self.placement.affine_at(alpha).inverse();
+            let to = |end: f32| {
+                let map = self.placement.affine_at(end) * back;
+                points.iter().map(|&p| map.transform_point3(p)).collect()
+            };
+            return Ok([to(0.0), to(1.0)]);
+        };
+        let scale = self.field_bounds().size().max_element();
+        let field: Vec<Vec3> = points.par_iter().map(|&p| self.placement.unplace(p, alpha, scale)).collect();
+        let on_target = field.par_iter().map(|&x| warp(x)).collect();
+        Ok([field, on_target])
     }
 }

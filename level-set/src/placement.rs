@@ -2,7 +2,7 @@
 //! polygonized frames so that size, position and shape change smoothly while
 //! the level set deforms.
 
-use isomorph_common::glam::{Affine3A, Vec3};
+use isomorph_common::glam::{Affine3A, Mat3, Vec3};
 use isomorph_common::{AffinePath, TriMesh};
 use std::fmt;
 use std::sync::Arc;
@@ -77,6 +77,38 @@ impl Placement {
         }
     }
 
+    /// The point `x` with `T(x, α) = p`: the affine path's inverse, or for
+    /// a warp Newton's method on `(1 − α) x + α W(x) = p` from `x = p`
+    /// (Jacobian by central differences of step `scale · 1e-4`, stopping at
+    /// `scale · 1e-6`; `scale` is the shapes' size). Where the warp folds
+    /// (singular Jacobian) the last iterate is returned.
+    pub fn unplace(&self, p: Vec3, alpha: f32, scale: f32) -> Vec3 {
+        match self {
+            Placement::Identity => p,
+            Placement::Affine(path) => path.at(alpha).inverse().transform_point3(p),
+            Placement::Warp(w) => {
+                let (h, tolerance) = (scale * 1e-4, scale * 1e-6);
+                let mut x = p;
+                for _ in 0..20 {
+                    let residual = x.lerp(w(x), alpha) - p;
+                    if residual.length() <= tolerance {
+                        break;
+                    }
+                    let column = |e: Vec3| {
+                        let d = (w(x + h * e) - w(x - h * e)) / (2.0 * h);
+                        (1.0 - alpha) * e + alpha * d
+                    };
+                    let jacobian = Mat3::from_cols(column(Vec3::X), column(Vec3::Y), column(Vec3::Z));
+                    if jacobian.determinant().abs() < 1e-12 {
+                        break;
+                    }
+                    x -= jacobian.inverse() * residual;
+                }
+                x
+            }
+        }
+    }
+
     /// Places `mesh` by `T(·, α)`; normals, if any, are recomputed for a warp.
     pub fn apply(&self, mesh: &mut TriMesh, alpha: f32) {
         match self {
@@ -106,6 +138,10 @@ mod tests {
         assert!((bend.point_at(x, 1.0) - Vec3::new(0.5, 0.35, -0.2)).length() < 1e-6);
         assert!((bend.point_at(x, 0.5) - Vec3::new(0.5, 0.225, -0.2)).length() < 1e-6);
         assert_eq!(bend.affine_at(0.7), Affine3A::IDENTITY);
+        for alpha in [0.0, 0.3, 1.0] {
+            let back = bend.unplace(bend.point_at(x, alpha), alpha, 1.0);
+            assert!(back.distance(x) < 1e-5, "alpha {alpha}: {back} vs {x}");
+        }
     }
 
     #[test]

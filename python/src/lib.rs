@@ -17,12 +17,12 @@
 //! `isomorph.Cancelled`.
 
 use isomorph_blobtree::MorphSpec;
-use isomorph_cli::methods::{Method, Settings, build, load_input};
+use isomorph_cli::methods::{LandmarkWarp, Method, Settings, build, landmark_warp, load_input};
 use isomorph_cli::parse::read_map;
 use isomorph_common::glam::{Affine3A, UVec3, Vec3};
 use isomorph_common::{
-    Aabb, BoxedError, BoxedMorph, CancelToken, Control, DynField, Field3, Grid3, MorphError, MorphFailure,
-    Solid, TriMesh, lattice_for_box,
+    Aabb, BoxedError, BoxedMorph, CancelToken, Control, DynField, Field3, Grid3, Landmarks, MorphError,
+    MorphFailure, Solid, TriMesh, lattice_for_box,
 };
 use isomorph_io::compare::{Candidate, Comparison, compare as compare_methods, error_chain};
 use isomorph_io::export::{ExportError, ExportSettings, export_sequence, reference_surfaces};
@@ -356,7 +356,7 @@ const SETTINGS: &[(&str, &[Method])] = &[
     ("kernel", &[Method::Rbf]),
     ("normal_offset", &[Method::Rbf]),
     ("surface_resolution", &[Method::Rbf, Method::Tspline]),
-    ("landmarks", &[Method::Rbf, Method::Warp]),
+    ("landmarks", &[Method::Rbf, Method::Warp, Method::LevelSet]),
     ("warp_spec", &[Method::Warp]),
     ("control_spacing", &[Method::Warp]),
     ("depth", &[Method::Tspline]),
@@ -521,6 +521,17 @@ fn apply_settings(
                 let pairs: Vec<(Vec3, Vec3)> = pairs.into_iter().map(|(a, b)| (a.into(), b.into())).collect();
                 if !pairs.is_empty() {
                     s.warp.spec = WarpSpec::Landmarks(pairs.clone());
+                    if methods.contains(&Method::LevelSet) {
+                        // Breen & Whitaker §6.2: the level set evolves towards
+                        // the target seen through the RBF warp of the pairs.
+                        let warp = Landmarks::new(&pairs).map_err(|e| setting_error(py, &name, e)).and_then(
+                            |l| {
+                                landmark_warp(&l, LandmarkWarp::Rbf, s.warp.control_spacing)
+                                    .map_err(|e| setting_error(py, &name, error_chain(&e)))
+                            },
+                        )?;
+                        s.level_set.align = Align::Warp(warp);
+                    }
                 }
                 s.rbf_correspondences = pairs;
             }

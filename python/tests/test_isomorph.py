@@ -238,3 +238,15 @@ def test_usd_export_opens_in_usd_core(morphs, tmp_path):
     for t, frame in enumerate(report["frames"]):
         assert len(mesh.GetPointsAttr().Get(t)) == frame["vertices"]
         assert len(mesh.GetFaceVertexCountsAttr().Get(t)) == frame["triangles"]
+
+
+def test_landmarks_drive_the_level_set():
+    # Breen & Whitaker 6.2: a shift of the sphere's poles as landmark pairs;
+    # the target is seen through that warp and the frames end on the ball.
+    shift = np.array([0.1, 0.05, 0.0])
+    poles = [np.eye(3)[i] * s * 0.3 for i in range(3) for s in (1, -1)]
+    pairs = [(tuple(p), tuple(p + shift)) for p in poles]
+    m = isomorph.morph("sphere", "ball", method="level-set", resolution=32, landmarks=pairs)
+    assert m.report["details"]["warped"] is True
+    with pytest.raises(isomorph.SettingError, match="landmarks.*at least 4"):
+        isomorph.morph("sphere", "ball", method="level-set", resolution=32, landmarks=pairs[:3])

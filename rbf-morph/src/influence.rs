@@ -3,14 +3,15 @@
 //! `N + 3`, one variational implicit through all of them, and a path through
 //! the extra dimensions that chooses the blend.
 
+use crate::RbfSettings;
 use crate::error::RbfError;
 use crate::interpolant::{Constraint, Interpolant};
 use crate::slice::Slice3;
-use crate::transform::{TransformSettings, lift};
+use crate::transform::{TransformSettings, lift, solid_constraints};
 use glam::Vec3;
 use isomorph_common::MorphError;
 use isomorph_common::check_time;
-use isomorph_common::{Aabb, Frame, Morph, MorphReport, Outcome};
+use isomorph_common::{Aabb, Control, Frame, Morph, MorphReport, Outcome, Solid, Stages};
 
 #[derive(Debug, Clone)]
 enum Blend {
@@ -168,6 +169,61 @@ impl InfluencePath {
     pub fn shapes(&self) -> &InfluenceShapes {
         &self.shapes
     }
+
+    /// The morph from `source` to `target` under the influence of one or
+    /// two more solids (§7, Fig. 8): all of them sampled as
+    /// [`RbfMorph::new`](crate::RbfMorph::new) samples its two, one implicit
+    /// through the three (five dimensions) or four (six) shapes at the
+    /// corners of a triangle or tetrahedron, and the path from the source's
+    /// corner to the target's, a Bézier curve pulled towards the influence
+    /// shapes' corners (control points source, influences, target).
+    ///
+    /// # Errors
+    /// [`RbfError::InvalidInput`] unless there are one or two influence
+    /// solids; [`MorphError::BadSetting`], [`MorphError::Cancelled`], the
+    /// solids' conversion errors and those of [`InfluenceShapes::new`].
+    pub fn from_solids(
+        source: &Solid,
+        target: &Solid,
+        influences: &[Solid],
+        settings: &RbfSettings,
+        control: &Control,
+    ) -> Result<Self, RbfError> {
+        settings.validate()?;
+        if !(1..=2).contains(&influences.len()) {
+            return Err(RbfError::InvalidInput(format!(
+                "one or two influence shapes, not {}",
+                influences.len()
+            )));
+        }
+        let mut warnings = isomorph_common::validate_inputs(source, target, control)?;
+        for influence in influences {
+            warnings.extend(isomorph_common::validate_inputs(influence, target, control)?);
+        }
+        control.install(|| {
+            let mut stages = Stages::start();
+            let solids: Vec<&Solid> = [source, target].into_iter().chain(influences).collect();
+            let share = 1.0 / solids.len() as f32;
+            let constraints = solids
+                .iter()
+                .enumerate()
+                .map(|(i, solid)| solid_constraints(solid, settings, i as f32 * share, control))
+                .collect::<Result<Vec<_>, _>>()?;
+            stages.lap("constraints");
+            let total: usize = constraints.iter().map(Vec::len).sum();
+            control.progress("fit", None, || format!("{total} constraints in {}D", 3 + solids.len() - 1));
+            let refs: Vec<&[Constraint<3>]> = constraints.iter().map(Vec::as_slice).collect();
+            let shapes = InfluenceShapes::new(&refs, &settings.transform())?;
+            control.check()?;
+            stages.lap("fit");
+            // Source, the influences in order, target.
+            let order = [0].into_iter().chain(2..solids.len()).chain([1]);
+            let path = order.map(|i| shapes.corners[i].clone()).collect();
+            let mut morph = shapes.path(path)?;
+            morph.report = morph.report.with_stages(stages).with_warnings(warnings);
+            Ok(morph)
+        })
+    }
 }
 
 impl Morph for InfluencePath {
@@ -270,5 +326,35 @@ mod tests {
             InfluenceShapes::new(&two, &TransformSettings::default()),
             Err(RbfError::InvalidInput(_))
         ));
+    }
+
+    #[test]
+    fn an_influence_solid_pulls_the_in_betweens_towards_it() {
+        let control = Control::new();
+        let (sphere, torus) = (Solid::shape(Shape::sphere(0.3)), Solid::shape(Shape::torus(0.3, 0.12)));
+        let cube = Solid::shape(Shape::rounded_cuboid(Vec3::splat(0.3), 0.04));
+        let settings = RbfSettings { points: 150, ..Default::default() };
+        let pulled =
+            InfluencePath::from_solids(&sphere, &torus, std::slice::from_ref(&cube), &settings, &control)
+                .unwrap();
+        let plain = crate::RbfMorph::new(&sphere, &torus, &settings, &control).unwrap();
+        let cube_surface = cube.surface(48, &control).unwrap().into_owned();
+        let to_cube = |m: &dyn Fn(f32) -> isomorph_common::TriMesh| {
+            surface_distance(&m(0.5), &cube_surface, 2000).unwrap().mean
+        };
+        let with = to_cube(&|t| pulled.frame_mesh(t, 48).unwrap());
+        let without = to_cube(&|t| plain.frame_mesh(t, 48).unwrap());
+        assert!(with < 0.8 * without, "mid-way {with} from the cube with its influence, {without} without");
+        // The ends are still the source and the target.
+        for (t, end) in [(0.0, &sphere), (1.0, &torus)] {
+            let d = surface_distance(
+                &pulled.frame_mesh(t, 48).unwrap(),
+                &end.surface(48, &control).unwrap(),
+                2000,
+            );
+            assert!(d.unwrap().mean < 0.01, "t = {t}");
+        }
+        let none = InfluencePath::from_solids(&sphere, &torus, &[], &settings, &control).unwrap_err();
+        assert!(none.to_string().contains("one or two influence shapes"), "{none}");
     }
 }

@@ -200,18 +200,30 @@ pub(crate) fn surface_constraints(
     settings: &RbfSettings,
     control: &Control,
 ) -> Result<[Vec<Constraint<3>>; 2], RbfError> {
+    Ok([
+        solid_constraints(source, settings, 0.0, control)?,
+        solid_constraints(target, settings, 0.5, control)?,
+    ])
+}
+
+/// The boundary and normal constraints of one solid's surface (of
+/// [`RbfSettings::points`] points); `done` is the share of the constraint
+/// stage already reported.
+pub(crate) fn solid_constraints(
+    solid: &Solid,
+    settings: &RbfSettings,
+    done: f32,
+    control: &Control,
+) -> Result<Vec<Constraint<3>>, RbfError> {
     let surface = SurfaceSettings {
         offset: NormalOffset::RelativeToDiagonal(settings.normal_offset),
         subsample: Subsample::FarthestPoint(settings.points),
     };
-    let side = |done: f32, solid: &Solid| -> Result<Vec<Constraint<3>>, RbfError> {
-        control.progress("constraints", Some(done), String::new);
-        let mesh = solid.surface(settings.surface_resolution, control)?;
-        let constraints = mesh_constraints(&mesh, &surface)?;
-        control.check()?;
-        Ok(constraints)
-    };
-    Ok([side(0.0, source)?, side(0.5, target)?])
+    control.progress("constraints", Some(done), String::new);
+    let mesh = solid.surface(settings.surface_resolution, control)?;
+    let constraints = mesh_constraints(&mesh, &surface)?;
+    control.check()?;
+    Ok(constraints)
 }
 
 /// Transformation between two 3D shapes through one 4D variational implicit

@@ -9,7 +9,7 @@ use crate::transform::{
 use glam::{Mat2, Mat3, Vec2, Vec3};
 use isomorph_common::check_time;
 use isomorph_common::marching_squares::{Polyline2, marching_squares};
-use isomorph_common::{Aabb, Control, Field3, Frame, Grid2, Morph, MorphReport, Solid, Stages};
+use isomorph_common::{Aabb, Control, Field3, Frame, Grid2, Landmarks, Morph, MorphReport, Solid, Stages};
 use rayon::prelude::*;
 use std::sync::Arc;
 
@@ -61,6 +61,26 @@ impl<const N: usize> DisplacementWarp<N> {
     /// The Jacobian `∂w_k/∂x_j` at `p`, row `k`.
     pub fn jacobian(&self, p: [f32; N]) -> [[f32; N]; N] {
         std::array::from_fn(|k| self.components[k].gradient_f64(p.map(f64::from)).map(|v| v as f32))
+    }
+}
+
+impl DisplacementWarp<3> {
+    /// The warp `W(x) = x + w(x)` through landmark pairs, `W(pᵢ) = qᵢ`
+    /// (the appendix's displacement warp with its affine part): the
+    /// generalized warp of Breen & Whitaker §6.2 built from the user's
+    /// correspondences.
+    ///
+    /// # Errors
+    /// [`DisplacementWarp::new`]'s (the landmarks are already validated).
+    pub fn from_landmarks(landmarks: &Landmarks, fit: &FitSettings) -> Result<Self, RbfError> {
+        let (points, displacements): (Vec<[f32; 3]>, Vec<[f32; 3]>) =
+            landmarks.pairs().iter().map(|&(p, q)| (p.to_array(), (q - p).to_array())).unzip();
+        Self::new(&points, &displacements, fit)
+    }
+
+    /// The warped point `W(x) = x + w(x)`.
+    pub fn apply(&self, x: Vec3) -> Vec3 {
+        x + Vec3::from_array(self.displacement(x.to_array()))
     }
 }
 

@@ -168,6 +168,7 @@ fn write_seeds() {
         positions: vec![glam::Vec3::ZERO, glam::Vec3::X, glam::Vec3::Y, glam::Vec3::Z],
         triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
         normals: None,
+        colors: None,
     };
     let mesh_bytes = |format| {
         let mut out = Vec::new();

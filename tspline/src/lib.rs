@@ -22,7 +22,7 @@
 //! | §4.3 projection frames, eq. 10 | [`morph`] (`morph.rs`) |
 //! | §4.4 combined alignment transforms, eq. 11 | [`TsplineMorph::placement`] (`W(u)`: translation and stretch linear, rotation slerped), [`TsplineMorph::frame_transform`], `tests/alignment.rs` |
 //! | §3.3 Fig. 2–3 | [`demo::corner_source`], [`demo::corner_target`], `tests/corner.rs` ("┌" → "┐", the shapes of the paper's text); [`demo::letter_t`], [`demo::letter_c`], `tests/t_to_c.rs` ("T" → "C", its captions) |
-//! | §5 examples | [`isomorph_common::models::holed_cube`], [`demo::petal_torus`] |
+//! | §5 examples | Example 1: [`demo::petal_torus`], `tests/tests/tspline_example1.rs` of `isomorph-tests`; Example 2: [`isomorph_common::models::holed_cube`], [`demo::holed_cube_settings`]; Example 3's source: [`isomorph_common::models::apple`] (open targets such as the Utah teapot enter as their winding-number zero set, see [`TsplineMorph::new`]) |
 //!
 //! # Choices where the paper is silent (see the note)
 //! - Anchors at every leaf vertex including hanging ones; local knot vectors

@@ -280,6 +280,11 @@ impl Morph for TsplineMorph {
         mesh.transform(&self.frame_transform(i));
         Ok(mesh)
     }
+
+    /// [`TsplineMorph::frame_transform`], without making the frame.
+    fn world_transform(&self, t: f32) -> Result<Affine3A, TsplineError> {
+        Ok(self.frame_transform(self.index(t)?))
+    }
 }
 
 /// Runs the whole method from a source to a target mesh (closed, outward
@@ -493,8 +498,10 @@ fn report(
 
 impl TsplineMorph {
     /// Yang & Jüttler's morph of `source` into `target`: their surfaces
-    /// (the mesh itself, or marching cubes of the true distance volume at
-    /// [`TsplineSettings::surface_resolution`]) through [`morph`].
+    /// (a closed mesh itself; an open mesh or any other solid as marching
+    /// cubes of its true distance volume, winding-number sign, at
+    /// [`TsplineSettings::surface_resolution`], with a report warning for an
+    /// open mesh) through [`morph`].
     ///
     /// # Errors
     /// As [`morph`], plus the solids' conversion errors.
@@ -509,12 +516,39 @@ impl TsplineMorph {
         let mut stages = Stages::start();
         let res = settings.surface_resolution;
         control.progress("surfaces", None, String::new);
-        let (a, b) = (source.surface(res, control)?, target.surface(res, control)?);
+        let (a, note_a) = closed_surface(source, "source", res, control)?;
+        let (b, note_b) = closed_surface(target, "target", res, control)?;
         stages.lap("surfaces");
         let mut morph = control.install(|| morph_on_pool(&a, &b, settings, control, stages))?;
-        morph.report.warnings.extend(warnings);
+        morph.report.warnings.extend(warnings.into_iter().chain(note_a).chain(note_b));
         Ok(morph)
     }
+}
+
+/// The surface the morph starts from or ends on: a closed mesh as it is;
+/// a solid that is not a mesh, or an open mesh (e.g. the Utah teapot's
+/// unwelded patches, whose spout and handle pass into the body), as marching
+/// cubes of its true signed distance (winding-number sign) with `res` nodes
+/// along its box's longest edge, so that every surface sample lies on the
+/// boundary of the solid's inside. For an open mesh the second value is a
+/// report warning saying so.
+fn closed_surface<'a>(
+    solid: &'a Solid,
+    name: &str,
+    res: u32,
+    control: &Control,
+) -> Result<(std::borrow::Cow<'a, TriMesh>, Option<String>), TsplineError> {
+    let surface = solid.surface(res, control)?;
+    let open = surface.edge_stats().boundary_edges;
+    if open == 0 {
+        return Ok((surface, None));
+    }
+    let volume = solid.distance_volume(&solid.bounds().padded(0.05), res, control)?;
+    let note = format!(
+        "the {name} mesh is open ({open} boundary edges): the morph uses the zero set of its \
+         winding-number signed distance at {res} nodes instead"
+    );
+    Ok((std::borrow::Cow::Owned(marching_cubes(&volume, 0.0)), Some(note)))
 }
 
 /// Uniform surface samples with the T-mesh's spacing (domain units).

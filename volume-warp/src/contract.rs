@@ -3,11 +3,14 @@
 //! trivariate B-spline maps (True's warp, thesis §5) and cross-dissolving
 //! them — the classic "warp and dissolve" volume morph.
 
-use crate::{BSplineMap, Filter, Handle, VolumeWarp, WarpError, WarpSettings, solve_drag};
+use crate::{BSplineMap, Filter, Handle, VolumeWarp, WarpError, WarpSettings, WorldMap, solve_drag};
 use glam::{Affine3A, UVec3, Vec3};
 use isomorph_common::alignment::{AlignMode, Alignment, align};
 use isomorph_common::marching_cubes::marching_cubes;
-use isomorph_common::{Aabb, Control, Frame, Grid3, Morph, MorphError, MorphReport, Outcome, Solid, Stages};
+use isomorph_common::{
+    Aabb, Control, Frame, Grid3, Landmarks, Morph, MorphError, MorphReport, Outcome, Solid, Stages,
+    lattice_for_box,
+};
 use isomorph_common::{check, check_time};
 use rayon::prelude::*;
 
@@ -185,15 +188,14 @@ impl WarpMorph {
             let b = density(target.distance_volume(&bounds, res, control)?)?;
             stages.lap("distance volumes");
             control.check()?;
-            let regions = (a.dims().as_vec3() / settings.control_spacing as f32).ceil().as_uvec3().max(UVec3::ONE);
-            let controls = regions + UVec3::splat(3);
+            let controls = control_grid(a.dims(), settings.control_spacing);
             let identity = BSplineMap::with_controls(a.dims(), controls)?;
             let correspondence = match (&settings.spec, alignment) {
                 (WarpSpec::Landmarks(pairs), _) => {
                     control.progress("landmarks", None, || format!("{} pairs", pairs.len()));
                     let swapped: Vec<_> = pairs.iter().map(|&(p, q)| (q, p)).collect();
-                    let forward = landmark_map(&identity, &a, pairs)?;
-                    let backward = landmark_map(&identity, &a, &swapped)?;
+                    let forward = landmark_map(&identity, a.origin(), a.spacing(), pairs)?;
+                    let backward = landmark_map(&identity, a.origin(), a.spacing(), &swapped)?;
                     stages.lap("landmarks");
                     Correspondence::Landmarks { forward, backward }
                 }
@@ -331,14 +333,21 @@ fn swept_bounds(source: Aabb, target: Aabb, spec: &WarpSpec, alignment: Option<&
     bounds
 }
 
+/// Control points per axis for a lattice of `dims` nodes with a B-spline
+/// region every `spacing` voxels (a cubic spline's three extra controls).
+fn control_grid(dims: UVec3, spacing: u32) -> UVec3 {
+    (dims.as_vec3() / spacing as f32).ceil().as_uvec3().max(UVec3::ONE) + UVec3::splat(3)
+}
+
 /// The least-motion map carrying each world landmark `p` to its partner `q`
-/// (thesis §6), in the voxel coordinates of `lattice`.
+/// (thesis §6), in the voxel coordinates of the lattice with node 0 at `o`
+/// and spacing `h`.
 fn landmark_map(
     identity: &BSplineMap,
-    lattice: &Grid3<f32>,
+    o: Vec3,
+    h: f32,
     pairs: &[(Vec3, Vec3)],
 ) -> Result<BSplineMap, WarpError> {
-    let (o, h) = (lattice.origin(), lattice.spacing());
     let handles: Vec<Handle> =
         pairs.iter().map(|&(p, q)| Handle { point: (p - o) / h, goal: (q - o) / h }).collect();
     let drag = solve_drag(identity, &handles, None)?;
@@ -347,6 +356,33 @@ fn landmark_map(
         map.set_control_point(c, position)?;
     }
     Ok(map)
+}
+
+impl WorldMap<'static> {
+    /// True's B-spline warp through landmark pairs (`W(pᵢ) = qᵢ`), fitted by
+    /// the minimum-norm direct manipulation of [`solve_drag`] from the
+    /// identity, on a lattice of `resolution` nodes along the longest edge
+    /// of `bounds` with a control point every `control_spacing` voxels: the
+    /// alternative to the RBF displacement warp for Breen & Whitaker's
+    /// generalized warp (§6.2). Outside `bounds` the map is the identity
+    /// plus the nearest control displacements' fading tail.
+    ///
+    /// # Errors
+    /// [`WarpError`] for a bad lattice or control spacing, and
+    /// [`solve_drag`]'s.
+    pub fn from_landmarks(
+        bounds: &Aabb,
+        resolution: u32,
+        control_spacing: u32,
+        landmarks: &Landmarks,
+    ) -> Result<Self, WarpError> {
+        check::count("control_spacing", u64::from(control_spacing), 2, 256)?;
+        let bounds = landmarks.pairs().iter().fold(*bounds, |b, &(p, q)| b.including(p).including(q));
+        let (dims, origin, spacing) = lattice_for_box(&bounds, resolution)?;
+        let identity = BSplineMap::with_controls(dims, control_grid(dims, control_spacing))?;
+        let map = landmark_map(&identity, origin, spacing, landmarks.pairs())?;
+        Ok(WorldMap::owned(map, origin, spacing))
+    }
 }
 
 /// Frames are densities on the common lattice in world space (identity
@@ -382,5 +418,11 @@ impl Morph for WarpMorph {
     fn frame_mesh(&self, t: f32, _res: u32) -> Result<isomorph_common::TriMesh, WarpError> {
         let frame = self.frame(t)?;
         Ok(marching_cubes(&frame.field, frame.iso))
+    }
+
+    /// The identity: frames are not placed (without making the frame).
+    fn world_transform(&self, t: f32) -> Result<Affine3A, WarpError> {
+        check_time(t)?;
+        Ok(Affine3A::IDENTITY)
     }
 }

@@ -71,6 +71,9 @@ pub enum WarpError {
     /// (its region of influence excludes every control point that moves it).
     #[error("handle {0} cannot move: no control point inside the region of influence affects it")]
     Unreachable(usize),
+    /// A saved map ([`crate::WorldMap::from_json`]) could not be read.
+    #[error("not a B-spline map file as `isomorph warp` writes it: {0}")]
+    MapFile(String),
 }
 
 impl From<GridError> for WarpError {

@@ -9,12 +9,17 @@ use crate::{BSplineMap, VolumeWarp, WarpError, WarpSettings};
 use glam::{Affine3A, Vec3};
 use isomorph_common::marching_cubes::marching_cubes;
 use isomorph_common::{Aabb, Frame, Grid3, Morph, MorphReport, Outcome, TriMesh, check_time};
+use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
 
 /// A [`BSplineMap`] placed in world space by a source grid's origin and
 /// spacing: `apply(p) = origin + spacing · B((p − origin)/spacing)`.
-#[derive(Debug, Clone, Copy)]
+/// Borrowed from a [`VolumeWarp`] ([`VolumeWarp::world_map`]) or owned
+/// (`WorldMap<'static>`, e.g. [`WorldMap::from_landmarks`], to be moved into
+/// a closure).
+#[derive(Debug, Clone)]
 pub struct WorldMap<'a> {
-    map: &'a BSplineMap,
+    map: Cow<'a, BSplineMap>,
     origin: Vec3,
     spacing: f32,
 }
@@ -22,7 +27,17 @@ pub struct WorldMap<'a> {
 impl<'a> WorldMap<'a> {
     /// `map` placed like a grid with node 0 at `origin` and node `spacing`.
     pub fn new(map: &'a BSplineMap, origin: Vec3, spacing: f32) -> Self {
-        Self { map, origin, spacing }
+        Self { map: Cow::Borrowed(map), origin, spacing }
+    }
+
+    /// Like [`WorldMap::new`], owning `map`.
+    pub fn owned(map: BSplineMap, origin: Vec3, spacing: f32) -> WorldMap<'static> {
+        WorldMap { map: Cow::Owned(map), origin, spacing }
+    }
+
+    /// The underlying map (source voxel coordinates).
+    pub fn map(&self) -> &BSplineMap {
+        &self.map
     }
 
     /// The image of world point `p`.
@@ -36,9 +51,84 @@ impl<'a> WorldMap<'a> {
         self.map.inverse((q - self.origin) / self.spacing, 1e-4, 30).map(|x| self.origin + self.spacing * x)
     }
 
+    /// The map as a JSON file ([`WorldMap::from_json`] reads it back):
+    /// `kind` `"bspline-map"`, the lattice placement `origin` and `spacing`
+    /// (world units), `source_dims` and `controls` (per axis) and every
+    /// control point's `displacements` (voxel units, x fastest).
+    pub fn to_json(&self) -> String {
+        let file = MapFile {
+            kind: MAP_KIND.into(),
+            origin: self.origin.to_array(),
+            spacing: self.spacing,
+            source_dims: self.map.source_dims().to_array(),
+            controls: self.map.controls().to_array(),
+            displacements: self.map.displacements().iter().map(|d| d.to_array()).collect(),
+        };
+        serde_json::to_string(&file).expect("finite numbers always serialize")
+    }
+
     /// The map as a closure `Fn(Vec3) -> Vec3`.
     pub fn as_fn(&self) -> impl Fn(Vec3) -> Vec3 + '_ {
         move |p| self.apply(p)
+    }
+}
+
+/// The `kind` of a map file.
+const MAP_KIND: &str = "bspline-map";
+
+/// A map file as [`WorldMap::to_json`] writes it.
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MapFile {
+    kind: String,
+    origin: [f32; 3],
+    spacing: f32,
+    source_dims: [u32; 3],
+    controls: [u32; 3],
+    displacements: Vec<[f32; 3]>,
+}
+
+impl WorldMap<'static> {
+    /// Reads a map written by [`WorldMap::to_json`] (`isomorph warp` writes
+    /// one as `map.json`).
+    ///
+    /// # Errors
+    /// [`WarpError::MapFile`] for other JSON, a wrong count of
+    /// displacements or a placement that is not finite and positive; the
+    /// lattice's errors ([`BSplineMap::with_controls`]); non-finite
+    /// displacements.
+    pub fn from_json(text: &str) -> Result<Self, WarpError> {
+        let file: MapFile = serde_json::from_str(text).map_err(|e| WarpError::MapFile(e.to_string()))?;
+        if file.kind != MAP_KIND {
+            return Err(WarpError::MapFile(format!("kind {:?}, expected {MAP_KIND:?}", file.kind)));
+        }
+        let origin = Vec3::from_array(file.origin);
+        if !(origin.is_finite() && file.spacing.is_finite() && file.spacing > 0.0) {
+            return Err(WarpError::MapFile("origin and spacing must be finite, spacing > 0".into()));
+        }
+        let mut map = BSplineMap::with_controls(file.source_dims.into(), file.controls.into())?;
+        if file.displacements.len() != map.displacements().len() {
+            return Err(WarpError::MapFile(format!(
+                "{} displacements for {} control points",
+                file.displacements.len(),
+                map.displacements().len()
+            )));
+        }
+        for (c, d) in map.control_indices().zip(&file.displacements) {
+            map.set_displacement(c, Vec3::from_array(*d))?;
+        }
+        Ok(WorldMap::owned(map, origin, file.spacing))
+    }
+
+    /// Reads a map file ([`WorldMap::from_json`]).
+    ///
+    /// # Errors
+    /// [`WarpError::MapFile`] for an unreadable file, then
+    /// [`WorldMap::from_json`]'s.
+    pub fn load(path: &std::path::Path) -> Result<Self, WarpError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| WarpError::MapFile(format!("cannot read {}: {e}", path.display())))?;
+        Self::from_json(&text)
     }
 }
 
@@ -134,6 +224,27 @@ mod tests {
     use super::*;
     use crate::Filter;
     use glam::UVec3;
+
+    #[test]
+    fn map_files_round_trip_and_bad_ones_are_errors() {
+        let mut map = BSplineMap::identity(UVec3::new(16, 12, 10), 7).unwrap();
+        map.set_displacement(UVec3::new(3, 2, 4), Vec3::new(1.5, -0.5, 0.25)).unwrap();
+        let w = WorldMap::new(&map, Vec3::new(-1.0, 0.5, 2.0), 0.1);
+        let back = WorldMap::from_json(&w.to_json()).unwrap();
+        assert_eq!(back.map(), &map);
+        let p = Vec3::new(-0.4, 1.0, 2.5);
+        assert_eq!(back.apply(p), w.apply(p));
+        let text = w.to_json();
+        for (bad, why) in [
+            (text.replace("bspline-map", "mesh"), "kind"),
+            (text.replace("\"spacing\":0.1", "\"spacing\":-0.1"), "spacing"),
+            (text.replace("\"controls\":[7,7,7]", "\"controls\":[7,7,8]"), "displacements for"),
+            ("{}".to_string(), "missing field"),
+        ] {
+            let e = WorldMap::from_json(&bad).unwrap_err().to_string();
+            assert!(e.contains(why), "{why}: {e}");
+        }
+    }
 
     #[test]
     fn world_map_and_inverse_round_trip() {

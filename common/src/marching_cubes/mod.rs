@@ -147,7 +147,7 @@ fn concatenate(slabs: Vec<SlabMesh>) -> TriMesh {
             slab.triangles.iter().map(|t| t.map(|v| if v < own { base + v } else { next + (v - own) })),
         );
     }
-    TriMesh { positions, triangles, normals: None }
+    TriMesh { positions, triangles, normals: None, colors: None }
 }
 
 /// Per-slab working memory, reused across the slabs one worker processes.

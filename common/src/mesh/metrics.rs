@@ -55,6 +55,11 @@ pub struct MeshMetrics {
     pub volume: f64,
     /// Connected components ([`TriMesh::connected_components`]).
     pub components: usize,
+    /// Components that wall in a cavity: their own signed volume is negative
+    /// (their outward triangles face into an enclosed void of a solid, as
+    /// marching cubes of a positive-inside field produce for an empty bubble).
+    /// `components − voids` are outer shells ([`TriMesh::component_volumes`]).
+    pub voids: usize,
     /// Euler characteristic V − E + F ([`TriMesh::euler_characteristic`]).
     pub euler: i64,
     /// Total genus of a closed 2-manifold ([`TriMesh::genus`]); `None` when it
@@ -159,6 +164,32 @@ impl TriMesh {
         self.components_and_vertices().0
     }
 
+    /// The signed volume ([`TriMesh::signed_volume`]) of each connected
+    /// component, in the order of their first triangles, in cubed world
+    /// units. For a closed, outward-oriented mesh an outer shell has a
+    /// positive volume and the wall of an enclosed cavity a negative one
+    /// (its triangles face into the cavity), which is how
+    /// [`MeshMetrics::voids`] tells them apart. Meaningless for open
+    /// components.
+    ///
+    /// # Panics
+    /// If a triangle index is out of range (a mesh [`TriMesh::validate`] rejects).
+    pub fn component_volumes(&self) -> Vec<f64> {
+        let (mut parent, _, _) = self.union_find();
+        let mut slot = vec![u32::MAX; self.positions.len()];
+        let mut volumes = Vec::new();
+        for &tri in self.triangles.iter().filter(|&&t| is_proper(t)) {
+            let root = find(&mut parent, tri[0]) as usize;
+            if slot[root] == u32::MAX {
+                slot[root] = volumes.len() as u32;
+                volumes.push(0.0);
+            }
+            let [a, b, c] = tri.map(|v| self.positions[v as usize].as_dvec3());
+            volumes[slot[root] as usize] += a.dot(b.cross(c)) / 6.0;
+        }
+        volumes
+    }
+
     /// Euler characteristic χ = V − E + F, where V counts only referenced
     /// vertices and triangles with a repeated vertex index are skipped (see
     /// the [module conventions](self)). A sphere has χ = 2, a torus χ = 0.
@@ -198,6 +229,7 @@ impl TriMesh {
             area,
             volume,
             components: topo.components,
+            voids: self.component_volumes().iter().filter(|&&v| v < 0.0).count(),
             euler: topo.euler(),
             genus: topo.genus(),
             boundary_edges: topo.edges.boundary_edges,
@@ -262,6 +294,14 @@ impl TriMesh {
     /// Union-find over the proper triangles' vertices: `(components,
     /// referenced vertices)`.
     fn components_and_vertices(&self) -> (usize, usize) {
+        let (_, referenced, merges) = self.union_find();
+        let vertices = referenced.iter().filter(|&&r| r).count();
+        (vertices - merges, vertices)
+    }
+
+    /// Union-find over the proper triangles' vertices: the parent forest,
+    /// which vertices are referenced, and the number of merges.
+    fn union_find(&self) -> (Vec<u32>, Vec<bool>, usize) {
         let n = self.positions.len();
         let mut parent: Vec<u32> = (0..n as u32).collect();
         let mut referenced = vec![false; n];
@@ -281,8 +321,7 @@ impl TriMesh {
                 }
             }
         }
-        let vertices = referenced.iter().filter(|&&r| r).count();
-        (vertices - merges, vertices)
+        (parent, referenced, merges)
     }
 }
 
@@ -408,6 +447,23 @@ mod tests {
         two.append(&torus(3.0, 1.0, 12, 8));
         two.append(&torus(3.0, 1.0, 12, 8));
         assert_topology(&two, 4, 4, Some(2));
+    }
+
+    #[test]
+    fn cavity_walls_are_voids_and_shells_are_not() {
+        // A hollow ball: the outer sphere outward, the inner one inside-out
+        // (its triangles face into the cavity), and a separate outer ball.
+        let mut m = uv_sphere(Vec3::ZERO, 2.0, 16, 24);
+        let mut wall = uv_sphere(Vec3::ZERO, 1.0, 16, 24);
+        wall.triangles.iter_mut().for_each(|t| t.swap(1, 2));
+        m.append(&wall);
+        m.append(&uv_sphere(Vec3::new(9.0, 0.0, 0.0), 0.5, 8, 12));
+        let v = m.component_volumes();
+        assert_eq!(v.len(), 3);
+        assert!(v[0] > 30.0 && v[1] < -3.0 && v[2] > 0.3, "{v:?}");
+        assert_rel(v.iter().sum(), m.signed_volume(), 1e-9);
+        let metrics = m.metrics();
+        assert_eq!((metrics.components, metrics.voids), (3, 1));
     }
 
     #[test]

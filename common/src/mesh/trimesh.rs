@@ -28,6 +28,17 @@ pub enum MeshError {
         /// Vertices.
         vertices: usize,
     },
+    /// The colour data does not have one colour per vertex.
+    #[error("colour data of the wrong length: {colors} colours given for {vertices} vertices")]
+    ColorCount {
+        /// Colours given.
+        colors: usize,
+        /// Vertices.
+        vertices: usize,
+    },
+    /// A vertex colour is NaN or infinite.
+    #[error("the colour of vertex {0} is not finite")]
+    NonFiniteColor(usize),
 }
 
 /// An indexed triangle mesh in world space.
@@ -43,6 +54,10 @@ pub struct TriMesh {
     pub triangles: Vec<[u32; 3]>,
     /// Optional per-vertex unit normals (outward).
     pub normals: Option<Vec<Vec3>>,
+    /// Optional per-vertex colours: sRGB red, green, blue in `[0, 1]` (PLY
+    /// `red green blue`, OBJ `v x y z r g b`). Readers, writers, the
+    /// renderer and the sequence exporter carry them; geometry ignores them.
+    pub colors: Option<Vec<Vec3>>,
 }
 
 impl TriMesh {
@@ -52,12 +67,13 @@ impl TriMesh {
     /// [`MeshError::IndexOutOfRange`] for a bad index, [`MeshError::NonFinite`]
     /// for a NaN or infinite coordinate.
     pub fn new(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Result<Self, MeshError> {
-        let mesh = Self { positions, triangles, normals: None };
+        let mesh = Self { positions, triangles, normals: None, colors: None };
         mesh.validate()?;
         Ok(mesh)
     }
 
-    /// Checks indices, coordinates and the normal count.
+    /// Checks indices, coordinates, the normal count and the colours (one
+    /// finite colour per vertex).
     ///
     /// # Errors
     /// The first problem found, as a [`MeshError`].
@@ -76,7 +92,20 @@ impl TriMesh {
         {
             return Err(MeshError::NormalCount { normals: normals.len(), vertices: n });
         }
-        Ok(())
+        self.check_colors()
+    }
+
+    /// One finite colour per vertex, when there are colours.
+    fn check_colors(&self) -> Result<(), MeshError> {
+        let Some(colors) = &self.colors else { return Ok(()) };
+        let n = self.positions.len();
+        if colors.len() != n {
+            return Err(MeshError::ColorCount { colors: colors.len(), vertices: n });
+        }
+        match colors.iter().position(|c| !c.is_finite()) {
+            Some(i) => Err(MeshError::NonFiniteColor(i)),
+            None => Ok(()),
+        }
     }
 
     /// True when the mesh has no triangle.
@@ -90,13 +119,21 @@ impl TriMesh {
     }
 
     /// A copy with every position multiplied by `s` (normals, being
-    /// directions, are kept).
+    /// directions, and colours are kept).
     pub(crate) fn scaled(&self, s: f32) -> TriMesh {
-        TriMesh {
-            positions: self.positions.iter().map(|&p| p * s).collect(),
-            triangles: self.triangles.clone(),
-            normals: self.normals.clone(),
-        }
+        TriMesh { positions: self.positions.iter().map(|&p| p * s).collect(), ..self.clone() }
+    }
+
+    /// The mesh with per-vertex `colors` (sRGB in `[0, 1]`, see
+    /// [`TriMesh::colors`]).
+    ///
+    /// # Errors
+    /// [`MeshError::ColorCount`] unless there is one colour per vertex,
+    /// [`MeshError::NonFiniteColor`] for a NaN or infinite component.
+    pub fn with_colors(mut self, colors: Vec<Vec3>) -> Result<Self, MeshError> {
+        self.colors = Some(colors);
+        self.check_colors()?;
+        Ok(self)
     }
 
     /// The power of two `s` that brings the largest coordinate magnitude of
@@ -137,7 +174,8 @@ impl TriMesh {
         self.normals = Some(self.vertex_normals());
     }
 
-    /// Applies `map` to every position (and normals by its inverse transpose);
+    /// Applies `map` to every position (and normals by its inverse
+    /// transpose; colours stay with their vertices);
     /// a map with negative determinant also flips the triangles so that they
     /// stay outward.
     pub fn transform(&mut self, map: &Affine3A) {
@@ -164,17 +202,19 @@ impl TriMesh {
         m
     }
 
-    /// Appends `other`'s vertices and triangles (normals are kept only when
-    /// both meshes have them).
+    /// Appends `other`'s vertices and triangles (normals and colours are
+    /// kept only when both meshes have them).
     pub fn append(&mut self, other: &TriMesh) {
         let offset = self.positions.len() as u32;
-        self.normals = match (self.normals.take(), &other.normals) {
+        let joined = |a: Option<Vec<Vec3>>, b: &Option<Vec<Vec3>>| match (a, b) {
             (Some(mut a), Some(b)) => {
                 a.extend_from_slice(b);
                 Some(a)
             }
             _ => None,
         };
+        self.normals = joined(self.normals.take(), &other.normals);
+        self.colors = joined(self.colors.take(), &other.colors);
         self.positions.extend_from_slice(&other.positions);
         self.triangles.extend(other.triangles.iter().map(|t| t.map(|i| i + offset)));
     }
@@ -213,6 +253,31 @@ pub(crate) mod tests {
             Err(MeshError::IndexOutOfRange { index: 1, .. })
         ));
         assert!(matches!(TriMesh::new(vec![Vec3::NAN], vec![]), Err(MeshError::NonFinite(0))));
+        let short = tetrahedron().with_colors(vec![Vec3::ONE; 3]);
+        assert_eq!(short, Err(MeshError::ColorCount { colors: 3, vertices: 4 }));
+        assert!(short.unwrap_err().to_string().contains("colour data of the wrong length"));
+        let nan =
+            tetrahedron().with_colors(vec![Vec3::ONE, Vec3::ONE, Vec3::new(0.0, f32::NAN, 0.0), Vec3::ONE]);
+        assert_eq!(nan, Err(MeshError::NonFiniteColor(2)));
+        let mut long = tetrahedron();
+        long.colors = Some(vec![Vec3::ZERO; 5]);
+        assert_eq!(long.validate(), Err(MeshError::ColorCount { colors: 5, vertices: 4 }));
+    }
+
+    #[test]
+    fn colors_follow_their_vertices() {
+        let colors = vec![Vec3::X, Vec3::Y, Vec3::Z, Vec3::ONE];
+        let t = tetrahedron().with_colors(colors.clone()).unwrap();
+        let m = t.transformed(&Affine3A::from_scale(Vec3::new(-1.0, 2.0, 1.0)));
+        assert_eq!(m.colors.as_ref(), Some(&colors));
+        let mut both = t.clone();
+        both.append(&t);
+        assert_eq!(both.colors.as_ref().map(Vec::len), Some(8));
+        assert_eq!(both.colors.as_ref().unwrap()[4..], colors[..]);
+        let mut one = t.clone();
+        one.append(&tetrahedron());
+        assert_eq!(one.colors, None, "colours of only one part are dropped");
+        assert_eq!(t.scaled(4.0).colors, t.colors);
     }
 
     #[test]

@@ -150,6 +150,12 @@ impl Morph for DistanceBlend {
         let frame = self.frame(t)?;
         Ok(marching_cubes(&frame.field, frame.iso))
     }
+
+    /// The identity: the blend is not placed.
+    fn world_transform(&self, t: f32) -> Result<Affine3A, MorphError> {
+        check_time(t)?;
+        Ok(Affine3A::IDENTITY)
+    }
 }
 
 #[cfg(test)]

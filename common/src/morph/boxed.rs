@@ -3,7 +3,7 @@
 
 use super::{Frame, Morph, MorphError, MorphFailure, MorphReport};
 use crate::{Aabb, Field3, TriMesh};
-use glam::Vec3;
+use glam::{Affine3A, Vec3};
 use std::fmt;
 
 /// A frame field of any method.
@@ -107,6 +107,14 @@ where
 
     fn frame_mesh(&self, t: f32, res: u32) -> Result<TriMesh, BoxedError> {
         self.0.frame_mesh(t, res).map_err(BoxedError::new)
+    }
+
+    fn world_transform(&self, t: f32) -> Result<Affine3A, BoxedError> {
+        self.0.world_transform(t).map_err(BoxedError::new)
+    }
+
+    fn ends_of(&self, t: f32, points: &[Vec3]) -> Result<[Vec<Vec3>; 2], BoxedError> {
+        self.0.ends_of(t, points).map_err(BoxedError::new)
     }
 }
 

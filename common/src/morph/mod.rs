@@ -44,7 +44,7 @@ pub use report::{Details, MorphReport, Outcome, Residual, StageTime, Stages, Val
 
 use crate::marching_cubes::level_set_mesh;
 use crate::{Aabb, Field3, TriMesh};
-use glam::Affine3A;
+use glam::{Affine3A, Vec3};
 
 /// One in-between shape: a field (positive inside, surface at `iso`) in the
 /// morph's field space, and the map that places it in the world.
@@ -106,6 +106,36 @@ pub trait Morph: Send + Sync {
         let mut mesh = level_set_mesh(&frame.field, &self.field_bounds(), res, frame.iso)?;
         mesh.transform(&frame.transform);
         Ok(mesh)
+    }
+
+    /// [`Frame::transform`] of the frame at `t` alone (field space → world
+    /// space), e.g. to find where a world point of frame `t` sits in frames
+    /// 0 and 1 (`world_transform(0) · world_transform(t)⁻¹` places it on the
+    /// source, as the sequence exporter's colour lookup does). The default
+    /// makes the whole frame; methods whose placement is known without it
+    /// override this.
+    ///
+    /// # Errors
+    /// As [`Morph::frame`].
+    fn world_transform(&self, t: f32) -> Result<Affine3A, Self::Error> {
+        Ok(self.frame(t)?.transform)
+    }
+
+    /// Where the world points `points` of frame `t` sit in the frames at 0
+    /// and at 1 (the same field point placed as the source and as the
+    /// target are): what the exporter's colour lookup reads the inputs'
+    /// colours at. The default maps by `world_transform(0 | 1) ·
+    /// world_transform(t)⁻¹`; methods placed by a non-affine map override it.
+    ///
+    /// # Errors
+    /// As [`Morph::world_transform`].
+    fn ends_of(&self, t: f32, points: &[Vec3]) -> Result<[Vec<Vec3>; 2], Self::Error> {
+        let back = self.world_transform(t)?.inverse();
+        let to = |end: Affine3A| {
+            let map = end * back;
+            points.iter().map(|&p| map.transform_point3(p)).collect()
+        };
+        Ok([to(self.world_transform(0.0)?), to(self.world_transform(1.0)?)])
     }
 }
 

@@ -15,6 +15,10 @@
 //!   decimal that round-trips each `f32`, so every format round-trips
 //!   positions bit for bit.
 //! - Triangles; polygons are fan-triangulated (`0,i,i+1`) on read.
+//! - Per-vertex colours (sRGB in `[0, 1]`, [`TriMesh::colors`]) in PLY
+//!   (`red green blue`; written as `uchar`, so within 1/510) and OBJ (the
+//!   common `v x y z r g b` extension, floats, written with the shortest
+//!   round-tripping decimal). STL has none; they are not written there.
 //! - Per-vertex normals in OBJ (`vn`, when every face corner names one and
 //!   each vertex always gets the same one) and PLY (`nx ny nz`). Non-finite
 //!   normals are dropped (the normals are then `None`), because they can be
@@ -323,6 +327,20 @@ pub enum ReadWarning {
         /// Face corners concerned.
         corners: u64,
         /// Line of the first one.
+        first_line: usize,
+    },
+    /// Some OBJ vertices carry a colour (`v x y z r g b`) and others do
+    /// not: the colours were dropped (a mesh has a colour for every vertex
+    /// or none).
+    #[error(
+        "OBJ: {uncolored} of {vertices} vertices have no colour (first on line {first_line}), so the vertex colours were dropped"
+    )]
+    ObjColorsDropped {
+        /// Vertices without a colour.
+        uncolored: usize,
+        /// All vertices.
+        vertices: usize,
+        /// Line of the first vertex without a colour.
         first_line: usize,
     },
     /// OBJ statements skipped: unknown keywords, or geometry this reader does

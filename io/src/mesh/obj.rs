@@ -71,8 +71,11 @@ pub(super) fn is_unread_geometry(keyword: &str) -> bool {
 /// fan-triangulated; negative (relative) indices are resolved. Normals are
 /// kept when every face corner names one (`v//vn` or `v/vt/vn`), each vertex
 /// always gets the same normal and all are finite; vertices used by no face
-/// then get a zero normal. Texture coordinates, materials, `w` weights and
-/// vertex colours are ignored, and texture indices are not checked.
+/// then get a zero normal. Vertex colours (the common extension `v x y z r
+/// g b`, floats in `0..1`) are kept when every vertex has one; when only
+/// some have, they are dropped with [`ReadWarning::ObjColorsDropped`].
+/// Texture coordinates, materials and `w` weights (`v x y z w`) are
+/// ignored, and texture indices are not checked.
 ///
 /// Lines end at `\n`, `\r\n` or a lone `\r` (old Mac files); a line whose
 /// last non-blank character is `\` continues on the next one (unless it
@@ -220,6 +223,10 @@ struct Skipped {
 #[derive(Default)]
 struct ObjParser {
     positions: Vec<Vec3>,
+    /// The colours of the `v` records that have one (`v x y z r g b`).
+    colors: Vec<Vec3>,
+    /// The line of the first `v` record without a colour.
+    uncolored: Option<usize>,
     /// The `vn` records.
     normals: Vec<Vec3>,
     /// How many `vt` records came so far.
@@ -263,6 +270,12 @@ impl ObjParser {
                 let p = vec3(&mut tokens, "vertex")?;
                 if !p.is_finite() {
                     return Err(format!("vertex {} has a non-finite coordinate", self.positions.len() + 1));
+                }
+                match color(tokens) {
+                    Some(c) => self.colors.push(c),
+                    None => {
+                        self.uncolored.get_or_insert(number);
+                    }
                 }
                 self.positions.push(p);
                 self.vertex_normal.push(NO_NORMAL);
@@ -368,9 +381,19 @@ impl ObjParser {
                     .collect::<Vec<_>>()
             })
             .filter(|normals| normals.iter().all(|n| n.is_finite()));
-        let mesh = TriMesh { positions: self.positions, triangles: self.triangles, normals };
-        mesh.validate()?;
         let mut warnings = Vec::new();
+        let colors = match self.uncolored {
+            None if !self.positions.is_empty() => Some(self.colors),
+            Some(first_line) if !self.colors.is_empty() => {
+                let vertices = self.positions.len();
+                let uncolored = vertices - self.colors.len();
+                warnings.push(ReadWarning::ObjColorsDropped { uncolored, vertices, first_line });
+                None
+            }
+            _ => None,
+        };
+        let mesh = TriMesh { positions: self.positions, triangles: self.triangles, normals, colors };
+        mesh.validate()?;
         let Dropped { corners, first_line } = self.normals_dropped;
         if corners > 0 {
             warnings.push(ReadWarning::ObjNormalsDropped { corners, first_line });
@@ -384,6 +407,19 @@ impl ObjParser {
         }));
         Ok(MeshRead { mesh, warnings })
     }
+}
+
+/// The colour of a `v` record after its `x y z`: exactly three further
+/// numbers; `None` otherwise (none, a `w` weight, or anything else).
+fn color<'a>(rest: impl Iterator<Item = &'a [u8]>) -> Option<Vec3> {
+    let mut rgb = [0.0f32; 3];
+    let mut count = 0;
+    for token in rest {
+        let value = std::str::from_utf8(token).ok()?.parse().ok()?;
+        *rgb.get_mut(count)? = value;
+        count += 1;
+    }
+    (count == 3).then(|| Vec3::from_array(rgb))
 }
 
 /// Parses three numbers (further ones, such as `w` or colours, are ignored).
@@ -415,12 +451,22 @@ fn resolve(token: &[u8], count: usize, items: &str) -> Result<u32, String> {
     Ok(resolved as u32)
 }
 
-/// Writes `v`, optional `vn` (one per vertex) and `f` records with 1-based
+/// Writes `v` (`v x y z r g b` with colours), optional `vn` (one per
+/// vertex) and `f` records with 1-based
 /// indices; coordinates use the shortest decimal that round-trips the `f32`.
 pub(super) fn write_obj(mesh: &TriMesh, out: &mut impl Write) -> io::Result<()> {
     writeln!(out, "# isomorph: {} vertices, {} triangles", mesh.positions.len(), mesh.triangles.len())?;
-    for p in &mesh.positions {
-        writeln!(out, "v {} {} {}", p.x, p.y, p.z)?;
+    match &mesh.colors {
+        Some(colors) => {
+            for (p, c) in mesh.positions.iter().zip(colors) {
+                writeln!(out, "v {} {} {} {} {} {}", p.x, p.y, p.z, c.x, c.y, c.z)?;
+            }
+        }
+        None => {
+            for p in &mesh.positions {
+                writeln!(out, "v {} {} {}", p.x, p.y, p.z)?;
+            }
+        }
     }
     if let Some(normals) = &mesh.normals {
         for n in normals {

@@ -15,6 +15,9 @@ use std::io::{self, Read, Write};
 
 const FORMAT: &str = "PLY";
 
+/// Names of the vertex colour properties.
+const COLORS: [&str; 3] = ["red", "green", "blue"];
+
 /// Names of the face property holding the vertex indices.
 const FACE_LISTS: [&str; 2] = ["vertex_indices", "vertex_index"];
 
@@ -22,7 +25,10 @@ const FACE_LISTS: [&str; 2] = ["vertex_indices", "vertex_index"];
 /// header).
 ///
 /// Uses the `vertex` element (`x y z` of any scalar type, usually `float` or
-/// `double`; `nx ny nz` when all three are present) and the `face` element
+/// `double`; `nx ny nz` when all three are present; `red green blue` when
+/// all three are present, as vertex colours: `float`/`double` taken as they
+/// are (`0..1`), 16-bit integers divided by 65535, other integers by 255;
+/// `alpha` is ignored) and the `face` element
 /// (a `vertex_indices` or `vertex_index` list of any integer type); other
 /// elements and properties are skipped. Faces with more than three vertices
 /// are fan-triangulated. The whole input is read into memory first.
@@ -81,6 +87,7 @@ fn parse(bytes: &[u8]) -> Result<MeshRead, MeshIoError> {
         Payload { bytes, pos: payload_start, line: header_lines, encoding: header.encoding, parser };
     let mut positions = Vec::new();
     let mut normals = Vec::new();
+    let mut colors = Vec::new();
     let mut triangles = Vec::new();
     let mut indices = Vec::new();
     for def in header.elements.values() {
@@ -91,11 +98,17 @@ fn parse(bytes: &[u8]) -> Result<MeshRead, MeshIoError> {
                 if layout.normals {
                     normals.reserve_exact(def.count);
                 }
+                if layout.color_scale.is_some() {
+                    colors.reserve_exact(def.count);
+                }
                 for i in 0..def.count {
                     let record = payload.record(def, i)?;
                     positions.push(Vec3::from_array(record.position));
                     if layout.normals {
                         normals.push(Vec3::from_array(record.normal));
+                    }
+                    if let Some(scale) = layout.color_scale {
+                        colors.push(Vec3::from_array(record.color) / scale);
                     }
                 }
             }
@@ -116,7 +129,8 @@ fn parse(bytes: &[u8]) -> Result<MeshRead, MeshIoError> {
         }
     }
     let normals = (layout.normals && normals.iter().all(|n| n.is_finite())).then_some(normals);
-    let mesh = TriMesh { positions, triangles, normals };
+    let colors = layout.color_scale.is_some().then_some(colors);
+    let mesh = TriMesh { positions, triangles, normals, colors };
     mesh.validate()?;
     let rest = &bytes[payload.pos..];
     let ascii = header.encoding == Encoding::Ascii;
@@ -170,6 +184,9 @@ fn check_unique_names(header: &[u8]) -> Result<(), MeshIoError> {
 struct Layout {
     /// The vertex element has `nx ny nz`.
     normals: bool,
+    /// The vertex element has `red green blue`: the value of full
+    /// intensity (1 for floats, 255 or 65535 for integers).
+    color_scale: Option<f32>,
 }
 
 impl Layout {
@@ -200,7 +217,17 @@ impl Layout {
         if let Some(empty) = header.elements.values().find(|e| e.count > 0 && e.properties.is_empty()) {
             return Err(unsupported(format!("element '{}' has records but no properties", empty.name)));
         }
-        Ok(Layout { normals: ["nx", "ny", "nz"].into_iter().all(|name| scalar(vertex, name)) })
+        let color_scale = match COLORS.map(|name| vertex.properties.get(name).map(|p| &p.data_type)) {
+            [Some(PropertyType::Scalar(r)), Some(PropertyType::Scalar(_)), Some(PropertyType::Scalar(_))] => {
+                Some(match r {
+                    ScalarType::Float | ScalarType::Double => 1.0,
+                    ScalarType::Short | ScalarType::UShort => 65535.0,
+                    _ => 255.0,
+                })
+            }
+            _ => None,
+        };
+        Ok(Layout { normals: ["nx", "ny", "nz"].into_iter().all(|name| scalar(vertex, name)), color_scale })
     }
 }
 
@@ -394,6 +421,8 @@ fn binary(e: ply_rs_bw::parser::ParseError) -> String {
 struct Record {
     position: [f32; 3],
     normal: [f32; 3],
+    /// Colour as stored (not yet divided by its full intensity).
+    color: [f32; 3],
     /// The face's vertex index list, as declared.
     indices: Option<Property>,
 }
@@ -411,6 +440,9 @@ impl PropertyAccess for Record {
             "nx" => &mut self.normal[0],
             "ny" => &mut self.normal[1],
             "nz" => &mut self.normal[2],
+            "red" => &mut self.color[0],
+            "green" => &mut self.color[1],
+            "blue" => &mut self.color[2],
             _ if FACE_LISTS.contains(&name) => {
                 self.indices = Some(property);
                 return PropertyAccessResult::Set;
@@ -429,16 +461,21 @@ impl PropertyAccess for Record {
     }
 }
 
-/// One record to write: a vertex (position, normal) or a face.
+/// One record to write: a vertex (position, normal, colour) or a face.
 struct OutRecord {
     position: Vec3,
     normal: Vec3,
+    color: [u8; 3],
     face: [u32; 3],
 }
 
 impl PropertyAccess for OutRecord {
     fn new() -> Self {
-        OutRecord { position: Vec3::ZERO, normal: Vec3::ZERO, face: [0; 3] }
+        OutRecord { position: Vec3::ZERO, normal: Vec3::ZERO, color: [0; 3], face: [0; 3] }
+    }
+
+    fn get_uchar(&self, name: &str) -> Option<u8> {
+        COLORS.iter().position(|&c| c == name).map(|i| self.color[i])
     }
 
     fn get_float(&self, name: &str) -> Option<f32> {
@@ -458,8 +495,9 @@ impl PropertyAccess for OutRecord {
     }
 }
 
-/// Writes `vertex` (`float x y z`, and `nx ny nz` with normals) and `face`
-/// (`list uchar uint vertex_indices`) in the encoding of `format`.
+/// Writes `vertex` (`float x y z`, `nx ny nz` with normals, `uchar red
+/// green blue` with colours, rounded to the nearest of 256 levels) and
+/// `face` (`list uchar uint vertex_indices`) in the encoding of `format`.
 pub(super) fn write_ply<W: Write>(mesh: &TriMesh, out: &mut W, format: MeshFormat) -> io::Result<()> {
     let encoding = match format {
         MeshFormat::PlyAscii => Encoding::Ascii,
@@ -473,6 +511,13 @@ pub(super) fn write_ply<W: Write>(mesh: &TriMesh, out: &mut W, format: MeshForma
         if mesh.normals.is_some() { &["x", "y", "z", "nx", "ny", "nz"] } else { &["x", "y", "z"] };
     for &name in names {
         vertex.properties.insert(name.to_owned(), property(name, PropertyType::Scalar(ScalarType::Float)));
+    }
+    if mesh.colors.is_some() {
+        for name in COLORS {
+            vertex
+                .properties
+                .insert(name.to_owned(), property(name, PropertyType::Scalar(ScalarType::UChar)));
+        }
     }
     let mut face = ElementDef::new("face".to_owned());
     face.count = mesh.triangles.len();
@@ -496,6 +541,7 @@ pub(super) fn write_ply<W: Write>(mesh: &TriMesh, out: &mut W, format: MeshForma
     for (i, &position) in mesh.positions.iter().enumerate() {
         record.position = position;
         record.normal = mesh.normals.as_ref().map_or(Vec3::ZERO, |n| n[i]);
+        record.color = mesh.colors.as_ref().map_or([0; 3], |c| color_bytes(c[i]));
         write(out, &record, &vertex)?;
     }
     for &triangle in &mesh.triangles {
@@ -503,6 +549,11 @@ pub(super) fn write_ply<W: Write>(mesh: &TriMesh, out: &mut W, format: MeshForma
         write(out, &record, &face)?;
     }
     Ok(())
+}
+
+/// A colour in `[0, 1]` as bytes, rounded to the nearest level (clamped).
+pub(super) fn color_bytes(color: Vec3) -> [u8; 3] {
+    (color.clamp(Vec3::ZERO, Vec3::ONE) * 255.0).round().to_array().map(|c| c as u8)
 }
 
 #[cfg(test)]

@@ -429,7 +429,7 @@ fn weld(soup: &[Facet], warnings: &mut Vec<ReadWarning>) -> Result<TriMesh, Mesh
             collapsed_triangles: collapsed,
         });
     }
-    let mesh = TriMesh { positions, triangles, normals: None };
+    let mesh = TriMesh { positions, triangles, normals: None, colors: None };
     mesh.validate()?;
     Ok(mesh)
 }
@@ -666,6 +666,7 @@ mod tests {
             positions: soup.iter().flatten().copied().collect(),
             triangles: (0..12).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect(),
             normals: None,
+            colors: None,
         };
         let read = warned(&written(&mesh, MeshFormat::StlBinary));
         assert_eq!(read.mesh.positions.len(), 8);

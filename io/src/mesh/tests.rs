@@ -190,8 +190,8 @@ fn files_on_disk() {
 
 #[test]
 fn invalid_meshes_are_not_written() {
-    let bad_index = TriMesh { positions: vec![Vec3::ZERO], triangles: vec![[0, 0, 1]], normals: None };
-    let nan = TriMesh { positions: vec![Vec3::NAN], triangles: vec![], normals: None };
+    let bad_index = TriMesh { positions: vec![Vec3::ZERO], triangles: vec![[0, 0, 1]], ..TriMesh::default() };
+    let nan = TriMesh { positions: vec![Vec3::NAN], ..TriMesh::default() };
     for format in ALL {
         for mesh in [&bad_index, &nan] {
             let mut bytes = Vec::new();
@@ -339,5 +339,89 @@ proptest! {
         prefix in prop::sample::select(vec!["", "solid x\n", "v 1 2 3\nf ", "ply\nformat ascii 1.0\n"]),
     ) {
         read_everything(format!("{prefix}{text}").as_bytes());
+    }
+}
+
+/// The tetrahedron coloured by its positions, on the 256 PLY levels.
+fn colored_tetrahedron() -> TriMesh {
+    let colors: [[u8; 3]; 4] = [[255, 0, 0], [0, 128, 0], [0, 0, 7], [200, 100, 50]];
+    tetrahedron().with_colors(colors.map(|c| Vec3::from_array(c.map(f32::from)) / 255.0).to_vec()).unwrap()
+}
+
+#[test]
+fn colors_round_trip_through_ply_and_obj_and_are_dropped_by_stl() {
+    let mesh = colored_tetrahedron();
+    for format in ALL {
+        let back = read_mesh_from(&to_bytes(&mesh, format)[..], format).unwrap();
+        let expected = if matches!(format, MeshFormat::StlAscii | MeshFormat::StlBinary) {
+            None
+        } else {
+            mesh.colors.clone()
+        };
+        assert_eq!(back.colors, expected, "{format}");
+    }
+    // Without colours nothing colour-like is written.
+    for format in [MeshFormat::PlyAscii, MeshFormat::Obj] {
+        let text = String::from_utf8(to_bytes(&tetrahedron(), format)).unwrap();
+        assert!(!text.contains("red") && !text.contains("v 0 0 0 "), "{format}: {text}");
+    }
+}
+
+#[test]
+fn ply_colors_of_every_type_are_scaled_to_one() {
+    let ply = |t: &str, values: &str| {
+        format!(
+            "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+             property {t} red\nproperty {t} green\nproperty {t} blue\nproperty {t} alpha\n\
+             element face 1\nproperty list uchar int vertex_indices\nend_header\n\
+             0 0 0 {values}\n1 0 0 {values}\n0 1 0 {values}\n3 0 1 2\n"
+        )
+    };
+    for (t, values, expected) in [
+        ("uchar", "255 51 0 9", Vec3::new(1.0, 0.2, 0.0)),
+        ("float", "0.25 0.5 1 0", Vec3::new(0.25, 0.5, 1.0)),
+        ("double", "0.25 0.5 1 1", Vec3::new(0.25, 0.5, 1.0)),
+        ("ushort", "65535 0 13107 0", Vec3::new(1.0, 0.0, 0.2)),
+    ] {
+        let mesh = read_mesh_from(ply(t, values).as_bytes(), MeshFormat::PlyAscii).unwrap();
+        let colors = mesh.colors.expect(t);
+        assert!(colors.iter().all(|c| (*c - expected).abs().max_element() < 1e-6), "{t}: {colors:?}");
+    }
+    let without_blue = ply("uchar", "1 2 3 4").replace("property uchar blue\n", "").replace(" 3 4", " 4");
+    let mesh = read_mesh_from(without_blue.as_bytes(), MeshFormat::PlyAscii).unwrap();
+    assert_eq!(mesh.colors, None, "red and green alone are no colour");
+}
+
+#[test]
+fn obj_colors_are_kept_only_when_every_vertex_has_one() {
+    let text = "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 0.5\nf 1 2 3\n";
+    let mesh = read_mesh_from(text.as_bytes(), MeshFormat::Obj).unwrap();
+    assert_eq!(mesh.colors, Some(vec![Vec3::X, Vec3::Y, Vec3::new(0.0, 0.0, 0.5)]));
+    let weighted = "v 0 0 0 1\nv 1 0 0 1\nv 0 1 0 1\nf 1 2 3\n";
+    assert_eq!(read_mesh_from(weighted.as_bytes(), MeshFormat::Obj).unwrap().colors, None);
+    let partial = "v 0 0 0 1 0 0\nv 1 0 0\nv 0 1 0 0 0 0.5\nf 1 2 3\n";
+    let read = read_mesh_from_with_warnings(partial.as_bytes(), MeshFormat::Obj).unwrap();
+    assert_eq!(read.mesh.colors, None);
+    assert_eq!(
+        read.warnings,
+        vec![ReadWarning::ObjColorsDropped { uncolored: 1, vertices: 3, first_line: 2 }]
+    );
+    let nan = "v 0 0 0 1 0 0\nv 1 0 0 nan 0 0\nv 0 1 0 0 0 0.5\nf 1 2 3\n";
+    let err = read_mesh_from(nan.as_bytes(), MeshFormat::Obj).unwrap_err();
+    assert!(matches!(err, MeshIoError::Mesh(MeshError::NonFiniteColor(1))), "{err}");
+}
+
+#[test]
+fn colour_data_of_the_wrong_length_is_not_written() {
+    let mut mesh = colored_tetrahedron();
+    mesh.colors.as_mut().unwrap().pop();
+    for format in ALL {
+        let mut bytes = Vec::new();
+        let err = write_mesh_to(&mesh, &mut bytes, format).unwrap_err();
+        assert!(
+            matches!(err, MeshIoError::Mesh(MeshError::ColorCount { colors: 3, vertices: 4 })),
+            "{format}: {err}"
+        );
+        assert!(err.to_string().contains("colour data of the wrong length"), "{err}");
     }
 }

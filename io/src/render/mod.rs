@@ -100,7 +100,9 @@ pub struct RenderSettings {
     /// Smooth or flat shading.
     pub shading: Shading,
     /// sRGB colour of the outside of the surface (the side its triangles'
-    /// normals point to).
+    /// normals point to), unless the mesh has vertex colours
+    /// ([`TriMesh::colors`]): those are then interpolated across each
+    /// triangle and shaded instead.
     pub color: [u8; 3],
     /// sRGB colour of the inside (back faces, seen through holes).
     pub back_color: [u8; 3],
@@ -282,6 +284,7 @@ mod tests {
             positions: vec![Vec3::NAN, Vec3::X, Vec3::Y, Vec3::new(1.0, 1.0, f32::INFINITY)],
             triangles: vec![[0, 1, 2], [1, 2, 3], [1, 2, 7]],
             normals: Some(vec![Vec3::NAN; 2]),
+            colors: None,
         };
         assert_eq!(render(&nan, &settings), plain);
         let mut partly = uv_sphere(Vec3::ZERO, 1.0, 8, 16);
@@ -316,5 +319,33 @@ mod tests {
         // Edge pixels become partly covered blends: more pixels differ from the background.
         assert!(levels(&smooth) > levels(&aliased));
         assert_eq!(smooth.get(0, 0), Some(base.background));
+    }
+
+    #[test]
+    fn vertex_colours_are_shaded_instead_of_the_surface_colour() {
+        // Red where x < 0, blue where x > 0 (the camera sees more of x > 0).
+        let sphere = uv_sphere(Vec3::ZERO, 1.0, 24, 48);
+        let colors = sphere
+            .positions
+            .iter()
+            .map(|p| Vec3::new((0.5 - 4.0 * p.x).clamp(0.0, 1.0), 0.0, (0.5 + 4.0 * p.x).clamp(0.0, 1.0)))
+            .collect();
+        let painted = sphere.clone().with_colors(colors).unwrap();
+        let settings = RenderSettings::default();
+        let count = |image: &Image, keep: &dyn Fn([u8; 3]) -> bool| {
+            drawn(image, settings.background).iter().filter(|&&(x, y)| keep(image.get(x, y).unwrap())).count()
+        };
+        let plain = render(&sphere, &settings);
+        let coloured = render(&painted, &settings);
+        let all = drawn(&coloured, settings.background).len();
+        assert_eq!(all, drawn(&plain, settings.background).len(), "the same pixels are covered");
+        let above = |a: u8, b: u8| u32::from(a) > u32::from(b) + 20;
+        let reddish = |p: [u8; 3]| above(p[0], p[2]) && above(p[0], p[1]);
+        let bluish = |p: [u8; 3]| above(p[2], p[0]) && above(p[2], p[1]);
+        assert_eq!(count(&plain, &reddish), 0);
+        for (what, keep) in [("red", &reddish as &dyn Fn([u8; 3]) -> bool), ("blue", &bluish)] {
+            let n = count(&coloured, keep);
+            assert!(n > all / 8, "{what}: {n} of {all} pixels");
+        }
     }
 }

@@ -493,6 +493,7 @@ mod tests {
             positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::NAN, Vec3::INFINITY],
             triangles: vec![[0, 1, 9], [0, 1, 3], [0, 4, 2], [0, 0, 1], [0, 1, 2]],
             normals: None,
+            colors: None,
         };
         let fragments = rasterize(&mesh, &projection, 16, 16);
         assert!(fragments.iter().filter(|f| f.is_covered()).all(|f| f.triangle == 4));

@@ -31,6 +31,9 @@ pub(super) struct Shader<'a> {
     /// Linear albedo of front and back faces.
     front: Vec3,
     back: Vec3,
+    /// Linear albedo of the front faces per vertex, from the mesh's
+    /// colours (when there is one per vertex); replaces `front`.
+    vertex_front: Option<Vec<Vec3>>,
 }
 
 impl<'a> Shader<'a> {
@@ -50,6 +53,11 @@ impl<'a> Shader<'a> {
             fill: world(0.8, -0.1, 0.5),
             front: srgb_to_linear(settings.color),
             back: srgb_to_linear(settings.back_color),
+            vertex_front: mesh
+                .colors
+                .as_ref()
+                .filter(|c| c.len() == mesh.positions.len())
+                .map(|c| c.iter().map(|&c| unit_srgb_to_linear(c)).collect()),
         }
     }
 
@@ -86,7 +94,14 @@ impl<'a> Shader<'a> {
         }
         let lambert = |light: Vec3| normal.dot(light).max(0.0);
         let diffuse = AMBIENT + KEY * lambert(self.key) + FILL * lambert(self.fill);
-        let albedo = if is_front { self.front } else { self.back };
+        let albedo = match &self.vertex_front {
+            _ if !is_front => self.back,
+            Some(colors) => {
+                let [ca, cb, cc] = tri.map(|i| colors[i as usize]);
+                weights.x * ca + weights.y * cb + weights.z * cc
+            }
+            None => self.front,
+        };
         let half = (self.key + to_eye).normalize_or(to_eye);
         let highlight = if is_front { SPECULAR * normal.dot(half).max(0.0).powf(SHININESS) } else { 0.0 };
         albedo * diffuse + Vec3::splat(highlight)
@@ -121,8 +136,14 @@ fn smooth_normals(mesh: &TriMesh) -> Option<Vec<Vec3>> {
 
 /// An 8-bit sRGB colour in linear RGB `[0, 1]`.
 pub(super) fn srgb_to_linear(color: [u8; 3]) -> Vec3 {
-    Vec3::from(color.map(|c| {
-        let c = f32::from(c) / 255.0;
+    unit_srgb_to_linear(Vec3::from(color.map(f32::from)) / 255.0)
+}
+
+/// An sRGB colour with components in `[0, 1]` (clamped; NaN as 0) in
+/// linear RGB.
+fn unit_srgb_to_linear(color: Vec3) -> Vec3 {
+    Vec3::from(color.to_array().map(|c| {
+        let c = if c.is_nan() { 0.0 } else { c.clamp(0.0, 1.0) };
         if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
     }))
 }
