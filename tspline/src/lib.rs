@@ -168,6 +168,6 @@ pub use basis::Eval;
 pub use error::TsplineError;
 pub use evolution::{Evolution, EvolveSettings, Outcome, Speed, StepStats, evolve};
 pub use fit::{FitReport, FitRound, FitSettings, Refinement, fit};
-pub use morph::{Align, FrameField, TsplineMorph, TsplineSettings, morph};
+pub use morph::{Align, FrameField, Mesher, TsplineMorph, TsplineSettings, morph};
 pub use tmesh::{MAX_DEPTH, TMesh, TMeshSettings};
 pub use tspline::TSpline;
