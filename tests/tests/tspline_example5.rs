@@ -28,8 +28,7 @@ fn dense_bunny_becomes_a_turned_ellipsoid() {
     let place = Affine3A::from_rotation_translation(turn, bb.center() + Vec3::X * size);
     let ellipsoid = Shape::superellipsoid(Vec3::new(0.3, 0.18, 0.12) * size, 1.0, 1.0).transformed(place);
     let target = polygonize(&ellipsoid, &ellipsoid.aabb().expanded(0.05 * size), 48, 0.0).unwrap();
-    let mut settings = TsplineSettings::default();
-    settings.align = Align::Moments(AlignMode::Affine);
+    let mut settings = TsplineSettings { align: Align::Moments(AlignMode::Affine), ..Default::default() };
     settings.evolve.max_steps = 60;
     let m = morph(&dense, &target, &settings, &Control::new()).unwrap();
     let ev = m.evolution();

@@ -23,7 +23,7 @@
 //! | §1, §4.4 marching triangulation (Hartmann 1998, ref. [10]) of the frames | [`TsplineSettings::mesher`], [`Mesher`] over [`isomorph_common::marching_triangulation`] |
 //! | §4.4 combined alignment transforms, eq. 11 | [`TsplineMorph::placement`] (`W(u)`: translation and stretch linear, rotation slerped), [`TsplineMorph::frame_transform`], `tests/alignment.rs` |
 //! | §3.3 Fig. 2–3 | [`demo::corner_source`], [`demo::corner_target`], `tests/corner.rs` ("┌" → "┐", the shapes of the paper's text); [`demo::letter_t`], [`demo::letter_c`], `tests/t_to_c.rs` ("T" → "C", its captions) |
-//! | §5 examples | Example 1: [`demo::petal_torus`], `tests/tests/tspline_example1.rs` of `isomorph-tests`; Example 2: [`isomorph_common::models::holed_cube`], [`demo::holed_cube_settings`]; Example 3's source: [`isomorph_common::models::apple`] (open targets such as the Utah teapot enter as their winding-number zero set, see [`TsplineMorph::new`]) |
+//! | §5 examples | Example 1: [`demo::petal_torus`], `tests/tests/tspline_example1.rs` of `isomorph-tests`; Example 2: [`isomorph_common::models::holed_cube`], [`demo::holed_cube_settings`]; Example 3's source: [`isomorph_common::models::apple`] (open targets such as the Utah teapot enter as their winding-number zero set, see [`TsplineMorph::new`]); Example 5's kind (a dense mesh into a turned ellipsoid, alignment interpolated): `tests/tests/tspline_example5.rs` of `isomorph-tests` |
 //!
 //! # Choices where the paper is silent (see the note)
 //! - Anchors at every leaf vertex including hanging ones; local knot vectors

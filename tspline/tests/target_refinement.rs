@@ -13,15 +13,17 @@ fn refining_the_target_brings_the_last_level_set_closer() {
     let bounds = Aabb::cube(0.5);
     let source = polygonize(&Shape::sphere(0.3), &bounds, 32, 0.0).unwrap();
     let target = polygonize(&Shape::torus(0.3, 0.12), &bounds, 48, 0.0).unwrap();
-    let mut s = TsplineSettings::default();
+    let mut s = TsplineSettings {
+        mesher: Mesher::MarchingTriangulation { edge: 0.03 },
+        target_refinement: Some(Refinement { tolerance: 0.002, max_rounds: 2 }),
+        ..Default::default()
+    };
     // An octree that stops early (many samples allowed per cell), so the
     // refinement has depth left to add.
     s.tmesh.max_depth = 4;
     s.tmesh.min_depth = 2;
     s.tmesh.max_samples_per_cell = 200;
     s.evolve.max_steps = 40;
-    s.mesher = Mesher::MarchingTriangulation { edge: 0.03 };
-    s.target_refinement = Some(Refinement { tolerance: 0.002, max_rounds: 2 });
     let m = morph(&source, &target, &s, &Control::new()).unwrap();
     assert_eq!(m.evolution().outcome, Outcome::Converged);
     let (refined, fit) = m.refined_target().expect("refined");
