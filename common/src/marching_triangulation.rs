@@ -1,7 +1,7 @@
 //! Marching triangulation of implicit surfaces after E. Hartmann, *A
 //! marching method for the triangulation of surfaces*, The Visual Computer
 //! 14, 95–108, 1998 — the mesher Yang & Jüttler use for their T-spline
-//! level sets (their ref. [10]; §1 and §4.4, Fig. 1 (c1), (f1)).
+//! level sets (their ref. \[10\]; §1 and §4.4, Fig. 1 (c1), (f1)).
 //!
 //! Where marching cubes cuts a lattice and leaves slivers of every shape,
 //! the marching method grows a net of **near-equilateral triangles of a

@@ -20,7 +20,7 @@
 //! | §3.3 evolution, eq. 5–9, speed eq. 8 | [`evolve`], [`EvolveSettings`], [`Speed`], [`Evolution`] (`evolution.rs`; zero-set samples by marching cubes + Newton projection in `sampling.rs`) |
 //! | §4.2 alignment | [`TsplineSettings::align`], [`Align`]: moments (`isomorph_common::alignment`) or a user's map; the T-mesh is built on the aligned shapes |
 //! | §4.3 projection frames, eq. 10 | [`morph`] (`morph.rs`) |
-//! | §1, §4.4 marching triangulation (Hartmann 1998, ref. [10]) of the frames | [`TsplineSettings::mesher`], [`Mesher`] over [`isomorph_common::marching_triangulation`] |
+//! | §1, §4.4 marching triangulation (Hartmann 1998, ref. \[10\]) of the frames | [`TsplineSettings::mesher`], [`Mesher`] over [`isomorph_common::marching_triangulation`] |
 //! | §4.4 combined alignment transforms, eq. 11 | [`TsplineMorph::placement`] (`W(u)`: translation and stretch linear, rotation slerped), [`TsplineMorph::frame_transform`], `tests/alignment.rs` |
 //! | §3.3 Fig. 2–3 | [`demo::corner_source`], [`demo::corner_target`], `tests/corner.rs` ("┌" → "┐", the shapes of the paper's text); [`demo::letter_t`], [`demo::letter_c`], `tests/t_to_c.rs` ("T" → "C", its captions) |
 //! | §5 examples | Example 1: [`demo::petal_torus`], `tests/tests/tspline_example1.rs` of `isomorph-tests`; Example 2: [`isomorph_common::models::holed_cube`], [`demo::holed_cube_settings`]; Example 3's source: [`isomorph_common::models::apple`] (open targets such as the Utah teapot enter as their winding-number zero set, see [`TsplineMorph::new`]); Example 5's kind (a dense mesh into a turned ellipsoid, alignment interpolated): `tests/tests/tspline_example5.rs` of `isomorph-tests` |
