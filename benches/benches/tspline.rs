@@ -8,6 +8,11 @@
 //! - `step/{500,1000,2000,4000}`: one evolution step (sampling, speed,
 //!   sparse least squares, Euler update) against the number of coefficients
 //!   (adaptive T-meshes around two spheres; the exact count is printed).
+//! - `mesher/{marching_cubes,marching_triangulation}/…`: one level set (a
+//!   torus fitted on a depth-5 T-mesh) meshed by marching cubes over the
+//!   domain at 65/129 nodes and by Hartmann's marching triangulation
+//!   (the paper's mesher) with edges of 0.04/0.02 domain units; the
+//!   triangle counts and quality are printed.
 //!
 //! `cargo bench -p isomorph-benches --bench tspline -- morph/sphere_holed_cube`
 
@@ -16,6 +21,9 @@ use glam::DVec3;
 use isomorph_benches::data_path;
 use isomorph_common::Control;
 use isomorph_common::marching_cubes::polygonize;
+use isomorph_common::marching_triangulation::{
+    TriangulationSettings, marching_triangulation, triangle_quality,
+};
 use isomorph_common::models;
 use isomorph_common::{Aabb, Shape};
 use isomorph_io::mesh::read_mesh;
@@ -94,5 +102,46 @@ fn steps(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, morphs, steps);
+fn meshers(c: &mut Criterion) {
+    let mut group = c.benchmark_group("mesher");
+    group.sample_size(10);
+    let (major, minor) = (0.5, 0.15);
+    let torus = move |p: DVec3| minor - DVec3::new(p.truncate().length() - major, 0.0, p.z).length();
+    let pts: Vec<DVec3> = (0..20_000)
+        .map(|i| {
+            let (u, v) =
+                (i as f64 * 0.618_034 * std::f64::consts::TAU, i as f64 * 0.0137 * std::f64::consts::TAU);
+            let r = major + minor * v.cos();
+            DVec3::new(r * u.cos(), r * u.sin(), minor * v.sin())
+        })
+        .collect();
+    let mesh = Arc::new(TMesh::build(&pts, &TMeshSettings { max_depth: 5, ..Default::default() }).unwrap());
+    let (spline, _) = fit(mesh, torus, &pts, &FitSettings::default()).unwrap();
+    let domain = Aabb::cube(1.0);
+    for res in [65u32, 129] {
+        let m = polygonize(&spline, &domain, res, 0.0).unwrap();
+        eprintln!("mesher/marching_cubes/{res}: {} triangles, {:?}", m.triangles.len(), triangle_quality(&m));
+        group.bench_function(BenchmarkId::new("marching_cubes", res), |b| {
+            b.iter(|| black_box(polygonize(&spline, &domain, res, 0.0).unwrap().triangles.len()))
+        });
+    }
+    for edge in [0.04f32, 0.02] {
+        let settings = TriangulationSettings { edge, ..Default::default() };
+        let (m, stats) = marching_triangulation(&spline, &domain, 0.0, &settings).unwrap();
+        eprintln!(
+            "mesher/marching_triangulation/{edge}: {} triangles, {stats:?}, {:?}, genus {:?}",
+            m.triangles.len(),
+            triangle_quality(&m),
+            m.genus()
+        );
+        group.bench_function(BenchmarkId::new("marching_triangulation", edge), |b| {
+            b.iter(|| {
+                black_box(marching_triangulation(&spline, &domain, 0.0, &settings).unwrap().0.triangles.len())
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, morphs, steps, meshers);
 criterion_main!(benches);

@@ -134,9 +134,27 @@ pub struct MethodArgs {
     /// of the [−1, 1]³ domain) and refit (off when not given).
     #[arg(long, help_heading = "T-spline (Yang & Jüttler)")]
     pub refine: Option<f64>,
-    /// At most this many refinement rounds (with `--refine`).
+    /// At most this many refinement rounds (with `--refine` or
+    /// `--refine-target`).
     #[arg(long, help_heading = "T-spline (Yang & Jüttler)", default_value_t = 3)]
     pub refine_rounds: usize,
+    /// The final refinement of the target's approximation after the
+    /// evolution (§3.2): fit the target on the T-mesh, split the cells
+    /// where it is farther than this from the target (units of the
+    /// [−1, 1]³ domain), refit, and end the level sets on it (off when not
+    /// given).
+    #[arg(long, help_heading = "T-spline (Yang & Jüttler)")]
+    pub refine_target: Option<f64>,
+    /// How level-set frames become triangle meshes: marching cubes at
+    /// --resolution, or the paper's marching triangulation (Hartmann 1998;
+    /// near-equilateral triangles of --mesh-edge, seeded from a lattice of
+    /// --resolution nodes).
+    #[arg(long, help_heading = "T-spline (Yang & Jüttler)", value_enum, default_value_t = MesherArg::MarchingCubes)]
+    pub mesher: MesherArg,
+    /// Edge length of the marching triangulation's triangles (units of the
+    /// [−1, 1]³ domain, 1e-4 to 1).
+    #[arg(long, help_heading = "T-spline (Yang & Jüttler)", default_value_t = 0.02)]
+    pub mesh_edge: f64,
 
     /// The animator's links, speed curves and trajectories (a RON or JSON
     /// morph spec); the built-in spec of a built-in pair, or automatic
@@ -192,6 +210,9 @@ const OWNERS: &[(&str, &[Method])] = &[
     ("margin", &[Method::Tspline]),
     ("refine", &[Method::Tspline]),
     ("refine_rounds", &[Method::Tspline]),
+    ("refine_target", &[Method::Tspline]),
+    ("mesher", &[Method::Tspline]),
+    ("mesh_edge", &[Method::Tspline]),
     ("links", &[Method::Blobtree]),
     ("via", &[Method::Blobtree]),
     ("via_mode", &[Method::Blobtree]),
@@ -304,6 +325,15 @@ impl MethodArgs {
         t.fit.refinement = self
             .refine
             .map(|tolerance| isomorph_tspline::Refinement { tolerance, max_rounds: self.refine_rounds });
+        t.target_refinement = self
+            .refine_target
+            .map(|tolerance| isomorph_tspline::Refinement { tolerance, max_rounds: self.refine_rounds });
+        t.mesher = match self.mesher {
+            MesherArg::MarchingCubes => isomorph_tspline::Mesher::MarchingCubes,
+            MesherArg::MarchingTriangulation => {
+                isomorph_tspline::Mesher::MarchingTriangulation { edge: self.mesh_edge }
+            }
+        };
 
         settings.blobtree.spec = match &self.links {
             Some(path) => {
@@ -432,6 +462,15 @@ pub enum WarpSpecArg {
     Identity,
     /// Moment alignment as a B-spline warp.
     Align,
+}
+
+/// The T-spline method's frame meshers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum MesherArg {
+    /// Marching cubes at --resolution.
+    MarchingCubes,
+    /// Hartmann's marching triangulation with --mesh-edge (the paper's).
+    MarchingTriangulation,
 }
 
 /// The T-spline evolution speeds.

@@ -16,6 +16,7 @@
 //! | Breen & Whitaker's CSG of Barr superellipsoids (their Figs. 4–13) | [`Shape`], [`models`] |
 //! | Sethian's fast marching; Chopp's subvoxel projection | [`fast_marching`] |
 //! | Lorensen & Cline's marching cubes (with a consistent face rule), marching squares | [`marching_cubes`], [`marching_squares`] |
+//! | Hartmann 1998, the marching method (near-equilateral triangles of a chosen edge length; Yang & Jüttler's mesher) | [`marching_triangulation`] |
 //! | exact mesh distance with generalized winding numbers (Barill et al. 2018) | [`sdf`], [`mesh::winding`], [`mesh::bvh`] |
 //!
 //! # Conventions
@@ -69,6 +70,7 @@ mod grid;
 mod landmarks;
 pub mod marching_cubes;
 pub mod marching_squares;
+pub mod marching_triangulation;
 pub mod mesh;
 pub mod models;
 mod morph;

@@ -16,13 +16,14 @@
 //! | §3.1 T-spline level sets, eq. 1–2 | [`TSpline`] (`tspline.rs`), blending functions and their rational derivatives (`basis.rs`, `bspline.rs`) |
 //! | §3.2 T-mesh by octree subdivision (`n_T`, depth ≤ 6) | [`TMesh`], [`TMeshSettings`] (`tmesh.rs`; knots by Sederberg's ray casting, note §3.3) |
 //! | §3.2 initial fit, eq. 3–4 | [`fit`], [`FitSettings`], [`FitReport`] (`fit.rs`, sparse normal equations in `lsq.rs`, faer sparse Cholesky) |
-//! | §3.2 final refinement | [`FitSettings::refinement`], [`Refinement`], [`FitReport::rounds`], [`TMesh::refined`] |
+//! | §3.2 final refinement | of the source fit: [`FitSettings::refinement`], [`Refinement`], [`FitReport::rounds`], [`TMesh::refined`]; of the target after the evolution (§3.2, last paragraph): [`TsplineSettings::target_refinement`], [`TsplineMorph::refined_target`] |
 //! | §3.3 evolution, eq. 5–9, speed eq. 8 | [`evolve`], [`EvolveSettings`], [`Speed`], [`Evolution`] (`evolution.rs`; zero-set samples by marching cubes + Newton projection in `sampling.rs`) |
 //! | §4.2 alignment | [`TsplineSettings::align`], [`Align`]: moments (`isomorph_common::alignment`) or a user's map; the T-mesh is built on the aligned shapes |
 //! | §4.3 projection frames, eq. 10 | [`morph`] (`morph.rs`) |
+//! | §1, §4.4 marching triangulation (Hartmann 1998, ref. \[10\]) of the frames | [`TsplineSettings::mesher`], [`Mesher`] over [`isomorph_common::marching_triangulation`] |
 //! | §4.4 combined alignment transforms, eq. 11 | [`TsplineMorph::placement`] (`W(u)`: translation and stretch linear, rotation slerped), [`TsplineMorph::frame_transform`], `tests/alignment.rs` |
 //! | §3.3 Fig. 2–3 | [`demo::corner_source`], [`demo::corner_target`], `tests/corner.rs` ("┌" → "┐", the shapes of the paper's text); [`demo::letter_t`], [`demo::letter_c`], `tests/t_to_c.rs` ("T" → "C", its captions) |
-//! | §5 examples | Example 1: [`demo::petal_torus`], `tests/tests/tspline_example1.rs` of `isomorph-tests`; Example 2: [`isomorph_common::models::holed_cube`], [`demo::holed_cube_settings`]; Example 3's source: [`isomorph_common::models::apple`] (open targets such as the Utah teapot enter as their winding-number zero set, see [`TsplineMorph::new`]) |
+//! | §5 examples | Example 1: [`demo::petal_torus`], `tests/tests/tspline_example1.rs` of `isomorph-tests`; Example 2: [`isomorph_common::models::holed_cube`], [`demo::holed_cube_settings`]; Example 3's source: [`isomorph_common::models::apple`] (open targets such as the Utah teapot enter as their winding-number zero set, see [`TsplineMorph::new`]); Example 5's kind (a dense mesh into a turned ellipsoid, alignment interpolated): `tests/tests/tspline_example5.rs` of `isomorph-tests` |
 //!
 //! # Choices where the paper is silent (see the note)
 //! - Anchors at every leaf vertex including hanging ones; local knot vectors
@@ -168,6 +169,6 @@ pub use basis::Eval;
 pub use error::TsplineError;
 pub use evolution::{Evolution, EvolveSettings, Outcome, Speed, StepStats, evolve};
 pub use fit::{FitReport, FitRound, FitSettings, Refinement, fit};
-pub use morph::{Align, FrameField, TsplineMorph, TsplineSettings, morph};
+pub use morph::{Align, FrameField, Mesher, TsplineMorph, TsplineSettings, morph};
 pub use tmesh::{MAX_DEPTH, TMesh, TMeshSettings};
 pub use tspline::TSpline;

@@ -5,13 +5,14 @@
 
 use crate::error::{TsplineError, check_range};
 use crate::evolution::{Evolution, EvolveSettings, evolve};
-use crate::fit::{FitReport, FitSettings, fit};
+use crate::fit::{FitReport, FitSettings, Refinement, fit};
 use crate::sampling::project;
 use crate::tmesh::{TMesh, TMeshSettings};
 use crate::tspline::TSpline;
 use glam::{Affine3A, DVec3, Mat3, Vec3};
 use isomorph_common::alignment::{AlignMode, Moments, align};
 use isomorph_common::marching_cubes::marching_cubes;
+use isomorph_common::marching_triangulation::{TriangulationSettings, marching_triangulation};
 use isomorph_common::mesh::distance::surface_samples;
 use isomorph_common::sdf::MeshSdf;
 use isomorph_common::{Aabb, AffineParts, Field3, Frame, Grid3, Morph, TriMesh};
@@ -35,6 +36,24 @@ pub enum Align {
     Map(Affine3A),
 }
 
+/// How [`Morph::frame_mesh`] turns a T-spline level set into triangles.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Mesher {
+    /// Marching cubes over the domain with `res` nodes per axis
+    /// ([`isomorph_common::marching_cubes`]).
+    #[default]
+    MarchingCubes,
+    /// Hartmann's marching triangulation, the paper's mesher (§1, §4.4;
+    /// [`isomorph_common::marching_triangulation`]): near-equilateral
+    /// triangles with edges of about `edge` domain units (`D = [−1, 1]³`,
+    /// in `(0, 1]`); `frame_mesh`'s `res` is the seed lattice's
+    /// resolution (clamped to 2–1024).
+    MarchingTriangulation {
+        /// The triangles' edge length, domain units.
+        edge: f64,
+    },
+}
+
 /// Settings of [`TsplineMorph::new`] and [`morph`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct TsplineSettings {
@@ -56,6 +75,16 @@ pub struct TsplineSettings {
     /// Grid nodes along the longest edge for the surface of a solid that
     /// is not a mesh ([`Solid::surface`]; 8–1024).
     pub surface_resolution: u32,
+    /// The paper's final refinement of the *target's* approximation after
+    /// the evolution (§3.2, last paragraph): the target's signed distance
+    /// is fitted on the evolution's T-mesh by [`fit`], refined where its
+    /// error exceeds the tolerance (as [`FitSettings::refinement`] does for
+    /// the source), and the result is appended as the last level set
+    /// (on its own, finer T-mesh); the target's projection frames start
+    /// from it. `None` (default) ends on the evolution's last level set.
+    pub target_refinement: Option<Refinement>,
+    /// The mesher of [`Morph::frame_mesh`] for level sets.
+    pub mesher: Mesher,
 }
 
 /// The defaults: a T-mesh of depth at most 3 (about 500 coefficients
@@ -76,6 +105,8 @@ impl Default for TsplineSettings {
             margin: 0.2,
             projection_frames: true,
             surface_resolution: 64,
+            target_refinement: None,
+            mesher: Mesher::MarchingCubes,
         }
     }
 }
@@ -94,6 +125,12 @@ impl TsplineSettings {
             let expected = "a finite, invertible, orientation-preserving map";
             return Err(MorphError::bad_setting("align", format!("{m:?}"), expected).into());
         }
+        if let Mesher::MarchingTriangulation { edge } = self.mesher {
+            check_range("mesher edge", edge, 1e-4, 1.0, "(0, 1] domain units")?;
+        }
+        if let Some(r) = self.target_refinement {
+            FitSettings { refinement: Some(r), ..self.fit.clone() }.validate()?;
+        }
         self.tmesh.validate()?;
         self.fit.validate()?;
         self.evolve.validate()
@@ -107,6 +144,8 @@ enum FrameKind {
     Mesh(Arc<TriMesh>),
     /// A T-spline level set: index into the evolution's coefficient vectors.
     Spline(usize),
+    /// The refined approximation of the target after the evolution.
+    Refined,
 }
 
 /// The field of one frame of a [`TsplineMorph`], in domain coordinates.
@@ -144,6 +183,9 @@ pub struct TsplineMorph {
     mesh: Arc<TMesh>,
     evolution: Evolution,
     fit: FitReport,
+    /// The final refinement of the target's approximation and its report.
+    refined_target: Option<(TSpline, FitReport)>,
+    mesher: Mesher,
     frames: Vec<FrameKind>,
     source_frames: usize,
     target_frames: usize,
@@ -171,7 +213,16 @@ impl TsplineMorph {
         &self.fit
     }
 
-    /// Total frames `m_A + n_l + m_B`.
+    /// The target's approximation after the evolution's final refinement
+    /// ([`TsplineSettings::target_refinement`]; `None` without it): the
+    /// last level set of the sequence, on its own T-mesh, and the fit's
+    /// report (its rounds' errors are distances to the target).
+    pub fn refined_target(&self) -> Option<(&TSpline, &FitReport)> {
+        self.refined_target.as_ref().map(|(s, r)| (s, r))
+    }
+
+    /// Total frames `m_A + n_l + m_B` (plus one with the target's final
+    /// refinement).
     pub fn frame_count(&self) -> usize {
         self.frames.len()
     }
@@ -229,6 +280,15 @@ impl TsplineMorph {
         }
     }
 
+    /// The T-spline of frame `i` (a level set or the refined target).
+    fn frame_spline(&self, i: usize) -> Result<TSpline, TsplineError> {
+        match (&self.frames[i], &self.refined_target) {
+            (FrameKind::Spline(k), _) => self.level_set(*k),
+            (FrameKind::Refined, Some((spline, _))) => Ok(spline.clone()),
+            _ => Err(MorphError::bad_setting("frame index", i, "a level-set frame").into()),
+        }
+    }
+
     fn index(&self, t: f32) -> Result<usize, TsplineError> {
         let t = check_time(t)?;
         Ok((t * (self.frames.len() - 1) as f32).round() as usize)
@@ -246,8 +306,8 @@ impl Morph for TsplineMorph {
     fn frame(&self, t: f32) -> Result<Frame<FrameField>, TsplineError> {
         let i = self.index(t)?;
         let field = match &self.frames[i] {
-            FrameKind::Spline(k) => FrameField::Spline(self.level_set(*k)?),
             FrameKind::Mesh(m) => FrameField::Mesh(MeshSdf::new(m)?),
+            FrameKind::Spline(_) | FrameKind::Refined => FrameField::Spline(self.frame_spline(i)?),
         };
         Ok(Frame { field, iso: 0.0, transform: self.frame_transform(i) })
     }
@@ -266,15 +326,29 @@ impl Morph for TsplineMorph {
     }
 
     /// Projection frames are returned as meshes directly; level sets are
-    /// polygonized over the domain with `res` nodes per axis.
+    /// meshed by [`TsplineSettings::mesher`]: marching cubes over the domain
+    /// with `res` nodes per axis, or marching triangulation seeded from a
+    /// lattice of `res` nodes.
     fn frame_mesh(&self, t: f32, res: u32) -> Result<TriMesh, TsplineError> {
         let i = self.index(t)?;
         let mut mesh = match &self.frames[i] {
             FrameKind::Mesh(m) => (**m).clone(),
-            FrameKind::Spline(k) => {
-                let spline = self.level_set(*k)?;
-                let grid = Grid3::sample_box(&spline, &Aabb::cube(1.0), res)?;
-                marching_cubes(&grid, 0.0)
+            FrameKind::Spline(_) | FrameKind::Refined => {
+                let spline = self.frame_spline(i)?;
+                match self.mesher {
+                    Mesher::MarchingCubes => {
+                        let grid = Grid3::sample_box(&spline, &Aabb::cube(1.0), res)?;
+                        marching_cubes(&grid, 0.0)
+                    }
+                    Mesher::MarchingTriangulation { edge } => {
+                        let settings = TriangulationSettings {
+                            edge: edge as f32,
+                            seed_resolution: res.clamp(2, 1024),
+                            ..Default::default()
+                        };
+                        marching_triangulation(&spline, &Aabb::cube(1.0), 0.0, &settings)?.0
+                    }
+                }
             }
         };
         mesh.transform(&self.frame_transform(i));
@@ -382,6 +456,19 @@ fn morph_on_pool(
     let mesh = initial.mesh().clone();
     let evolution = evolve(&initial, db, &samples_b, &settings.evolve, control)?;
     stages.lap("evolution");
+    // §3.2, last paragraph: the final refinement, now of the target's
+    // approximation, on the T-mesh the evolution used.
+    let refined_target = match settings.target_refinement {
+        Some(r) => {
+            control.check()?;
+            control.progress("target refinement", None, String::new);
+            let fit_settings = FitSettings { refinement: Some(r), ..settings.fit.clone() };
+            let refined = fit(mesh.clone(), db, &samples_b, &fit_settings)?;
+            stages.lap("target refinement");
+            Some(refined)
+        }
+        None => None,
+    };
     let h = settings.evolve.step_size(mesh.finest_cell());
     let mut frames = Vec::new();
     let (mut source_frames, mut target_frames) = (0, 0);
@@ -391,8 +478,14 @@ fn morph_on_pool(
         frames.extend(start.into_iter().map(|m| FrameKind::Mesh(Arc::new(m))));
     }
     frames.extend((0..evolution.frames.len()).map(FrameKind::Spline));
+    if refined_target.is_some() {
+        frames.push(FrameKind::Refined);
+    }
     if settings.projection_frames {
-        let last = TSpline::new(mesh.clone(), evolution.frames.last().cloned().unwrap_or_default())?;
+        let last = match &refined_target {
+            Some((spline, _)) => spline.clone(),
+            None => TSpline::new(mesh.clone(), evolution.frames.last().cloned().unwrap_or_default())?,
+        };
         let mut end = projection_frames(&b, &last, h);
         end.reverse();
         target_frames = end.len();
@@ -400,6 +493,12 @@ fn morph_on_pool(
     }
     stages.lap("projection frames");
     let mut report = report(&evolution, &fit_report, &frames, stages, settings);
+    if let Some((_, fit)) = &refined_target {
+        report = report
+            .with_detail("target_refinement_coefficients", fit.coefficients)
+            .with_detail("target_refinement_rounds", fit.rounds.len().saturating_sub(1))
+            .with_detail("target_refinement_max_surface_error", fit.max_surface_error);
+    }
     if let Some(p) = &placement {
         let parts = p.parts;
         let (axis, angle) = parts.rotation.to_axis_angle();
@@ -420,6 +519,8 @@ fn morph_on_pool(
         mesh,
         evolution,
         fit: fit_report,
+        refined_target,
+        mesher: settings.mesher,
         frames,
         source_frames,
         target_frames,
@@ -453,7 +554,7 @@ fn report(
         .iter()
         .map(|f| match f {
             FrameKind::Mesh(m) => m.positions.len() * 12 + m.triangles.len() * 12,
-            FrameKind::Spline(_) => 0,
+            FrameKind::Spline(_) | FrameKind::Refined => 0,
         })
         .sum();
     let stored = coefficients * size_of::<f64>() + meshes;
