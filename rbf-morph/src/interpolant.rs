@@ -214,6 +214,7 @@ impl<const D: usize> Interpolant<D> {
         let flat: Vec<f64> = centres.iter().flatten().copied().collect();
         let sol =
             crate::solve::solve(&flat, D, &values, settings.kernel, settings.smoothing, settings.solver)?;
+        let centre_values = sol.centre_values;
         let mut interpolant = Self {
             kernel: settings.kernel,
             weights: sol.weights,
@@ -233,8 +234,8 @@ impl<const D: usize> Interpolant<D> {
         };
         if settings.check_residual {
             let hmax = values.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE);
-            let worst = interpolant
-                .values_at_centres()
+            let worst = centre_values
+                .unwrap_or_else(|| interpolant.values_at_centres())
                 .iter()
                 .zip(&values)
                 .map(|(f, h)| (f - h).abs())

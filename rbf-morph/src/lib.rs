@@ -117,6 +117,8 @@ mod transform;
 mod warp;
 
 mod duplicates;
+mod hierarchical;
+mod hmatrix;
 mod slab;
 mod solve;
 

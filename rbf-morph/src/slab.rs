@@ -285,7 +285,7 @@ pub(crate) fn conjugate_gradients(
 
 /// The Cholesky factor of the symmetric block `s` (lower triangle read);
 /// `None` if it is not numerically positive definite.
-fn cholesky(s: MatRef<'_, f64>, par: Par) -> Option<Mat<f64>> {
+pub(crate) fn cholesky(s: MatRef<'_, f64>, par: Par) -> Option<Mat<f64>> {
     let mut l = s.to_owned();
     let n = l.nrows();
     let mut mem = MemBuffer::new(llt::factor::cholesky_in_place_scratch::<f64>(n, par, Default::default()));
