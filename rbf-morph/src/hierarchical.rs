@@ -66,11 +66,20 @@ pub(crate) struct Settings {
     pub tolerance: f64,
     /// GMRES iterations before giving up.
     pub max_iterations: usize,
+    /// Fall back to the dense solve when GMRES does not converge (and the
+    /// dense system fits in memory); otherwise fail with
+    /// [`RbfError::NotConverged`].
+    pub dense_fallback: bool,
 }
 
 impl Default for Settings {
     fn default() -> Self {
-        Self { aca: ACA_TOLERANCE, tolerance: TOLERANCE, max_iterations: MAX_ITERATIONS }
+        Self {
+            aca: ACA_TOLERANCE,
+            tolerance: TOLERANCE,
+            max_iterations: MAX_ITERATIONS,
+            dense_fallback: true,
+        }
     }
 }
 
@@ -426,15 +435,54 @@ mod tests {
         all
     }
 
+    /// Fits `cs` with `solver` and the hierarchical `settings`.
+    fn fit_with(
+        cs: &[crate::Constraint<4>],
+        solver: Solver,
+        settings: &Settings,
+    ) -> Result<Interpolant<4>, RbfError> {
+        let fit = FitSettings { solver, ..FitSettings::default() };
+        Interpolant::fit_with(cs, &fit, settings)
+    }
+
+    #[test]
+    fn no_convergence_falls_back_to_the_dense_solve_or_is_an_error() {
+        let cs = sphere_torus(2000);
+        let capped = Settings { max_iterations: 2, ..Settings::default() };
+        let fit = fit_with(&cs, Solver::Hierarchical, &capped).unwrap();
+        assert_eq!(fit.report().factorization, Factorization::Cholesky);
+        assert!(fit.report().max_residual.unwrap() < 1e-8);
+        let no_fallback = Settings { dense_fallback: false, ..capped };
+        let err = fit_with(&cs, Solver::Hierarchical, &no_fallback).unwrap_err();
+        assert!(
+            matches!(err, RbfError::NotConverged { iterations: 2, residual } if residual > TOLERANCE),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn results_do_not_depend_on_the_thread_count() {
+        let cs = sphere_torus(2000);
+        let fit = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| fit_with(&cs, Solver::Hierarchical, &Settings::default()).unwrap())
+        };
+        let (one, three) = (fit(1), fit(3));
+        assert!(matches!(one.report().factorization, Factorization::Hierarchical { .. }));
+        assert_eq!(one.report(), three.report());
+        for c in cs.iter().step_by(37) {
+            let x = c.position.map(f64::from);
+            assert_eq!(one.value_f64(x).to_bits(), three.value_f64(x).to_bits());
+        }
+    }
+
     #[test]
     fn hierarchical_solver_agrees_with_the_dense_cholesky() {
         let cs = sphere_torus(3000);
         for kernel in [Kernel::ThinPlate, Kernel::Cubic] {
             let fast =
                 FitSettings { solver: Solver::Hierarchical, ..FitSettings::default().with_kernel(kernel) };
-            let t0 = std::time::Instant::now();
             let fast = Interpolant::fit(&cs, &fast).unwrap();
-            eprintln!("{kernel:?} {:?} {:?}", fast.report(), t0.elapsed());
             let dense = FitSettings { solver: Solver::Dense, ..FitSettings::default().with_kernel(kernel) };
             let dense = Interpolant::fit(&cs, &dense).unwrap();
             let Factorization::Hierarchical { iterations } = fast.report().factorization else {
@@ -450,7 +498,11 @@ mod tests {
                 lo = lo.min(fd);
                 hi = hi.max(fd);
             }
-            eprintln!("{kernel:?}: {iterations} iterations, worst {worst:e}, range {}", hi - lo);
+            assert!(iterations <= 40, "{kernel:?}: {iterations} iterations");
+            // The residual at the constraints, through the H-matrix.
+            assert!(fast.report().max_residual.unwrap() < 1e-8, "{:?}", fast.report());
+            let ratio = fast.report().rcond / dense.report().rcond;
+            assert!((1e-3..1e3).contains(&ratio), "{kernel:?}: rcond {ratio}× the dense estimate");
             assert!(worst <= 1e-6 * (hi - lo), "{kernel:?}: {worst:e} vs range {}", hi - lo);
         }
     }

@@ -230,6 +230,7 @@ impl HMatrix {
     }
 
     /// Bytes stored in the blocks.
+    #[cfg(test)]
     pub fn bytes(&self) -> usize {
         self.blocks.iter().map(Block::len).sum::<usize>() * size_of::<f64>()
     }

@@ -189,8 +189,29 @@ impl<const D: usize> Interpolant<D> {
         Ok(())
     }
 
+    /// [`Interpolant::fit`] with every constraint a centre and the
+    /// hierarchical solver's `iterative` settings (tests reach the fallback
+    /// and the error paths through them).
+    #[cfg(test)]
+    pub(crate) fn fit_with(
+        constraints: &[Constraint<D>],
+        settings: &FitSettings,
+        iterative: &crate::hierarchical::Settings,
+    ) -> Result<Self, RbfError> {
+        Self::fit_solved(constraints, settings, iterative)
+    }
+
     /// Interpolates every constraint.
     fn fit_all(constraints: &[Constraint<D>], settings: &FitSettings) -> Result<Self, RbfError> {
+        Self::fit_solved(constraints, settings, &crate::hierarchical::Settings::default())
+    }
+
+    /// [`Interpolant::fit_all`] with the hierarchical solver's settings.
+    fn fit_solved(
+        constraints: &[Constraint<D>],
+        settings: &FitSettings,
+        iterative: &crate::hierarchical::Settings,
+    ) -> Result<Self, RbfError> {
         Self::check_input(constraints, settings)?;
         // Normalize: bounding-box centre to the origin, unit diagonal.
         let mut lo = [f64::INFINITY; D];
@@ -212,8 +233,15 @@ impl<const D: usize> Interpolant<D> {
         let (kept, values) = dedup(&normalized, &values, settings.duplicate_tolerance, settings.duplicates)?;
         let centres: Vec<[f64; D]> = kept.iter().map(|&i| normalized[i]).collect();
         let flat: Vec<f64> = centres.iter().flatten().copied().collect();
-        let sol =
-            crate::solve::solve(&flat, D, &values, settings.kernel, settings.smoothing, settings.solver)?;
+        let sol = crate::solve::solve_with(
+            &flat,
+            D,
+            &values,
+            settings.kernel,
+            settings.smoothing,
+            settings.solver,
+            iterative,
+        )?;
         let centre_values = sol.centre_values;
         let mut interpolant = Self {
             kernel: settings.kernel,

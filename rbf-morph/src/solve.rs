@@ -294,19 +294,8 @@ const HIERARCHICAL_MIN: usize = 12_000;
 pub(crate) const PARALLELISM: Par = Par::Rayon(std::num::NonZeroUsize::new(4).expect("4 > 0"));
 
 /// Solves the interpolation system for `positions` (row-major `n × dim`,
-/// already normalized) and `values`.
-pub(crate) fn solve(
-    positions: &[f64],
-    dim: usize,
-    values: &[f64],
-    kernel: Kernel,
-    smoothing: f64,
-    solver: Solver,
-) -> Result<Solution, RbfError> {
-    solve_with(positions, dim, values, kernel, smoothing, solver, &hierarchical::Settings::default())
-}
-
-/// [`solve`] with the hierarchical solver's settings.
+/// already normalized) and `values`, with the hierarchical solver's
+/// `settings` when `solver` picks it.
 pub(crate) fn solve_with(
     positions: &[f64],
     dim: usize,
@@ -326,7 +315,7 @@ pub(crate) fn solve_with(
         match hierarchical::solve(positions, dim, values, kernel, smoothing, settings)? {
             Ok(solution) => return Ok(solution),
             Err(failure) => {
-                if reserve_system(n, false).is_err() {
+                if !settings.dense_fallback || reserve_system(n, false).is_err() {
                     return Err(RbfError::NotConverged {
                         iterations: failure.iterations,
                         residual: failure.residual,
