@@ -130,7 +130,7 @@ pub(crate) fn solve(
         out.copy_from_slice(&lambda[m..]);
     };
     let (y2, iterations, residual) = gmres(&apply_b, &apply_m, &g2, settings);
-    if !(residual <= settings.tolerance) {
+    if residual.is_nan() || residual > settings.tolerance {
         return Ok(Err(Failure { iterations, residual }));
     }
     // d = Z y, then R c = Q₁ᵀ(h − Φ d); the values at the centres come with it.
@@ -164,7 +164,7 @@ pub(crate) fn solve(
         let x = tree.point(i);
         centre_values[input] = phi_d[i] + c[0] + (0..dim).map(|k| c[k + 1] * x[k]).sum::<f64>();
     }
-    if c.iter().chain(&weights).any(|v| !v.is_finite()) || !(rcond > 0.0) {
+    if c.iter().chain(&weights).any(|v| !v.is_finite()) || rcond.is_nan() || rcond <= 0.0 {
         return Err(RbfError::Singular { rcond: if rcond.is_finite() { rcond } else { 0.0 } });
     }
     Ok(Ok(Solution {
@@ -416,24 +416,8 @@ fn gmres(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::constraints::{NormalOffset, Subsample, SurfaceSettings, field_constraints};
-    use crate::transform::lift;
+    use crate::slab::tests::sphere_torus;
     use crate::{FitSettings, Interpolant, Solver};
-    use isomorph_common::{Aabb, Shape};
-
-    /// The reference case's constraints (sphere at t = 0, torus at t = 1)
-    /// with `total` constraints.
-    fn sphere_torus(total: usize) -> Vec<crate::Constraint<4>> {
-        let s = SurfaceSettings {
-            offset: NormalOffset::Absolute(0.01),
-            subsample: Subsample::FarthestPoint(total / 4),
-        };
-        let a = field_constraints(&Shape::sphere(0.3), &Aabb::cube(0.5), 32, &s).unwrap();
-        let b = field_constraints(&Shape::torus(0.3, 0.12), &Aabb::cube(0.5), 32, &s).unwrap();
-        let mut all = lift::<3, 4>(&a, &[0.0]);
-        all.extend(lift::<3, 4>(&b, &[1.0]));
-        all
-    }
 
     /// Fits `cs` with `solver` and the hierarchical `settings`.
     fn fit_with(

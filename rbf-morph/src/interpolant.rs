@@ -44,9 +44,9 @@ pub struct FitSettings {
     /// Evaluate the fitted function at every constraint and report the
     /// largest residual (`O(n²)`, cheap next to the `O(n³)` solve). Default on.
     pub check_residual: bool,
-    /// How the system is solved (default [`Solver::Auto`]: the slab solver
-    /// for two separated groups of constraints, the dense Cholesky
-    /// otherwise).
+    /// How the system is solved (default [`Solver::Auto`]: the hierarchical
+    /// solver from 16000 constraints, below that the slab solver for two
+    /// separated groups of constraints, the dense Cholesky otherwise).
     pub solver: Solver,
     /// Which constraints become centres (default [`Centres::All`]: exact
     /// interpolation; [`Centres::Greedy`] fits to a tolerance through fewer

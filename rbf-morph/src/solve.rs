@@ -266,17 +266,18 @@ enum Factor {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[non_exhaustive]
 pub enum Solver {
-    /// The slab solver ([`Factorization::SlabCg`]) when the constraints form
-    /// two groups well apart along some axis (the two shapes of a shape
+    /// The hierarchical solver from 16000 constraints; below that the slab
+    /// solver ([`Factorization::SlabCg`]) when the constraints form two
+    /// groups well apart along some axis (the two shapes of a shape
     /// transformation), with at least 1500 constraints; the dense Cholesky
-    /// otherwise, and whenever the slab solver does not converge.
+    /// otherwise, and whenever an iterative solver does not converge.
     #[default]
     Auto,
     /// Always the dense Cholesky (with its `LBLᵀ` fallback).
     Dense,
     /// The hierarchical solver ([`Factorization::Hierarchical`]), `O(n log n)`
     /// memory and near-linear time; the default ([`Solver::Auto`]) from
-    /// 12000 constraints. Falls back to the dense Cholesky when GMRES does
+    /// 16000 constraints (where the dense matrix needs 2 GiB). Falls back to the dense Cholesky when GMRES does
     /// not converge, or fails with [`RbfError::NotConverged`] when the dense
     /// system would not fit in memory.
     Hierarchical,
@@ -284,7 +285,7 @@ pub enum Solver {
 
 /// Fewest constraints for which [`Solver::Auto`] uses the hierarchical
 /// solver.
-const HIERARCHICAL_MIN: usize = 12_000;
+const HIERARCHICAL_MIN: usize = 16_000;
 
 /// The parallelism of the dense kernels (faer): a fixed task count rather
 /// than the pool's thread count, because faer's blocking, and with it the
