@@ -16,7 +16,8 @@
 //! factored once by the projected Cholesky. Applied to a residual, each
 //! subdomain solves its local problem and keeps the weights of its own
 //! (inner) points; a coarse problem on about [`COARSE`] points spread over
-//! all subdomains adds the global part. The result is projected onto the
+//! all subdomains, fitted to the residual the local corrections leave (one
+//! more H-matrix product), adds the global part. The result is projected onto the
 //! null space of `Pᵀ`. The preconditioner is not symmetric, so the outer
 //! iteration is flexible GMRES (restarted), in f64, stopping when the
 //! residual of the H-matrix system is below [`TOLERANCE`] of the right-hand
@@ -125,7 +126,7 @@ pub(crate) fn solve(
     let apply_m = |r: &[f64], out: &mut [f64]| {
         let mut full = [vec![0.0; m], r.to_vec()].concat();
         qr.apply_q(&mut full);
-        let mut lambda = preconditioner.apply(&full);
+        let mut lambda = preconditioner.apply(&full, &|x, y| h.matvec(x, y));
         qr.apply_qt(&mut lambda);
         out.copy_from_slice(&lambda[m..]);
     };
@@ -282,8 +283,10 @@ impl Schwarz {
         Some(Self { locals: locals?, coarse, n: tree.order.len() })
     }
 
-    /// The weights (tree order) of the preconditioned residual `r`.
-    fn apply(&self, r: &[f64]) -> Vec<f64> {
+    /// The weights (tree order) of the preconditioned residual `r`: the
+    /// local corrections, then the coarse one fitted to the residual they
+    /// leave (`phi` is the product with `Φ`).
+    fn apply(&self, r: &[f64], phi: &dyn Fn(&[f64], &mut [f64])) -> Vec<f64> {
         let local: Vec<Vec<f64>> = self.locals.par_iter().map(|l| l.solve(r)).collect();
         let mut lambda = vec![0.0; self.n];
         for (l, w) in self.locals.iter().zip(&local) {
@@ -291,7 +294,10 @@ impl Schwarz {
                 lambda[i] = *v;
             }
         }
-        let w = self.coarse.solve(r);
+        let mut left = vec![0.0; self.n];
+        phi(&lambda, &mut left);
+        left.iter_mut().zip(r).for_each(|(l, r)| *l = r - *l);
+        let w = self.coarse.solve(&left);
         for (&i, v) in self.coarse.idx.iter().zip(&w) {
             lambda[i] += v;
         }
