@@ -5,6 +5,7 @@
 //! in 4D with a degree-one polynomial.
 //!
 //! `cargo bench -p isomorph-benches --bench rbf -- fit/sphere_torus_4d/8000`
+//! `cargo bench -p isomorph-benches --bench rbf -- fit/sphere_torus_4d/100000`
 //! `cargo bench -p isomorph-benches --bench rbf -- eval_grid/sphere_torus_4d/8000/64`
 //! `cargo bench -p isomorph-benches --bench rbf -- eval_grid_r3/sphere_torus_4d/8000/64`
 //! `cargo bench -p isomorph-benches --bench rbf -- polygonize/sphere_torus_4d/8000/64`
@@ -19,15 +20,17 @@ use std::hint::black_box;
 
 /// The reference case: a sphere (radius 0.3) and a torus (R = 0.3,
 /// r = 0.12), each with `total / 4` farthest-point samples of its surface
-/// (polygonized at 64³ over `[-0.5, 0.5]³`) giving a boundary and an inward
-/// normal constraint at offset 0.01.
+/// (polygonized at 64³ over `[-0.5, 0.5]³`, at 160³ above 16000
+/// constraints so that there are enough vertices) giving a boundary and an
+/// inward normal constraint at offset 0.01.
 fn shapes(total: usize) -> [Vec<isomorph_rbf::Constraint<3>>; 2] {
     let s = SurfaceSettings {
         offset: NormalOffset::Absolute(0.01),
         subsample: Subsample::FarthestPoint(total / 4),
     };
+    let resolution = if total > 16_000 { 160 } else { 64 };
     [isomorph_common::Shape::sphere(0.3), isomorph_common::Shape::torus(0.3, 0.12)]
-        .map(|shape| field_constraints(&shape, &Aabb::cube(0.5), 64, &s).unwrap())
+        .map(|shape| field_constraints(&shape, &Aabb::cube(0.5), resolution, &s).unwrap())
 }
 
 /// The 4D constraints of the reference case with `total` constraints.
@@ -46,14 +49,18 @@ fn reference_morph(total: usize, kernel: Kernel) -> RbfMorph {
     RbfMorph::from_constraints(&a, &b, &settings).unwrap()
 }
 
-/// The fit (projection, Cholesky, rcond estimate, residual check) at 2000 to
-/// 16000 constraints (16000 needs 3 GiB).
+/// The fit (solve, rcond estimate, residual check) at 2000 to 100000
+/// constraints with the default solver: the slab solver up to 8000, the
+/// hierarchical solver (H-matrix, GMRES) from 16000 (r³ up to 16000).
 fn fit(c: &mut Criterion) {
     let mut group = c.benchmark_group("fit/sphere_torus_4d");
     group.sample_size(10);
-    for total in [2000usize, 4000, 8000, 16000] {
+    for total in [2000usize, 4000, 8000, 16000, 32000, 100_000] {
         let cs = constraints(total);
-        for (name, kernel) in [("", Kernel::ThinPlate), ("r3/", Kernel::Cubic)] {
+        // r³ only up to 16000: beyond, GMRES needs many more iterations.
+        let kernels = [("", Kernel::ThinPlate), ("r3/", Kernel::Cubic)];
+        for (name, kernel) in kernels.into_iter().filter(|(_, k)| total <= 16_000 || *k == Kernel::ThinPlate)
+        {
             let settings = FitSettings::default().with_kernel(kernel);
             group.bench_function(BenchmarkId::from_parameter(format!("{name}{total}")), |b| {
                 b.iter(|| Interpolant::fit(black_box(&cs), &settings).unwrap())

@@ -72,6 +72,18 @@ pub enum RbfError {
         /// factorization succeeded).
         rcond: f64,
     },
+    /// The hierarchical solver's iteration did not converge and the dense
+    /// system, the fallback, would not fit in memory. Use fewer constraints
+    /// (or greedy centre selection), or raise the smoothing parameter.
+    #[error(
+        "the iterative solver did not converge ({iterations} iterations, relative residual {residual:e}) and the dense fallback does not fit in memory"
+    )]
+    NotConverged {
+        /// GMRES iterations taken.
+        iterations: usize,
+        /// The last relative residual of the projected system.
+        residual: f64,
+    },
     /// A slice was asked for with the wrong number of fixed coordinates.
     #[error(
         "slicing a {dim}-dimensional interpolant to {slice_dim} dimensions needs {expected} fixed coordinates, got {got}"

@@ -44,9 +44,9 @@ pub struct FitSettings {
     /// Evaluate the fitted function at every constraint and report the
     /// largest residual (`O(n²)`, cheap next to the `O(n³)` solve). Default on.
     pub check_residual: bool,
-    /// How the system is solved (default [`Solver::Auto`]: the slab solver
-    /// for two separated groups of constraints, the dense Cholesky
-    /// otherwise).
+    /// How the system is solved (default [`Solver::Auto`]: the hierarchical
+    /// solver from 16000 constraints, below that the slab solver for two
+    /// separated groups of constraints, the dense Cholesky otherwise).
     pub solver: Solver,
     /// Which constraints become centres (default [`Centres::All`]: exact
     /// interpolation; [`Centres::Greedy`] fits to a tolerance through fewer
@@ -189,8 +189,29 @@ impl<const D: usize> Interpolant<D> {
         Ok(())
     }
 
+    /// [`Interpolant::fit`] with every constraint a centre and the
+    /// hierarchical solver's `iterative` settings (tests reach the fallback
+    /// and the error paths through them).
+    #[cfg(test)]
+    pub(crate) fn fit_with(
+        constraints: &[Constraint<D>],
+        settings: &FitSettings,
+        iterative: &crate::hierarchical::Settings,
+    ) -> Result<Self, RbfError> {
+        Self::fit_solved(constraints, settings, iterative)
+    }
+
     /// Interpolates every constraint.
     fn fit_all(constraints: &[Constraint<D>], settings: &FitSettings) -> Result<Self, RbfError> {
+        Self::fit_solved(constraints, settings, &crate::hierarchical::Settings::default())
+    }
+
+    /// [`Interpolant::fit_all`] with the hierarchical solver's settings.
+    fn fit_solved(
+        constraints: &[Constraint<D>],
+        settings: &FitSettings,
+        iterative: &crate::hierarchical::Settings,
+    ) -> Result<Self, RbfError> {
         Self::check_input(constraints, settings)?;
         // Normalize: bounding-box centre to the origin, unit diagonal.
         let mut lo = [f64::INFINITY; D];
@@ -212,8 +233,16 @@ impl<const D: usize> Interpolant<D> {
         let (kept, values) = dedup(&normalized, &values, settings.duplicate_tolerance, settings.duplicates)?;
         let centres: Vec<[f64; D]> = kept.iter().map(|&i| normalized[i]).collect();
         let flat: Vec<f64> = centres.iter().flatten().copied().collect();
-        let sol =
-            crate::solve::solve(&flat, D, &values, settings.kernel, settings.smoothing, settings.solver)?;
+        let sol = crate::solve::solve_with(
+            &flat,
+            D,
+            &values,
+            settings.kernel,
+            settings.smoothing,
+            settings.solver,
+            iterative,
+        )?;
+        let centre_values = sol.centre_values;
         let mut interpolant = Self {
             kernel: settings.kernel,
             weights: sol.weights,
@@ -233,8 +262,8 @@ impl<const D: usize> Interpolant<D> {
         };
         if settings.check_residual {
             let hmax = values.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(f64::MIN_POSITIVE);
-            let worst = interpolant
-                .values_at_centres()
+            let worst = centre_values
+                .unwrap_or_else(|| interpolant.values_at_centres())
                 .iter()
                 .zip(&values)
                 .map(|(f, h)| (f - h).abs())

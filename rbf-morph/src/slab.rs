@@ -285,7 +285,7 @@ pub(crate) fn conjugate_gradients(
 
 /// The Cholesky factor of the symmetric block `s` (lower triangle read);
 /// `None` if it is not numerically positive definite.
-fn cholesky(s: MatRef<'_, f64>, par: Par) -> Option<Mat<f64>> {
+pub(crate) fn cholesky(s: MatRef<'_, f64>, par: Par) -> Option<Mat<f64>> {
     let mut l = s.to_owned();
     let n = l.nrows();
     let mut mem = MemBuffer::new(llt::factor::cholesky_in_place_scratch::<f64>(n, par, Default::default()));
@@ -317,7 +317,7 @@ fn uniform(state: &mut u64) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::constraints::{NormalOffset, Subsample, SurfaceSettings, field_constraints};
     use crate::transform::lift;
@@ -326,7 +326,7 @@ mod tests {
 
     /// The reference case's constraints (sphere at t = 0, torus at t = 1)
     /// with `total` constraints.
-    fn sphere_torus(total: usize) -> Vec<crate::Constraint<4>> {
+    pub(crate) fn sphere_torus(total: usize) -> Vec<crate::Constraint<4>> {
         let s = SurfaceSettings {
             offset: NormalOffset::Absolute(0.01),
             subsample: Subsample::FarthestPoint(total / 4),

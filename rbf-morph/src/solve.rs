@@ -32,6 +32,7 @@
 //! estimate is within 10 % of the dense one).
 
 use crate::error::RbfError;
+use crate::hierarchical;
 use crate::kernel::Kernel;
 use crate::slab::{self, SlabPreconditioner};
 use faer::dyn_stack::{MemBuffer, MemStack};
@@ -57,6 +58,14 @@ pub enum Factorization {
         /// Conjugate-gradient iterations taken.
         iterations: usize,
     },
+    /// The hierarchical solver ([`Solver::Hierarchical`]): an H-matrix of
+    /// the kernel matrix (ACA-compressed far blocks) inside GMRES with a
+    /// two-level overlapping domain-decomposition preconditioner, run to a
+    /// relative residual of 1e-11 (see the crate docs).
+    Hierarchical {
+        /// GMRES iterations taken.
+        iterations: usize,
+    },
 }
 
 /// The solution of the bordered system.
@@ -69,23 +78,26 @@ pub(crate) struct Solution {
     pub factorization: Factorization,
     /// Reciprocal 1-norm condition estimate of the projected block.
     pub rcond: f64,
+    /// The fitted function at the centres, when the solver computed it
+    /// (the hierarchical solver, with its H-matrix).
+    pub centre_values: Option<Vec<f64>>,
 }
 
 /// Householder QR of the `n × m` polynomial matrix `P = [1 | x]`.
-struct PolyQr {
+pub(crate) struct PolyQr {
     n: usize,
-    m: usize,
+    pub m: usize,
     /// Householder vectors, column-major `n × m` (`v_k[k] = 1`, zeros above).
     v: Mat<f64>,
     tau: Vec<f64>,
     /// Upper-triangular `m × m` factor.
-    r: Mat<f64>,
+    pub r: Mat<f64>,
 }
 
 impl PolyQr {
     /// QR of `[1 | positions]`; `NotUnisolvent` when the positions span
     /// fewer than `dim` dimensions.
-    fn new(positions: &[f64], dim: usize) -> Result<Self, RbfError> {
+    pub fn new(positions: &[f64], dim: usize) -> Result<Self, RbfError> {
         let n = positions.len() / dim;
         let m = dim + 1;
         let mut a = Mat::<f64>::from_fn(n, m, |i, k| if k == 0 { 1.0 } else { positions[i * dim + k - 1] });
@@ -125,14 +137,14 @@ impl PolyQr {
     }
 
     /// `x ← Qᵀ x` (reflectors in order).
-    fn apply_qt(&self, x: &mut [f64]) {
+    pub fn apply_qt(&self, x: &mut [f64]) {
         for k in 0..self.m {
             self.reflect(k, x);
         }
     }
 
     /// `x ← Q x` (reflectors in reverse order).
-    fn apply_q(&self, x: &mut [f64]) {
+    pub fn apply_q(&self, x: &mut [f64]) {
         for k in (0..self.m).rev() {
             self.reflect(k, x);
         }
@@ -167,7 +179,7 @@ impl PolyQr {
 /// transforms it to the lower triangle of `QᵀΦQ` in place. The strict upper
 /// triangle is neither read nor written: the kernel is evaluated `n²/2`
 /// times and the rank-`2m` update touches half the matrix.
-fn build_projected(
+pub(crate) fn build_projected(
     a: &mut [f64],
     positions: &[f64],
     dim: usize,
@@ -254,15 +266,26 @@ enum Factor {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[non_exhaustive]
 pub enum Solver {
-    /// The slab solver ([`Factorization::SlabCg`]) when the constraints form
-    /// two groups well apart along some axis (the two shapes of a shape
+    /// The hierarchical solver from 16000 constraints; below that the slab
+    /// solver ([`Factorization::SlabCg`]) when the constraints form two
+    /// groups well apart along some axis (the two shapes of a shape
     /// transformation), with at least 1500 constraints; the dense Cholesky
-    /// otherwise, and whenever the slab solver does not converge.
+    /// otherwise, and whenever an iterative solver does not converge.
     #[default]
     Auto,
     /// Always the dense Cholesky (with its `LBLᵀ` fallback).
     Dense,
+    /// The hierarchical solver ([`Factorization::Hierarchical`]), `O(n log n)`
+    /// memory and near-linear time; the default ([`Solver::Auto`]) from
+    /// 16000 constraints (where the dense matrix needs 2 GiB). Falls back to the dense Cholesky when GMRES does
+    /// not converge, or fails with [`RbfError::NotConverged`] when the dense
+    /// system would not fit in memory.
+    Hierarchical,
 }
+
+/// Fewest constraints for which [`Solver::Auto`] uses the hierarchical
+/// solver.
+const HIERARCHICAL_MIN: usize = 16_000;
 
 /// The parallelism of the dense kernels (faer): a fixed task count rather
 /// than the pool's thread count, because faer's blocking, and with it the
@@ -272,18 +295,39 @@ pub enum Solver {
 pub(crate) const PARALLELISM: Par = Par::Rayon(std::num::NonZeroUsize::new(4).expect("4 > 0"));
 
 /// Solves the interpolation system for `positions` (row-major `n × dim`,
-/// already normalized) and `values`.
-pub(crate) fn solve(
+/// already normalized) and `values`, with the hierarchical solver's
+/// `settings` when `solver` picks it.
+pub(crate) fn solve_with(
     positions: &[f64],
     dim: usize,
     values: &[f64],
     kernel: Kernel,
     smoothing: f64,
     solver: Solver,
+    settings: &hierarchical::Settings,
 ) -> Result<Solution, RbfError> {
+    let n = values.len();
+    let iterative = match solver {
+        Solver::Auto => n >= HIERARCHICAL_MIN,
+        Solver::Dense => false,
+        Solver::Hierarchical => n > dim + 1,
+    };
+    if iterative {
+        match hierarchical::solve(positions, dim, values, kernel, smoothing, settings)? {
+            Ok(solution) => return Ok(solution),
+            Err(failure) => {
+                if !settings.dense_fallback || reserve_system(n, false).is_err() {
+                    return Err(RbfError::NotConverged {
+                        iterations: failure.iterations,
+                        residual: failure.residual,
+                    });
+                }
+            }
+        }
+    }
     let split = match solver {
         Solver::Auto => slab::find_split(positions, dim),
-        Solver::Dense => None,
+        Solver::Dense | Solver::Hierarchical => None,
     };
     let Some(split) = split else {
         return solve_ordered(positions, dim, values, kernel, smoothing, None);
@@ -382,7 +426,7 @@ fn solve_ordered(
     if rhs.iter().chain(&weights).any(|v| !v.is_finite()) {
         return Err(RbfError::Singular { rcond });
     }
-    Ok(Solution { weights, poly: rhs, factorization, rcond })
+    Ok(Solution { weights, poly: rhs, factorization, rcond, centre_values: None })
 }
 
 /// Checks the dense system's memory (the `n × n` matrix of f64, and the
@@ -525,7 +569,7 @@ fn one_norm(b: MatRef<'_, f64>) -> f64 {
 
 /// Hager's (Higham's refinement) estimate of `‖B⁻¹‖₁` for symmetric `B`,
 /// given a solver `x ← B⁻¹x`.
-fn hager_inverse_norm(k: usize, solve: &dyn Fn(&mut [f64])) -> f64 {
+pub(crate) fn hager_inverse_norm(k: usize, solve: &dyn Fn(&mut [f64])) -> f64 {
     let mut x = vec![1.0 / k as f64; k];
     let mut est = 0.0;
     for iter in 0..5 {

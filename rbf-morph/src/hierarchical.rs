@@ -1,0 +1,499 @@
+//! The projected system solved in near-linear time: an H-matrix product
+//! (`hmatrix.rs`) inside preconditioned GMRES.
+//!
+//! The unknowns are those of the dense path: `d = Z y` with `Z` the
+//! null-space basis of `Pᵀ` from the Householder QR of `P = [1 | x]`
+//! (applied implicitly, `O(n m)`), and `B y = Zᵀ h` with
+//! `B = Zᵀ(Φ + λI)Z`. A product with `B` is a reflection, an H-matrix
+//! product and a reflection.
+//!
+//! The preconditioner is the two-level overlapping domain decomposition of
+//! Beatson, Light & Billings (SIAM J. Sci. Comput. 22, 2000), the one
+//! FastRBF uses: the cluster tree's nodes of at most [`INNER`] points are
+//! the subdomains; each is grown by its neighbours within half its
+//! diameter (to at most [`LOCAL`] points) and its own interpolation problem
+//! (with a local degree-one polynomial over the coordinates it spans) is
+//! factored once by the projected Cholesky. Applied to a residual, each
+//! subdomain solves its local problem and keeps the weights of its own
+//! (inner) points; a coarse problem on about [`COARSE`] points spread over
+//! all subdomains, fitted to the residual the local corrections leave (one
+//! more H-matrix product), adds the global part. The result is projected onto the
+//! null space of `Pᵀ`. The preconditioner is not symmetric, so the outer
+//! iteration is flexible GMRES (restarted), in f64, stopping when the
+//! residual of the H-matrix system is below [`TOLERANCE`] of the right-hand
+//! side.
+//!
+//! Accuracy: the computed weights solve a system within the H-matrix's
+//! tolerance `ε` ([`ACA_TOLERANCE`]) of the exact one to the GMRES
+//! tolerance, so the residual at the constraints is about
+//! `TOLERANCE ‖h‖ + ε ‖Φ‖_F ‖d‖` (reported in
+//! [`FitReport::max_residual`](crate::FitReport::max_residual), evaluated
+//! with the H-matrix). When GMRES does not converge the caller falls back
+//! to the dense solve, or reports [`RbfError::NotConverged`] when that
+//! would not fit in memory.
+
+use crate::error::RbfError;
+use crate::hmatrix::{ClusterTree, HMatrix, LEAF, dot};
+use crate::kernel::Kernel;
+use crate::solve::{Factorization, PolyQr, Solution, build_projected, hager_inverse_norm};
+use faer::linalg::triangular_solve::{solve_lower_triangular_in_place, solve_upper_triangular_in_place};
+use faer::{Mat, MatMut, Par};
+use rayon::prelude::*;
+
+/// Most points in a subdomain's own (inner) set.
+const INNER: usize = 128;
+/// Most points of a subdomain with its overlap.
+const LOCAL: usize = 320;
+/// The overlap: neighbours within this fraction of the subdomain's
+/// diameter join its local problem.
+const OVERLAP: f64 = 0.5;
+/// About this many points form the coarse problem.
+const COARSE: usize = 1500;
+/// Relative Frobenius tolerance of the H-matrix blocks.
+pub(crate) const ACA_TOLERANCE: f64 = 1e-12;
+/// GMRES stops when `‖g − B y‖₂ ≤ TOLERANCE ‖g‖₂`.
+pub(crate) const TOLERANCE: f64 = 1e-11;
+/// GMRES restart length.
+const RESTART: usize = 50;
+/// GMRES iterations before giving up.
+const MAX_ITERATIONS: usize = 300;
+
+/// Knobs of the iteration (the constants above, overridable in tests).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Settings {
+    /// Relative tolerance of the H-matrix blocks.
+    pub aca: f64,
+    /// GMRES's relative residual tolerance.
+    pub tolerance: f64,
+    /// GMRES iterations before giving up.
+    pub max_iterations: usize,
+    /// Fall back to the dense solve when GMRES does not converge (and the
+    /// dense system fits in memory); otherwise fail with
+    /// [`RbfError::NotConverged`].
+    pub dense_fallback: bool,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            aca: ACA_TOLERANCE,
+            tolerance: TOLERANCE,
+            max_iterations: MAX_ITERATIONS,
+            dense_fallback: true,
+        }
+    }
+}
+
+/// Why the iteration gave up.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Failure {
+    /// Iterations taken.
+    pub iterations: usize,
+    /// The last relative residual `‖g − B y‖₂ / ‖g‖₂`.
+    pub residual: f64,
+}
+
+/// Solves the interpolation system for `positions` (row-major `n × dim`,
+/// normalized) and `values`; `Ok(Err(_))` when GMRES did not converge (or
+/// a local problem could not be factored).
+pub(crate) fn solve(
+    positions: &[f64],
+    dim: usize,
+    values: &[f64],
+    kernel: Kernel,
+    smoothing: f64,
+    settings: &Settings,
+) -> Result<Result<Solution, Failure>, RbfError> {
+    let n = values.len();
+    let tree = ClusterTree::new(positions, dim, LEAF);
+    let qr = PolyQr::new(&tree.points, dim)?;
+    let m = qr.m;
+    let h = HMatrix::new(&tree, kernel, smoothing, settings.aca);
+    let mut g: Vec<f64> = tree.order.iter().map(|&i| values[i]).collect();
+    qr.apply_qt(&mut g);
+    let g2 = g[m..].to_vec();
+    let apply_b = |y: &[f64], out: &mut [f64]| {
+        let mut d = [vec![0.0; m], y.to_vec()].concat();
+        qr.apply_q(&mut d);
+        let mut phi_d = vec![0.0; n];
+        h.matvec(&d, &mut phi_d);
+        qr.apply_qt(&mut phi_d);
+        out.copy_from_slice(&phi_d[m..]);
+    };
+    let Some(preconditioner) = Schwarz::new(&tree, kernel, smoothing) else {
+        return Ok(Err(Failure { iterations: 0, residual: 1.0 }));
+    };
+    let apply_m = |r: &[f64], out: &mut [f64]| {
+        let mut full = [vec![0.0; m], r.to_vec()].concat();
+        qr.apply_q(&mut full);
+        let mut lambda = preconditioner.apply(&full, &|x, y| h.matvec(x, y));
+        qr.apply_qt(&mut lambda);
+        out.copy_from_slice(&lambda[m..]);
+    };
+    let (y2, iterations, residual) = gmres(&apply_b, &apply_m, &g2, settings);
+    if residual.is_nan() || residual > settings.tolerance {
+        return Ok(Err(Failure { iterations, residual }));
+    }
+    // d = Z y, then R c = Q₁ᵀ(h − Φ d); the values at the centres come with it.
+    let mut d = [vec![0.0; m], y2.clone()].concat();
+    qr.apply_q(&mut d);
+    let mut phi_d = vec![0.0; n];
+    h.matvec(&d, &mut phi_d);
+    let mut t = phi_d.clone();
+    qr.apply_qt(&mut t);
+    let mut c: Vec<f64> = (0..m).map(|i| g[i] - t[i]).collect();
+    for i in (0..m).rev() {
+        let s: f64 = (i + 1..m).map(|j| qr.r[(i, j)] * c[j]).sum();
+        c[i] = (c[i] - s) / qr.r[(i, i)];
+    }
+    let k = n - m;
+    let norm_b = hager_inverse_norm(k, &|x| {
+        let mut out = vec![0.0; k];
+        apply_b(x, &mut out);
+        x.copy_from_slice(&out);
+    });
+    let inv_norm = hager_inverse_norm(k, &|x| {
+        let mut out = vec![0.0; k];
+        apply_m(x, &mut out);
+        x.copy_from_slice(&out);
+    });
+    let rcond = 1.0 / (norm_b * inv_norm);
+    let mut weights = vec![0.0; n];
+    let mut centre_values = vec![0.0; n];
+    for (i, &input) in tree.order.iter().enumerate() {
+        weights[input] = d[i];
+        let x = tree.point(i);
+        centre_values[input] = phi_d[i] + c[0] + (0..dim).map(|k| c[k + 1] * x[k]).sum::<f64>();
+    }
+    if c.iter().chain(&weights).any(|v| !v.is_finite()) || rcond.is_nan() || rcond <= 0.0 {
+        return Err(RbfError::Singular { rcond: if rcond.is_finite() { rcond } else { 0.0 } });
+    }
+    Ok(Ok(Solution {
+        weights,
+        poly: c,
+        factorization: Factorization::Hierarchical { iterations },
+        rcond,
+        centre_values: Some(centre_values),
+    }))
+}
+
+/// One factored local problem: the points `idx` (tree order), of which the
+/// first `inner` keep their weights.
+struct Local {
+    idx: Vec<usize>,
+    inner: usize,
+    qr: PolyQr,
+    /// Cholesky factor of the local projected block.
+    l: Mat<f64>,
+}
+
+impl Local {
+    /// Factors the interpolation problem on the points `idx`, with a
+    /// polynomial over the coordinates they span; `None` if it is not
+    /// positive definite.
+    fn new(
+        tree: &ClusterTree,
+        idx: Vec<usize>,
+        inner: usize,
+        kernel: Kernel,
+        smoothing: f64,
+    ) -> Option<Self> {
+        let dim = tree.dim;
+        let n = idx.len();
+        let pos: Vec<f64> = idx.iter().flat_map(|&i| tree.point(i).iter().copied()).collect();
+        let extent: Vec<f64> = (0..dim)
+            .map(|k| {
+                let (lo, hi) = idx
+                    .iter()
+                    .map(|&i| tree.point(i)[k])
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x)));
+                hi - lo
+            })
+            .collect();
+        let largest = extent.iter().copied().fold(0.0, f64::max);
+        let spanned: Vec<usize> = (0..dim).filter(|&k| extent[k] > 1e-6 * largest).collect();
+        let reduced: Vec<f64> = (0..n)
+            .flat_map(|i| spanned.iter().map(move |&k| (i, k)))
+            .map(|(i, k)| pos[i * dim + k])
+            .collect();
+        let qr = PolyQr::new(&reduced, spanned.len()).ok()?;
+        let m = qr.m;
+        if n <= m {
+            return None;
+        }
+        let mut a = vec![0.0; n * n];
+        build_projected(&mut a, &pos, dim, kernel, smoothing, &qr);
+        let am = MatMut::from_column_major_slice_mut(&mut a, n, n);
+        let l = crate::slab::cholesky(am.as_ref().submatrix(m, m, n - m, n - m), Par::Seq)?;
+        Some(Self { idx, inner, qr, l })
+    }
+
+    /// The local weights fitting the residual `r` (full, tree order) at
+    /// the local points, up to a local polynomial.
+    fn solve(&self, r: &[f64]) -> Vec<f64> {
+        let m = self.qr.m;
+        let mut g: Vec<f64> = self.idx.iter().map(|&i| r[i]).collect();
+        self.qr.apply_qt(&mut g);
+        g[..m].iter_mut().for_each(|v| *v = 0.0);
+        let mut y = MatMut::from_column_major_slice_mut(&mut g[m..], self.idx.len() - m, 1);
+        solve_lower_triangular_in_place(self.l.as_ref(), y.as_mut(), Par::Seq);
+        solve_upper_triangular_in_place(self.l.transpose(), y, Par::Seq);
+        self.qr.apply_q(&mut g);
+        g
+    }
+}
+
+/// The two-level overlapping Schwarz preconditioner (module docs).
+struct Schwarz {
+    locals: Vec<Local>,
+    coarse: Local,
+    n: usize,
+}
+
+impl Schwarz {
+    /// Builds and factors the subdomains of `tree`; `None` if a local
+    /// problem cannot be factored.
+    fn new(tree: &ClusterTree, kernel: Kernel, smoothing: f64) -> Option<Self> {
+        let mut roots = Vec::new();
+        let mut stack = vec![0usize];
+        while let Some(s) = stack.pop() {
+            let node = &tree.nodes[s];
+            match node.children {
+                Some((a, b)) if node.range.len() > INNER => stack.extend([b, a]),
+                _ => roots.push(s),
+            }
+        }
+        roots.sort_by_key(|&s| tree.nodes[s].range.start);
+        let per = COARSE.div_ceil(roots.len()).max(1);
+        let mut coarse_idx = Vec::new();
+        let mut locals_idx = Vec::with_capacity(roots.len());
+        for &s in &roots {
+            let node = &tree.nodes[s];
+            let len = node.range.len();
+            let take = per.min(len);
+            coarse_idx.extend((0..take).map(|j| node.range.start + j * len / take));
+            locals_idx.push((s, neighbourhood(tree, s)));
+        }
+        let locals: Option<Vec<Local>> = locals_idx
+            .into_par_iter()
+            .map(|(s, idx)| Local::new(tree, idx, tree.nodes[s].range.len(), kernel, smoothing))
+            .collect();
+        let inner = coarse_idx.len();
+        let coarse = Local::new(tree, coarse_idx, inner, kernel, smoothing)?;
+        Some(Self { locals: locals?, coarse, n: tree.order.len() })
+    }
+
+    /// The weights (tree order) of the preconditioned residual `r`: the
+    /// local corrections, then the coarse one fitted to the residual they
+    /// leave (`phi` is the product with `Φ`).
+    fn apply(&self, r: &[f64], phi: &dyn Fn(&[f64], &mut [f64])) -> Vec<f64> {
+        let local: Vec<Vec<f64>> = self.locals.par_iter().map(|l| l.solve(r)).collect();
+        let mut lambda = vec![0.0; self.n];
+        for (l, w) in self.locals.iter().zip(&local) {
+            for (&i, v) in l.idx[..l.inner].iter().zip(w) {
+                lambda[i] = *v;
+            }
+        }
+        let mut left = vec![0.0; self.n];
+        phi(&lambda, &mut left);
+        left.iter_mut().zip(r).for_each(|(l, r)| *l = r - *l);
+        let w = self.coarse.solve(&left);
+        for (&i, v) in self.coarse.idx.iter().zip(&w) {
+            lambda[i] += v;
+        }
+        lambda
+    }
+}
+
+/// The points of subdomain `s` first, then its nearest neighbours within
+/// [`OVERLAP`] of its diameter, to at most [`LOCAL`] points.
+fn neighbourhood(tree: &ClusterTree, s: usize) -> Vec<usize> {
+    let node = &tree.nodes[s];
+    let grow = OVERLAP * node.diameter();
+    let lo: Vec<f64> = node.lo.iter().map(|v| v - grow).collect();
+    let hi: Vec<f64> = node.hi.iter().map(|v| v + grow).collect();
+    let box_distance = |x: &[f64]| -> f64 {
+        (0..tree.dim).map(|k| (node.lo[k] - x[k]).max(x[k] - node.hi[k]).max(0.0).powi(2)).sum()
+    };
+    let mut near: Vec<(f64, usize)> = Vec::new();
+    let mut stack = vec![0usize];
+    while let Some(c) = stack.pop() {
+        let cn = &tree.nodes[c];
+        if (0..tree.dim).any(|k| cn.hi[k] < lo[k] || cn.lo[k] > hi[k]) || c == s {
+            continue;
+        }
+        match cn.children {
+            Some((a, b)) => stack.extend([a, b]),
+            None => near.extend(
+                cn.range
+                    .clone()
+                    .filter(|i| !node.range.contains(i))
+                    .map(|i| (box_distance(tree.point(i)), i))
+                    .filter(|&(d2, _)| d2 <= grow * grow),
+            ),
+        }
+    }
+    near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let room = LOCAL.saturating_sub(node.range.len());
+    node.range.clone().chain(near.into_iter().take(room).map(|(_, i)| i)).collect()
+}
+
+/// Flexible GMRES with restarts for `A y = g` with right preconditioner
+/// `M`; returns `y`, the iterations and the final true relative residual.
+fn gmres(
+    a: &dyn Fn(&[f64], &mut [f64]),
+    m: &dyn Fn(&[f64], &mut [f64]),
+    g: &[f64],
+    settings: &Settings,
+) -> (Vec<f64>, usize, f64) {
+    let k = g.len();
+    let norm_g = dot(g, g).sqrt();
+    let mut y = vec![0.0; k];
+    if norm_g == 0.0 {
+        return (y, 0, 0.0);
+    }
+    let mut r = g.to_vec();
+    let mut beta = norm_g;
+    let mut iterations = 0;
+    let mut w = vec![0.0; k];
+    loop {
+        let mut v: Vec<Vec<f64>> = vec![r.iter().map(|x| x / beta).collect()];
+        let mut z: Vec<Vec<f64>> = Vec::new();
+        let mut hess: Vec<Vec<f64>> = Vec::new();
+        let (mut cs, mut sn) = (Vec::<f64>::new(), Vec::<f64>::new());
+        let mut s = vec![beta];
+        for j in 0..RESTART {
+            iterations += 1;
+            let mut zj = vec![0.0; k];
+            m(&v[j], &mut zj);
+            a(&zj, &mut w);
+            z.push(zj);
+            let mut col = vec![0.0; j + 2];
+            for i in 0..=j {
+                col[i] = dot(&w, &v[i]);
+                w.iter_mut().zip(&v[i]).for_each(|(w, v)| *w -= col[i] * v);
+            }
+            col[j + 1] = dot(&w, &w).sqrt();
+            for i in 0..j {
+                let t = cs[i] * col[i] + sn[i] * col[i + 1];
+                col[i + 1] = -sn[i] * col[i] + cs[i] * col[i + 1];
+                col[i] = t;
+            }
+            let rho = col[j].hypot(col[j + 1]);
+            let (c, sj) = if rho == 0.0 { (1.0, 0.0) } else { (col[j] / rho, col[j + 1] / rho) };
+            let breakdown = col[j + 1] == 0.0;
+            if !breakdown {
+                v.push(w.iter().map(|x| x / col[j + 1]).collect());
+            }
+            col[j] = rho;
+            col[j + 1] = 0.0;
+            cs.push(c);
+            sn.push(sj);
+            s.push(-sj * s[j]);
+            s[j] *= c;
+            hess.push(col);
+            if s[j + 1].abs() <= settings.tolerance * norm_g
+                || iterations >= settings.max_iterations
+                || breakdown
+            {
+                break;
+            }
+        }
+        // Back substitution for the coefficients of the z vectors.
+        let len = hess.len();
+        let mut coef = s[..len].to_vec();
+        for i in (0..len).rev() {
+            let t: f64 = (i + 1..len).map(|l| hess[l][i] * coef[l]).sum();
+            coef[i] = (coef[i] - t) / hess[i][i];
+        }
+        for (zi, ci) in z.iter().zip(&coef) {
+            y.iter_mut().zip(zi).for_each(|(y, z)| *y += ci * z);
+        }
+        a(&y, &mut w);
+        r.iter_mut().zip(g.iter().zip(&w)).for_each(|(r, (g, w))| *r = g - w);
+        beta = dot(&r, &r).sqrt();
+        let residual = beta / norm_g;
+        if residual <= settings.tolerance || iterations >= settings.max_iterations || !residual.is_finite() {
+            return (y, iterations, residual);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::slab::tests::sphere_torus;
+    use crate::{FitSettings, Interpolant, Solver};
+
+    /// Fits `cs` with `solver` and the hierarchical `settings`.
+    fn fit_with(
+        cs: &[crate::Constraint<4>],
+        solver: Solver,
+        settings: &Settings,
+    ) -> Result<Interpolant<4>, RbfError> {
+        let fit = FitSettings { solver, ..FitSettings::default() };
+        Interpolant::fit_with(cs, &fit, settings)
+    }
+
+    #[test]
+    fn no_convergence_falls_back_to_the_dense_solve_or_is_an_error() {
+        let cs = sphere_torus(2000);
+        let capped = Settings { max_iterations: 2, ..Settings::default() };
+        let fit = fit_with(&cs, Solver::Hierarchical, &capped).unwrap();
+        assert_eq!(fit.report().factorization, Factorization::Cholesky);
+        assert!(fit.report().max_residual.unwrap() < 1e-8);
+        let no_fallback = Settings { dense_fallback: false, ..capped };
+        let err = fit_with(&cs, Solver::Hierarchical, &no_fallback).unwrap_err();
+        assert!(
+            matches!(err, RbfError::NotConverged { iterations: 2, residual } if residual > TOLERANCE),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn results_do_not_depend_on_the_thread_count() {
+        let cs = sphere_torus(2000);
+        let fit = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| fit_with(&cs, Solver::Hierarchical, &Settings::default()).unwrap())
+        };
+        let (one, three) = (fit(1), fit(3));
+        assert!(matches!(one.report().factorization, Factorization::Hierarchical { .. }));
+        assert_eq!(one.report(), three.report());
+        for c in cs.iter().step_by(37) {
+            let x = c.position.map(f64::from);
+            assert_eq!(one.value_f64(x).to_bits(), three.value_f64(x).to_bits());
+        }
+    }
+
+    #[test]
+    fn hierarchical_solver_agrees_with_the_dense_cholesky() {
+        let cs = sphere_torus(3000);
+        for kernel in [Kernel::ThinPlate, Kernel::Cubic] {
+            let fast =
+                FitSettings { solver: Solver::Hierarchical, ..FitSettings::default().with_kernel(kernel) };
+            let fast = Interpolant::fit(&cs, &fast).unwrap();
+            let dense = FitSettings { solver: Solver::Dense, ..FitSettings::default().with_kernel(kernel) };
+            let dense = Interpolant::fit(&cs, &dense).unwrap();
+            let Factorization::Hierarchical { iterations } = fast.report().factorization else {
+                panic!("{kernel:?}: not hierarchical: {:?}", fast.report().factorization);
+            };
+            let mut worst = 0.0f64;
+            let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+            for i in 0..300 {
+                let u = |k: u32| ((i * 7919 + k * 104_729) % 1000) as f64 / 1000.0 - 0.5;
+                let x = [0.8 * u(1), 0.8 * u(2), 0.8 * u(3), 1.2 * u(4) + 0.5];
+                let (ff, fd) = (fast.value_f64(x), dense.value_f64(x));
+                worst = worst.max((ff - fd).abs());
+                lo = lo.min(fd);
+                hi = hi.max(fd);
+            }
+            assert!(iterations <= 40, "{kernel:?}: {iterations} iterations");
+            // The residual at the constraints, through the H-matrix.
+            assert!(fast.report().max_residual.unwrap() < 1e-8, "{:?}", fast.report());
+            let ratio = fast.report().rcond / dense.report().rcond;
+            assert!((1e-3..1e3).contains(&ratio), "{kernel:?}: rcond {ratio}× the dense estimate");
+            assert!(worst <= 1e-6 * (hi - lo), "{kernel:?}: {worst:e} vs range {}", hi - lo);
+        }
+    }
+}
