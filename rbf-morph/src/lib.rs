@@ -38,8 +38,8 @@
 //!   conjugate gradients, run in f64 to the backward error of a direct
 //!   solve (4 iterations with `r² log r`, 8 with `r³` on the reference case).
 //!   That is about a quarter of the dense factorization's flops; if it does
-//!   not converge the dense Cholesky runs. From 16000 constraints
-//!   [`Solver::Auto`] uses the **hierarchical solver**
+//!   not converge the dense Cholesky runs. From 16000 constraints with the
+//!   thin-plate kernel [`Solver::Auto`] uses the **hierarchical solver**
 //!   ([`Solver::Hierarchical`], [`Factorization::Hierarchical`]) instead:
 //!   a kd-type cluster tree over the `N + 1`-dimensional constraint points,
 //!   the kernel matrix as an H-matrix (strong admissibility

@@ -266,7 +266,9 @@ enum Factor {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[non_exhaustive]
 pub enum Solver {
-    /// The hierarchical solver from 16000 constraints; below that the slab
+    /// The hierarchical solver from 16000 constraints with the thin-plate
+    /// kernel (the default; with `r³` its iteration count grows too fast above
+    /// that size, so `r³` keeps the paths below); otherwise the slab
     /// solver ([`Factorization::SlabCg`]) when the constraints form two
     /// groups well apart along some axis (the two shapes of a shape
     /// transformation), with at least 1500 constraints; the dense Cholesky
@@ -276,15 +278,16 @@ pub enum Solver {
     /// Always the dense Cholesky (with its `LBLᵀ` fallback).
     Dense,
     /// The hierarchical solver ([`Factorization::Hierarchical`]), `O(n log n)`
-    /// memory and near-linear time; the default ([`Solver::Auto`]) from
-    /// 16000 constraints (where the dense matrix needs 2 GiB). Falls back to the dense Cholesky when GMRES does
+    /// memory and near-linear time; the default ([`Solver::Auto`]) for the
+    /// thin-plate kernel from 16000 constraints (where the dense matrix needs
+    /// 2 GiB). Falls back to the dense Cholesky when GMRES does
     /// not converge, or fails with [`RbfError::NotConverged`] when the dense
     /// system would not fit in memory.
     Hierarchical,
 }
 
 /// Fewest constraints for which [`Solver::Auto`] uses the hierarchical
-/// solver.
+/// solver (thin-plate kernel only).
 const HIERARCHICAL_MIN: usize = 16_000;
 
 /// The parallelism of the dense kernels (faer): a fixed task count rather
@@ -308,7 +311,7 @@ pub(crate) fn solve_with(
 ) -> Result<Solution, RbfError> {
     let n = values.len();
     let iterative = match solver {
-        Solver::Auto => n >= HIERARCHICAL_MIN,
+        Solver::Auto => n >= HIERARCHICAL_MIN && kernel == Kernel::ThinPlate,
         Solver::Dense => false,
         Solver::Hierarchical => n > dim + 1,
     };
