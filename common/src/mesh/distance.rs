@@ -302,6 +302,32 @@ mod tests {
     }
 
     #[test]
+    fn indexed_surfaces_measure_as_surface_distance_does() {
+        let (a, b) = (sphere(0.2, 32), sphere(0.3, 48));
+        let want = surface_distance(&a, &b, 1000).unwrap();
+        // Indexed in their own boxes (different scales) or in a shared one.
+        let far = Aabb::cube(300.0);
+        for (frame_a, frame_b) in [(a.bounds(), b.bounds()), (far, far), (a.bounds(), far)] {
+            let (ia, ib) =
+                (IndexedSurface::new(&a, &frame_a).unwrap(), IndexedSurface::new(&b, &frame_b).unwrap());
+            let got = ia.distance_to(&ib, 1000).unwrap();
+            assert!(
+                (got.mean - want.mean).abs() < 1e-6 && (got.hausdorff - want.hausdorff).abs() < 1e-6,
+                "{got:?}"
+            );
+        }
+        // Against the exact sphere: its points and its distance.
+        let exact = IndexedSurface::new(&a, &a.bounds())
+            .unwrap()
+            .distance_to_reference(1000, &surface_samples(&b, 1000).unwrap(), |p| (p.length() - 0.3).abs())
+            .unwrap();
+        assert!((exact.mean - want.mean).abs() < 1e-3, "{exact:?} vs {want:?}");
+        assert!((exact.hausdorff - 0.1).abs() < 3e-3 && exact.hausdorff >= 0.1 - 1e-3, "{exact:?}");
+        let empty = IndexedSurface::new(&a, &a.bounds()).unwrap().distance_to_reference(10, &[], |_| 0.0);
+        assert_eq!(empty, Err(DistanceError::EmptySurface { which: "second" }));
+    }
+
+    #[test]
     fn samples_are_area_uniform() {
         // Two triangles of area 1 and 3: the counts must follow the areas.
         let mesh = TriMesh::new(
