@@ -119,8 +119,9 @@ fn step(c: &mut Criterion) {
 }
 
 /// The whole `isomorph morph --method level-set --source sphere --target
-/// torus --res 128 --frames 8` through the library, as the command runs it:
-/// the inputs' reference surfaces for the endpoint distances, both distance
+/// torus --res 128 --frames 8` through the library, as the command runs it
+/// (the same library calls, not the binary): the inputs' reference surfaces
+/// for the endpoint distances ([`ExportSettings::with_inputs`]), both distance
 /// volumes, the evolution keeping a frame per iteration, and the 8 frames
 /// polygonized, measured and written with the contact sheet and report.
 fn cli(c: &mut Criterion) {
@@ -136,15 +137,14 @@ fn cli(c: &mut Criterion) {
             let target = load_input(method, "torus", &Default::default()).expect("built-in");
             let settings = Settings::default().with_resolution(res);
             let morph = build(method, &source, &target, &settings, &control).expect("morphs");
-            let reference = (2 * res).min(256);
             let export = ExportSettings {
                 frames: 8,
                 resolution: res,
                 out_dir: out.clone(),
-                source_reference: Some(source.surface(reference, &control).expect("a surface").into_owned()),
-                target_reference: Some(target.surface(reference, &control).expect("a surface").into_owned()),
                 ..ExportSettings::default()
-            };
+            }
+            .with_inputs(&source, &target, &control)
+            .expect("reference surfaces");
             black_box(export_sequence(&*morph, &export, &control).expect("exports").report.frames.len())
         })
     });

@@ -8,7 +8,7 @@ use clap::{ArgMatches, Args, ValueEnum};
 use isomorph_cli::methods::{Method, Settings, build, load_input_with_warnings};
 use isomorph_common::mesh::color::ColorLookup;
 use isomorph_common::{Control, Solid, TriMesh};
-use isomorph_io::export::{ExportSettings, FrameColors, Report, export_sequence, reference_surfaces};
+use isomorph_io::export::{ExportSettings, FrameColors, Report, export_sequence};
 use isomorph_io::inputs::{LoadOptions, UNCOLORED, builtin_color};
 use isomorph_io::mesh::MeshFormat;
 use std::path::{Path, PathBuf};
@@ -153,20 +153,7 @@ impl Io {
         inputs: &(Solid, Solid),
         control: &Control,
     ) -> anyhow::Result<ExportSettings> {
-        let (source, target) = reference_surfaces(&inputs.0, &inputs.1, self.resolution(), control)?;
-        let colors = (self.colour || source.colors.is_some() || target.colors.is_some())
-            .then(|| -> anyhow::Result<FrameColors> {
-                let lookup = |spec: &str, surface: &TriMesh| {
-                    ColorLookup::new(surface, builtin_color(spec).unwrap_or(UNCOLORED))
-                        .with_context(|| format!("the colours of {spec}"))
-                };
-                Ok(FrameColors {
-                    source: lookup(&self.source, &source)?,
-                    target: lookup(&self.target, &target)?,
-                })
-            })
-            .transpose()?;
-        Ok(ExportSettings {
+        let settings = ExportSettings {
             frames: self.frames as usize,
             resolution: self.resolution(),
             out_dir: out,
@@ -174,11 +161,25 @@ impl Io {
             frame_files: self.format != Format::Usd,
             usd: self.format == Format::Usd,
             preview: !self.no_preview,
-            source_reference: Some(source),
-            target_reference: Some(target),
-            colors,
             ..ExportSettings::default()
-        })
+        }
+        .with_inputs(&inputs.0, &inputs.1, control)?;
+        let colors = match (&settings.source_reference, &settings.target_reference) {
+            (Some(source), Some(target))
+                if self.colour || source.colors.is_some() || target.colors.is_some() =>
+            {
+                let lookup = |spec: &str, surface: &TriMesh| {
+                    ColorLookup::new(surface, builtin_color(spec).unwrap_or(UNCOLORED))
+                        .with_context(|| format!("the colours of {spec}"))
+                };
+                Some(FrameColors {
+                    source: lookup(&self.source, source)?,
+                    target: lookup(&self.target, target)?,
+                })
+            }
+            _ => None,
+        };
+        Ok(ExportSettings { colors, ..settings })
     }
 }
 

@@ -29,7 +29,7 @@ use crate::alignment::Moments;
 use crate::control::Control;
 use crate::fast_marching::{FastMarchingSettings, redistance};
 use crate::grid::lattice_for_box;
-use crate::marching_cubes::marching_cubes;
+use crate::marching_cubes::{level_set_mesh, marching_cubes};
 use crate::morph::{MorphError, Side};
 use crate::scan_conversion::scan_convert;
 use crate::sdf::MeshSdf;
@@ -295,6 +295,31 @@ impl Solid {
         }
     }
 
+    /// The exact unsigned distance from `p` to the surface, where the solid
+    /// knows it without sampling a volume: meshes (their tree) and analytic
+    /// shapes whose distance is exact ([`Shape::is_exact_distance`]).
+    /// `None` for the other kinds, whose distance comes from a sampled
+    /// volume ([`Solid::distance_field`]), and for a non-finite `p`.
+    pub fn exact_distance(&self, p: Vec3) -> Option<f32> {
+        if !self.has_exact_distance() {
+            return None;
+        }
+        match &*self.0 {
+            Repr::Mesh { sdf, .. } => sdf.closest(p).map(|c| c.distance_squared.max(0.0).sqrt()),
+            Repr::Shape(shape) if p.is_finite() => Some(shape.distance(p).abs()),
+            _ => None,
+        }
+    }
+
+    /// True when [`Solid::exact_distance`] answers (for finite points).
+    pub fn has_exact_distance(&self) -> bool {
+        match &*self.0 {
+            Repr::Mesh { .. } => true,
+            Repr::Shape(shape) => shape.is_exact_distance(),
+            Repr::Volume(_) | Repr::Implicit { .. } => false,
+        }
+    }
+
     /// The true signed distance (positive inside, world units) on the
     /// lattice over `bounds` with `res` nodes along its longest edge (see
     /// [`lattice_for_box`]).
@@ -354,17 +379,21 @@ impl Solid {
 
     /// The surface as a mesh: the mesh itself, or marching cubes of the
     /// distance volume over the solid's box (padded by 5 % per side) with
-    /// `res` nodes along its longest edge.
+    /// `res` nodes along its longest edge. For analytic shapes with an exact
+    /// distance the distance is evaluated only near the surface
+    /// ([`level_set_mesh`]: the same mesh, without sampling the whole box).
     ///
     /// # Errors
     /// As [`Solid::distance_volume`].
     pub fn surface(&self, res: u32, control: &Control) -> Result<Cow<'_, TriMesh>, MorphError> {
+        let bounds = self.bounds().padded(0.05);
         Ok(match &*self.0 {
             Repr::Mesh { mesh, .. } => Cow::Borrowed(mesh),
-            _ => Cow::Owned(marching_cubes(
-                &self.distance_volume(&self.bounds().padded(0.05), res, control)?,
-                0.0,
-            )),
+            Repr::Shape(shape) if shape.is_exact_distance() => {
+                control.check()?;
+                Cow::Owned(control.install(|| level_set_mesh(shape, &bounds, res, 0.0))?)
+            }
+            _ => Cow::Owned(marching_cubes(&self.distance_volume(&bounds, res, control)?, 0.0)),
         })
     }
 
@@ -403,6 +432,25 @@ mod tests {
     use super::*;
     use crate::mesh::primitives::uv_sphere;
     use crate::models;
+
+    #[test]
+    fn exact_distances_are_unsigned_and_only_where_known() {
+        let mesh = Solid::mesh(uv_sphere(Vec3::ZERO, 0.3, 48, 96)).unwrap();
+        let shape = Solid::shape(Shape::sphere(0.3));
+        for p in [Vec3::ZERO, Vec3::new(0.1, 0.05, 0.0), Vec3::new(0.5, 0.2, -0.1)] {
+            let want = (p.length() - 0.3).abs();
+            assert!((shape.exact_distance(p).unwrap() - want).abs() < 1e-6, "{p}");
+            // The mesh is a polyhedron: its faces lie up to 0.3 · (2 − cos(π/48)
+            // − cos(π/96)) ≈ 8e-4 inside the sphere.
+            assert!((mesh.exact_distance(p).unwrap() - want).abs() < 1e-3, "{p}");
+        }
+        assert_eq!(shape.exact_distance(Vec3::NAN), None);
+        let volume =
+            Solid::volume(Grid3::sample_box(&Shape::sphere(0.3), &Aabb::cube(0.5), 17).unwrap()).unwrap();
+        let csg = Solid::shape(models::c_shape());
+        assert_eq!((volume.exact_distance(Vec3::ZERO), csg.exact_distance(Vec3::ZERO)), (None, None));
+        assert!(mesh.has_exact_distance() && shape.has_exact_distance() && !csg.has_exact_distance());
+    }
 
     #[test]
     fn every_kind_gives_a_true_distance() {

@@ -22,7 +22,12 @@
 //! }
 //! ```
 //! `genus` is `null` for frames that are not closed 2-manifolds; an endpoint is
-//! `null` when no reference mesh was given. `step_from_previous` is the
+//! `null` when no reference mesh was given. An endpoint distance is
+//! two-sided: samples of the frame measured against the input's surface,
+//! and samples of the reference mesh (the input's surface) measured against
+//! the frame; with [`ExportSettings::source_solid`] (`target_solid`) the
+//! first side uses the input's exact distance where it has one (meshes,
+//! analytic shapes) rather than the distance to the reference mesh. `step_from_previous` is the
 //! Hausdorff distance from the frame before (how far the surface jumped);
 //! `largest_step` the largest of them. `morph` is the method's
 //! [`MorphReport`].
@@ -48,7 +53,7 @@ use crate::render::{Camera, Image, RenderSettings, contact_sheet, render, write_
 use crate::usd::{UsdSettings, write_usda};
 use isomorph_common::glam::Vec3;
 use isomorph_common::mesh::color::ColorLookup;
-use isomorph_common::mesh::distance::{SurfaceDistance, surface_distance};
+use isomorph_common::mesh::distance::{IndexedSurface, SurfaceDistance, surface_samples};
 use isomorph_common::{Aabb, Control, Morph, MorphError, Solid, TriMesh};
 use isomorph_common::{BoxedError, MorphReport};
 use rayon::prelude::*;
@@ -96,6 +101,16 @@ pub struct ExportSettings {
     pub source_reference: Option<TriMesh>,
     /// The target surface, to measure how well the last frame matches it.
     pub target_reference: Option<TriMesh>,
+    /// The source solid whose surface `source_reference` is: where it knows
+    /// its exact distance ([`Solid::exact_distance`]: meshes, analytic
+    /// shapes), frame 0's samples are measured by that distance instead of
+    /// against a tree built over `source_reference` (faster, and free of the
+    /// reference's polygonization error on that side); `source_reference`'s
+    /// points are still measured against the frame.
+    pub source_solid: Option<Solid>,
+    /// The target solid whose surface `target_reference` is, as
+    /// `source_solid`.
+    pub target_solid: Option<Solid>,
     /// Surface samples per mesh for the endpoint distances.
     pub distance_samples: usize,
     /// Surface samples per mesh for the distance between consecutive frames.
@@ -130,6 +145,28 @@ impl FrameColors {
     }
 }
 
+impl ExportSettings {
+    /// These settings measuring the end frames against the inputs `source`
+    /// and `target`: their surfaces ([`reference_surfaces`] at
+    /// [`ExportSettings::resolution`]) as `source_reference` and
+    /// `target_reference`, and the solids themselves as `source_solid` and
+    /// `target_solid` (for their exact distances).
+    ///
+    /// # Errors
+    /// As [`reference_surfaces`].
+    pub fn with_inputs(self, source: &Solid, target: &Solid, control: &Control) -> Result<Self, MorphError> {
+        let (source_reference, target_reference) =
+            reference_surfaces(source, target, self.resolution, control)?;
+        Ok(Self {
+            source_reference: Some(source_reference),
+            target_reference: Some(target_reference),
+            source_solid: Some(source.clone()),
+            target_solid: Some(target.clone()),
+            ..self
+        })
+    }
+}
+
 impl Default for ExportSettings {
     fn default() -> Self {
         Self {
@@ -145,6 +182,8 @@ impl Default for ExportSettings {
             render: RenderSettings { width: 240, height: 240, ..RenderSettings::default() },
             source_reference: None,
             target_reference: None,
+            source_solid: None,
+            target_solid: None,
             distance_samples: 20_000,
             step_samples: 4_000,
             colors: None,
@@ -345,7 +384,13 @@ fn export_on_pool<M: Morph + ?Sized>(
     std::fs::create_dir_all(dir).map_err(|source| ExportError::Io { path: dir.clone(), source })?;
     let total = settings.frames;
     let done = std::sync::atomic::AtomicUsize::new(0);
-    let results: Vec<(FrameReport, TriMesh)> = (0..total)
+    // Every distance (steps, endpoints) is computed in one frame, scaled for
+    // the box of all frames and references.
+    let distance_box = [&settings.source_reference, &settings.target_reference]
+        .into_iter()
+        .flatten()
+        .fold(morph.world_bounds(), |b, r| b.union(&r.bounds()));
+    let results: Vec<(FrameReport, (TriMesh, Option<IndexedSurface>))> = (0..total)
         .into_par_iter()
         .map(|i| {
             control.check()?;
@@ -386,10 +431,14 @@ fn export_on_pool<M: Morph + ?Sized>(
             let finished = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
             control
                 .progress("frames", Some(finished as f32 / total as f32), || format!("{finished}/{total}"));
-            Ok((report, mesh))
+            // The frame's tree, built once for its steps and its endpoint.
+            let index = IndexedSurface::new(&mesh, &distance_box).ok();
+            Ok((report, (mesh, index)))
         })
         .collect::<Result<_, ExportError>>()?;
-    let (mut frames, meshes): (Vec<FrameReport>, Vec<TriMesh>) = results.into_iter().unzip();
+    let (mut frames, indexed): (Vec<FrameReport>, Vec<(TriMesh, Option<IndexedSurface>)>) =
+        results.into_iter().unzip();
+    let (meshes, indexes): (Vec<TriMesh>, Vec<Option<IndexedSurface>>) = indexed.into_iter().unzip();
 
     for (which, index, reference) in
         [("source", 0, &settings.source_reference), ("target", total - 1, &settings.target_reference)]
@@ -441,10 +490,17 @@ fn export_on_pool<M: Morph + ?Sized>(
     control.check()?;
     control.progress("metrics", None, String::new);
     let voxel = world_voxel(&morph.world_bounds(), settings.resolution);
-    let endpoint = |reference: &Option<TriMesh>, mesh: &TriMesh| {
-        let reference = reference.as_ref()?;
-        let d = surface_distance(mesh, reference, settings.distance_samples).ok()?;
-        Some(EndpointDistance::new(d, voxel))
+    let endpoint = |reference: &Option<TriMesh>, solid: &Option<Solid>, frame: &Option<IndexedSurface>| {
+        let (reference, frame) = (reference.as_ref()?, frame.as_ref()?);
+        let samples = settings.distance_samples;
+        let d = match solid.as_ref().filter(|s| s.has_exact_distance()) {
+            Some(solid) => {
+                let points = surface_samples(reference, samples)?;
+                frame.distance_to_reference(samples, &points, |p| solid.exact_distance(p).unwrap_or(f32::NAN))
+            }
+            None => frame.distance_to(&IndexedSurface::new(reference, &distance_box).ok()?, samples),
+        };
+        Some(EndpointDistance::new(d.ok()?, voxel))
     };
     // The steps and both endpoints at once, so that every core stays busy
     // (an endpoint's reference mesh is the largest of all).
@@ -453,15 +509,15 @@ fn export_on_pool<M: Morph + ?Sized>(
             (1..total)
                 .into_par_iter()
                 .map(|i| {
-                    let d = surface_distance(&meshes[i - 1], &meshes[i], settings.step_samples);
-                    d.ok().map(|d| d.hausdorff)
+                    let (a, b) = (indexes[i - 1].as_ref()?, indexes[i].as_ref()?);
+                    a.distance_to(b, settings.step_samples).ok().map(|d| d.hausdorff)
                 })
                 .collect::<Vec<Option<f32>>>()
         },
         || {
             rayon::join(
-                || endpoint(&settings.source_reference, &meshes[0]),
-                || endpoint(&settings.target_reference, &meshes[total - 1]),
+                || endpoint(&settings.source_reference, &settings.source_solid, &indexes[0]),
+                || endpoint(&settings.target_reference, &settings.target_solid, &indexes[total - 1]),
             )
         },
     );

@@ -13,7 +13,8 @@
 //! are scaled back in `f64`.
 
 use super::bvh::TriangleBvh;
-use crate::TriMesh;
+use super::trimesh::unit_scale;
+use crate::{Aabb, TriMesh};
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -63,32 +64,152 @@ pub enum DistanceError {
 /// assert!((d.mean - 0.05).abs() < 0.005 && (d.hausdorff - 0.05).abs() < 0.01);
 /// ```
 pub fn surface_distance(a: &TriMesh, b: &TriMesh, samples: usize) -> Result<SurfaceDistance, DistanceError> {
-    a.validate()?;
-    b.validate()?;
-    let scale = a.unit_scale().min(b.unit_scale());
-    let (a, b) = (&a.scaled(scale), &b.scaled(scale));
-    let points_a = surface_samples(a, samples).ok_or(DistanceError::EmptySurface { which: "first" })?;
-    let points_b = surface_samples(b, samples).ok_or(DistanceError::EmptySurface { which: "second" })?;
-    let (sum_ab, sq_ab, max_ab) = one_sided(&points_a, &TriangleBvh::new(b));
-    let (sum_ba, sq_ba, max_ba) = one_sided(&points_b, &TriangleBvh::new(a));
-    let n = (points_a.len() + points_b.len()) as f64;
-    let unit = 1.0 / f64::from(scale);
-    Ok(SurfaceDistance {
-        mean: ((sum_ab + sum_ba) / n * unit) as f32,
-        rms: (((sq_ab + sq_ba) / n).sqrt() * unit) as f32,
-        hausdorff: (max_ab.max(max_ba) * unit) as f32,
-    })
+    let frame = a.bounds().union(&b.bounds());
+    let a = IndexedSurface::new(a, &frame)?;
+    let b = IndexedSurface::new(b, &frame)?;
+    a.distance_to(&b, samples)
 }
 
-/// Sum, sum of squares and maximum of the distances from `points` to `bvh`.
-fn one_sided(points: &[Vec3], bvh: &TriangleBvh) -> (f64, f64, f64) {
-    let mut closest = vec![None; points.len()];
-    bvh.closest_many(points, &mut closest);
-    closest
-        .par_iter()
-        .map(|c| c.map_or(0.0, |c| f64::from(c.distance_squared.max(0.0)).sqrt()))
-        .fold(|| (0.0, 0.0, 0.0f64), |(s, q, m), d| (s + d, q + d * d, m.max(d)))
-        .reduce(|| (0.0, 0.0, 0.0), |x, y| (x.0 + y.0, x.1 + y.1, x.2.max(y.2)))
+/// A surface indexed once for any number of distance measurements
+/// ([`IndexedSurface::distance_to`], [`IndexedSurface::distance_to_reference`]):
+/// its [`TriangleBvh`], built in the frame multiplied by the power of two
+/// that brings the coordinates of a given box near 1 (see the [module
+/// docs](self)). Index every surface that will be compared in the same box
+/// (e.g. the box of all of them), so that no point needs rescaling.
+#[derive(Debug, Clone)]
+pub struct IndexedSurface {
+    /// The mesh multiplied by `scale`.
+    mesh: TriMesh,
+    /// The tree over `mesh`.
+    bvh: TriangleBvh,
+    /// The power of two the world was multiplied by.
+    scale: f32,
+}
+
+/// Sum, sum of squares and maximum of one-sided distances, and their count.
+#[derive(Debug, Clone, Copy, Default)]
+struct Sums {
+    sum: f64,
+    squares: f64,
+    max: f64,
+    count: usize,
+}
+
+impl Sums {
+    /// The sums of `distances` (world units).
+    fn of(distances: impl ParallelIterator<Item = f64>) -> Sums {
+        distances
+            .fold(Sums::default, |s, d| Sums {
+                sum: s.sum + d,
+                squares: s.squares + d * d,
+                max: s.max.max(d),
+                count: s.count + 1,
+            })
+            .reduce(Sums::default, |x, y| Sums {
+                sum: x.sum + y.sum,
+                squares: x.squares + y.squares,
+                max: x.max.max(y.max),
+                count: x.count + y.count,
+            })
+    }
+
+    /// The two-sided figures of the two one-sided sums `self` and `other`.
+    fn both_ways(self, other: Sums) -> SurfaceDistance {
+        let n = (self.count + other.count).max(1) as f64;
+        SurfaceDistance {
+            mean: ((self.sum + other.sum) / n) as f32,
+            rms: ((self.squares + other.squares) / n).sqrt() as f32,
+            hausdorff: self.max.max(other.max) as f32,
+        }
+    }
+}
+
+impl IndexedSurface {
+    /// Indexes `mesh` for distances in the box `frame` (which picks the
+    /// scale of the computation; the mesh's own box is added to it).
+    ///
+    /// # Errors
+    /// [`DistanceError::Mesh`] for an invalid mesh.
+    pub fn new(mesh: &TriMesh, frame: &Aabb) -> Result<Self, DistanceError> {
+        mesh.validate()?;
+        let frame = frame.union(&mesh.bounds());
+        let magnitude =
+            if frame.is_empty() { 0.0 } else { frame.min.abs().max(frame.max.abs()).max_element() };
+        let scale = unit_scale(magnitude);
+        let mesh = mesh.scaled(scale);
+        Ok(Self { bvh: TriangleBvh::new(&mesh), mesh, scale })
+    }
+
+    /// Sums of the distances (world units) from `points`, given in this
+    /// index's scaled frame, to the surface.
+    fn sums(&self, points: &[Vec3]) -> Sums {
+        let mut closest = vec![None; points.len()];
+        self.bvh.closest_many(points, &mut closest);
+        let unit = 1.0 / f64::from(self.scale);
+        Sums::of(
+            closest
+                .par_iter()
+                .map(|c| c.map_or(0.0, |c| f64::from(c.distance_squared.max(0.0)).sqrt() * unit)),
+        )
+    }
+
+    /// `points` of another index's frame (scale `from`) in this one's.
+    fn rescaled(&self, points: Vec<Vec3>, from: f32) -> Vec<Vec3> {
+        if from == self.scale {
+            return points;
+        }
+        let ratio = self.scale / from;
+        points.into_iter().map(|p| p * ratio).collect()
+    }
+
+    /// Two-sided distance between this surface and `other`: `samples`
+    /// points on each (plus their vertices) measured against the other's
+    /// tree, as [`surface_distance`] does, without building either tree
+    /// again.
+    ///
+    /// # Errors
+    /// [`DistanceError::EmptySurface`] when either has zero area (`"first"`
+    /// is `self`).
+    pub fn distance_to(
+        &self,
+        other: &IndexedSurface,
+        samples: usize,
+    ) -> Result<SurfaceDistance, DistanceError> {
+        let here =
+            surface_samples(&self.mesh, samples).ok_or(DistanceError::EmptySurface { which: "first" })?;
+        let there =
+            surface_samples(&other.mesh, samples).ok_or(DistanceError::EmptySurface { which: "second" })?;
+        let outward = other.sums(&other.rescaled(here, self.scale));
+        Ok(outward.both_ways(self.sums(&self.rescaled(there, other.scale))))
+    }
+
+    /// Two-sided distance between this surface and a reference surface that
+    /// is known by points on it (`reference_points`, world units: e.g.
+    /// [`surface_samples`] of its mesh) and by its own unsigned distance
+    /// (`reference_distance`, world units, e.g. the exact distance of the
+    /// solid it bounds): `samples` points on this surface (plus its
+    /// vertices) measured by `reference_distance`, and every reference point
+    /// against this surface's tree.
+    ///
+    /// # Errors
+    /// [`DistanceError::EmptySurface`] when this surface has zero area
+    /// (`"first"`) or `reference_points` is empty (`"second"`).
+    pub fn distance_to_reference(
+        &self,
+        samples: usize,
+        reference_points: &[Vec3],
+        reference_distance: impl Fn(Vec3) -> f32 + Sync,
+    ) -> Result<SurfaceDistance, DistanceError> {
+        if reference_points.is_empty() {
+            return Err(DistanceError::EmptySurface { which: "second" });
+        }
+        let here =
+            surface_samples(&self.mesh, samples).ok_or(DistanceError::EmptySurface { which: "first" })?;
+        let unit = 1.0 / self.scale;
+        let outward = Sums::of(here.par_iter().map(|&p| f64::from(reference_distance(p * unit).abs())));
+        let inward = self.sums(&self.rescaled(reference_points.to_vec(), 1.0));
+        Ok(outward.both_ways(inward))
+    }
 }
 
 /// `count` area-uniform points on the surface of `mesh` followed by its
@@ -178,6 +299,32 @@ mod tests {
         assert!((ab.hausdorff - 2.0).abs() < 0.05, "{ab:?}");
         assert!((ab.hausdorff - ba.hausdorff).abs() < 1e-6);
         assert!(ab.mean > 0.4, "half of b's samples are on the far copy: {ab:?}");
+    }
+
+    #[test]
+    fn indexed_surfaces_measure_as_surface_distance_does() {
+        let (a, b) = (sphere(0.2, 32), sphere(0.3, 48));
+        let want = surface_distance(&a, &b, 1000).unwrap();
+        // Indexed in their own boxes (different scales) or in a shared one.
+        let far = Aabb::cube(300.0);
+        for (frame_a, frame_b) in [(a.bounds(), b.bounds()), (far, far), (a.bounds(), far)] {
+            let (ia, ib) =
+                (IndexedSurface::new(&a, &frame_a).unwrap(), IndexedSurface::new(&b, &frame_b).unwrap());
+            let got = ia.distance_to(&ib, 1000).unwrap();
+            assert!(
+                (got.mean - want.mean).abs() < 1e-6 && (got.hausdorff - want.hausdorff).abs() < 1e-6,
+                "{got:?}"
+            );
+        }
+        // Against the exact sphere: its points and its distance.
+        let exact = IndexedSurface::new(&a, &a.bounds())
+            .unwrap()
+            .distance_to_reference(1000, &surface_samples(&b, 1000).unwrap(), |p| (p.length() - 0.3).abs())
+            .unwrap();
+        assert!((exact.mean - want.mean).abs() < 1e-3, "{exact:?} vs {want:?}");
+        assert!((exact.hausdorff - 0.1).abs() < 3e-3 && exact.hausdorff >= 0.1 - 1e-3, "{exact:?}");
+        let empty = IndexedSurface::new(&a, &a.bounds()).unwrap().distance_to_reference(10, &[], |_| 0.0);
+        assert_eq!(empty, Err(DistanceError::EmptySurface { which: "second" }));
     }
 
     #[test]
