@@ -40,7 +40,10 @@ pub struct EvolveSettings {
     /// Iteration cap.
     pub max_iterations: usize,
     /// Stop when the RMS target distance at the surface falls below this
-    /// (voxels).
+    /// (voxels). The default, 0.003, lets the last iterations settle the
+    /// points that joined the active set on the way in: the converged
+    /// surface then lies within the grid's own polygonization floor of the
+    /// target (figures in `docs/EXPERIMENTS.md`).
     pub rms_distance: f32,
     /// Stop when the RMS change per iteration falls below this (voxels).
     pub rms_change: f32,
@@ -49,8 +52,8 @@ pub struct EvolveSettings {
     /// speed is a distance, which changes by one voxel per voxel moved along
     /// the normal: explicit Euler on that relaxation overshoots for steps
     /// above 1 and oscillates for steps above 2. The default, 1, converges
-    /// monotonically (measured: max surface error 0.03 voxel on the
-    /// reference case at 128³, against 0.29 voxel with an unbounded step).
+    /// monotonically (an unbounded step left the reference case's surface
+    /// 0.29 voxel off the torus; see `docs/EXPERIMENTS.md`).
     pub max_time_step: f32,
     /// Which intermediate frames to keep (the first and last always are).
     pub frames: FrameSchedule,
@@ -78,7 +81,7 @@ impl Default for EvolveSettings {
         Self {
             solver: SolverKind::SparseField,
             max_iterations: 5000,
-            rms_distance: 0.01,
+            rms_distance: 0.003,
             rms_change: 1e-4,
             max_time_step: 1.0,
             frames: FrameSchedule::EveryIterations(10),

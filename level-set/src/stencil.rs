@@ -33,6 +33,11 @@ impl Lattice {
         self.dims
     }
 
+    /// Index steps between neighbours along x, y and z.
+    pub(crate) fn strides(&self) -> [usize; 3] {
+        self.strides
+    }
+
     /// Integer coordinates of node `n`.
     pub(crate) fn coords(&self, n: usize) -> [usize; 3] {
         let x = n % self.dims[0];
