@@ -19,6 +19,8 @@
 
 use crate::GridError;
 use glam::UVec3;
+use rayon::prelude::*;
+use std::fmt::Debug;
 use std::ops::{Index, IndexMut};
 
 /// Nodes along each edge of a brick.
@@ -157,8 +159,7 @@ impl<T: Copy + PartialEq> Bricks<T> {
 
     /// The first node (lowest `(i, j, k)`) of `brick`.
     pub fn brick_origin(&self, brick: usize) -> UVec3 {
-        let (bx, by) = (self.bricks.x as usize, self.bricks.y as usize);
-        UVec3::new((brick % bx) as u32, ((brick / bx) % by) as u32, (brick / (bx * by)) as u32) << SHIFT
+        origin_of(self.bricks, brick)
     }
 
     /// Whether `brick` holds values of its own.
@@ -286,6 +287,120 @@ impl<T: Copy + PartialEq> IndexMut<usize> for Bricks<T> {
     }
 }
 
+/// The first node of `brick` among `bricks` bricks per axis.
+fn origin_of(bricks: UVec3, brick: usize) -> UVec3 {
+    let (bx, by) = (bricks.x as usize, bricks.y as usize);
+    UVec3::new((brick % bx) as u32, ((brick / bx) % by) as u32, (brick / (bx * by)) as u32) << SHIFT
+}
+
+/// Per-node storage of an x-fastest lattice, addressed by linear node
+/// index: dense (`Vec<T>`, a value per node) or sparse ([`Bricks`], values
+/// only near a given set of nodes). Lets an algorithm written against node
+/// indices (a sparse-field level set) run on either, with equal results.
+pub trait NodeStore<T>: IndexMut<usize, Output = T> + Clone + Debug + Send + Sync {
+    /// A store of `dims` nodes in which node `n` reads `values[1]` (inside)
+    /// when `is_inside(n)`, `values[0]` (outside) otherwise. A sparse store
+    /// allocates only the bricks within `reach` nodes (per axis) of a node
+    /// of `near` (linear indices) and gives every other brick the side of
+    /// its first node: the caller guarantees such bricks lie on one side.
+    ///
+    /// # Errors
+    /// [`GridError::TooSmall`] for a zero dimension, [`GridError::TooLarge`]
+    /// over the memory limit.
+    fn by_side(
+        dims: UVec3,
+        is_inside: impl Fn(usize) -> bool + Sync,
+        near: &[u32],
+        reach: u32,
+        values: [T; 2],
+    ) -> Result<Self, GridError>
+    where
+        Self: Sized;
+
+    /// Heap bytes held.
+    fn heap_bytes(&self) -> usize;
+}
+
+impl<T: Copy + Debug + Send + Sync> NodeStore<T> for Vec<T> {
+    fn by_side(
+        dims: UVec3,
+        is_inside: impl Fn(usize) -> bool + Sync,
+        _near: &[u32],
+        _reach: u32,
+        values: [T; 2],
+    ) -> Result<Self, GridError> {
+        if dims.min_element() == 0 {
+            return Err(GridError::TooSmall { dims, min: 1 });
+        }
+        let len = dims.as_u64vec3().element_product() as usize;
+        let requested = len.saturating_mul(size_of::<T>());
+        let limit = crate::memory_limit();
+        if requested > limit {
+            return Err(GridError::TooLarge { dims, requested, limit });
+        }
+        Ok((0..len).into_par_iter().map(|n| values[usize::from(is_inside(n))]).collect())
+    }
+
+    fn heap_bytes(&self) -> usize {
+        self.capacity() * size_of::<T>()
+    }
+}
+
+impl<T: Copy + PartialEq + Debug + Send + Sync> NodeStore<T> for Bricks<T> {
+    fn by_side(
+        dims: UVec3,
+        is_inside: impl Fn(usize) -> bool + Sync,
+        near: &[u32],
+        reach: u32,
+        values: [T; 2],
+    ) -> Result<Self, GridError> {
+        let mut grid = Bricks::new(dims, values[0], values[1])?;
+        let mut marked = vec![false; grid.brick_count()];
+        let last = dims - UVec3::ONE;
+        let (bx, by) = (grid.bricks.x as usize, grid.bricks.y as usize);
+        for &n in near {
+            let c = grid.coords(n as usize);
+            let lo = c.saturating_sub(UVec3::splat(reach)) >> SHIFT;
+            let hi = (c + UVec3::splat(reach)).min(last) >> SHIFT;
+            for k in lo.z..=hi.z {
+                for j in lo.y..=hi.y {
+                    for i in lo.x..=hi.x {
+                        marked[i as usize + bx * (j as usize + by * k as usize)] = true;
+                    }
+                }
+            }
+        }
+        for (brick, &keep) in marked.iter().enumerate() {
+            if keep {
+                grid.allocate(brick);
+            } else {
+                let first = grid.linear(grid.brick_origin(brick));
+                grid.set_background(brick, is_inside(first));
+            }
+        }
+        // Every node of an allocated brick by its own side, bricks in parallel.
+        let (bricks, nx, nxy) = (grid.bricks, dims.x as usize, dims.x as usize * dims.y as usize);
+        let Bricks { data, owners, .. } = &mut grid;
+        data.par_chunks_mut(BRICK_NODES).zip(owners.par_iter()).for_each(|(chunk, owner)| {
+            let Some(brick) = owner.map(|b| b as usize) else { return };
+            let origin = origin_of(bricks, brick);
+            for (local, v) in chunk.iter_mut().enumerate() {
+                let l = local as u32;
+                let c = origin + UVec3::new(l & (BRICK - 1), (l >> SHIFT) & (BRICK - 1), l >> (2 * SHIFT));
+                if c.cmple(last).all() {
+                    let n = c.x as usize + nx * c.y as usize + nxy * c.z as usize;
+                    *v = values[usize::from(is_inside(n))];
+                }
+            }
+        });
+        Ok(grid)
+    }
+
+    fn heap_bytes(&self) -> usize {
+        Bricks::heap_bytes(self)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -360,6 +475,26 @@ mod tests {
         assert_eq!(g[0], 1);
         assert_eq!(g[far], 9);
         assert_eq!(g.brick_origin(g.brick_of(far)), UVec3::splat(8));
+    }
+
+    /// Built by side around a sphere's surface nodes, the bricked store reads
+    /// as the dense one at every node while allocating a fraction of the
+    /// bricks.
+    #[test]
+    fn by_side_equals_the_dense_store() {
+        let dims = UVec3::new(64, 61, 70);
+        let r = |n: usize| {
+            let c =
+                Bricks::new(dims, 0u8, 0).unwrap().coords(n).as_vec3() - glam::Vec3::new(30.0, 27.0, 33.0);
+            c.length() - 12.0
+        };
+        let near: Vec<u32> = (0..(64 * 61 * 70)).filter(|&n| r(n).abs() < 1.0).map(|n| n as u32).collect();
+        let inside = |n: usize| r(n) < 0.0;
+        let dense = <Vec<i8> as NodeStore<i8>>::by_side(dims, inside, &near, 3, [-3, 3]).unwrap();
+        let sparse = <Bricks<i8> as NodeStore<i8>>::by_side(dims, inside, &near, 3, [-3, 3]).unwrap();
+        assert!((0..dense.len()).all(|n| dense[n] == sparse[n]));
+        assert!(sparse.allocated() < sparse.brick_count() / 3, "{} bricks", sparse.allocated());
+        assert!(NodeStore::heap_bytes(&sparse) < NodeStore::heap_bytes(&dense));
     }
 
     #[test]

@@ -81,7 +81,7 @@ mod solid;
 mod transform;
 
 pub use aabb::Aabb;
-pub use bricks::{BRICK, Bricks};
+pub use bricks::{BRICK, Bricks, NodeStore};
 pub use control::{CancelToken, Control, Progress};
 pub use field::{Bounded, Field3, GRADIENT_STEP};
 pub use glam;
