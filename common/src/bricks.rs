@@ -370,6 +370,9 @@ impl<T: Copy + PartialEq + Debug + Send + Sync> NodeStore<T> for Bricks<T> {
                 }
             }
         }
+        let count = marked.iter().filter(|&&m| m).count();
+        grid.data.reserve_exact(count * BRICK_NODES);
+        grid.owners.reserve_exact(count);
         for (brick, &keep) in marked.iter().enumerate() {
             if keep {
                 grid.allocate(brick);

@@ -64,10 +64,6 @@ impl Solver for DenseSolver {
         }
     }
 
-    fn embedding(&self) -> &[f32] {
-        &self.u
-    }
-
     fn capture(&self, iteration: usize, time: f64) -> BandFrame {
         BandFrame::capture(&self.u, &self.lattice, iteration, time)
     }

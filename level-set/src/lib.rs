@@ -105,6 +105,15 @@ fn initial_embedding(
     source: &Grid3<f32>,
     bytes_per_node: usize,
 ) -> Result<(Lattice, Vec<f32>), LevelSetError> {
+    let lattice = check_source(source, bytes_per_node)?;
+    let inv_h = 1.0 / source.spacing();
+    Ok((lattice, source.data().iter().map(|&d| d * inv_h).collect()))
+}
+
+/// Checks a source distance grid: at least 3 nodes per axis,
+/// `bytes_per_node` of solver state per node within the memory limit,
+/// finite values, and a sign change (in voxel units, as the solvers see it).
+fn check_source(source: &Grid3<f32>, bytes_per_node: usize) -> Result<Lattice, LevelSetError> {
     let dims = source.dims();
     if dims.min_element() < 3 {
         return Err(GridError::TooSmall { dims, min: 3 }.into());
@@ -118,10 +127,9 @@ fn initial_embedding(
         return Err(LevelSetError::NonFinite { what: "source", node });
     }
     let inv_h = 1.0 / source.spacing();
-    let u: Vec<f32> = source.data().iter().map(|&d| d * inv_h).collect();
-    let lattice = Lattice::new(dims);
-    if !u.iter().any(|&v| v > 0.0) || u.iter().all(|&v| v > 0.0) {
+    let inside = |&d: &f32| d * inv_h > 0.0;
+    if !source.data().iter().any(inside) || source.data().iter().all(inside) {
         return Err(LevelSetError::NoSurface("source"));
     }
-    Ok((lattice, u))
+    Ok(Lattice::new(dims))
 }

@@ -63,7 +63,7 @@
 use crate::solver::{Curvature, Solver, StepParams, StepStats, node_rate, stable_time_step};
 use crate::stencil::{Lattice, speed_at_zero_crossing};
 use crate::{BandFrame, LevelSetError, SpeedGrid};
-use isomorph_common::Grid3;
+use isomorph_common::{Bricks, Grid3, NodeStore};
 use rayon::prelude::*;
 
 /// Number of layers on each side of the active set.
@@ -88,12 +88,16 @@ const ACTIVE_MAX: f32 = 0.5;
 /// (without the margin the reference case stalls short of convergence).
 const LEAVE_MAX: f32 = ACTIVE_MAX + 0.05;
 
-/// The sparse-field level-set solver.
+/// The sparse-field level-set solver, with its per-node embedding `U` and
+/// layer status `S` kept in a [`NodeStore`]: by default sparse
+/// ([`Bricks`]: values only in the bricks the band occupies or has
+/// crossed, the far side elsewhere, so memory grows with the surface), or
+/// dense (`Vec`, a value per node; the same results).
 #[derive(Debug, Clone)]
-pub struct SparseFieldSolver {
+pub struct SparseFieldSolver<U = Bricks<f32>, S = Bricks<i8>> {
     lattice: Lattice,
-    u: Vec<f32>,
-    status: Vec<i8>,
+    u: U,
+    status: S,
     /// Layer lists `L−2 … L+2` at index `ℓ + 2`; entries whose status no
     /// longer matches are dropped at the end of each iteration.
     layers: [Vec<u32>; 5],
@@ -114,32 +118,52 @@ fn slot(layer: i8) -> usize {
 
 impl SparseFieldSolver {
     /// Builds the active set and layers from the source's signed distance
-    /// grid (world units, positive inside).
+    /// grid (world units, positive inside), with the embedding and status
+    /// in bricks: see [`Self::with_storage`].
+    ///
+    /// # Errors
+    /// As [`Self::with_storage`].
+    pub fn new(source: &Grid3<f32>) -> Result<Self, LevelSetError> {
+        Self::with_storage(source)
+    }
+}
+
+impl<U: NodeStore<f32>, S: NodeStore<i8>> SparseFieldSolver<U, S> {
+    /// Builds the active set and layers from the source's signed distance
+    /// grid (world units, positive inside), keeping the embedding in `U`
+    /// and the status in `S`.
     ///
     /// The active set is, for every grid edge the zero set crosses, the end
     /// closer to it (and every node within half a voxel of it); values are
     /// clamped to `[−½, ½]`, and the layers are then filled as in step 4.
+    /// A sparse store holds values only in the bricks within two nodes of
+    /// the active set; every other brick lies on one side of the surface.
     ///
     /// # Errors
     /// [`LevelSetError::NonFinite`], [`MorphError::Grid`](isomorph_common::MorphError::Grid) (fewer than 3 nodes per axis, or over the memory limit),
     /// [`LevelSetError::NoSurface`] for a source without a sign change.
-    pub fn new(source: &Grid3<f32>) -> Result<Self, LevelSetError> {
-        // The embedding and the status byte per node.
-        let (lattice, mut u) = crate::initial_embedding(source, 5)?;
-        let active: Vec<u32> = (0..u.len())
+    pub fn with_storage(source: &Grid3<f32>) -> Result<Self, LevelSetError> {
+        let lattice = crate::check_source(source, 0)?;
+        let (d, inv_h) = (source.data(), 1.0 / source.spacing());
+        let value = |n: usize| d[n] * inv_h;
+        let active: Vec<u32> = (0..d.len())
             .into_par_iter()
             .filter(|&n| {
-                let inside = u[n] > 0.0;
+                let (un, inside) = (value(n), value(n) > 0.0);
                 lattice.neighbours(n).iter().flatten().any(|&m| {
-                    (u[m] > 0.0) != inside && (u[n].abs() <= u[m].abs() || u[n].abs() <= ACTIVE_MAX)
+                    let um = value(m);
+                    (um > 0.0) != inside && (un.abs() <= um.abs() || un.abs() <= ACTIVE_MAX)
                 })
             })
             .map(|n| n as u32)
             .collect();
-        let mut status: Vec<i8> = u.iter().map(|&v| if v > 0.0 { FAR_IN } else { FAR_OUT }).collect();
+        let inside = |n: usize| value(n) > 0.0;
+        let reach = LAYERS as u32;
+        let mut u = U::by_side(source.dims(), inside, &active, reach, [-FAR_VALUE, FAR_VALUE])?;
+        let mut status = S::by_side(source.dims(), inside, &active, reach, [FAR_OUT, FAR_IN])?;
         for &n in &active {
             status[n as usize] = 0;
-            u[n as usize] = u[n as usize].clamp(-ACTIVE_MAX, ACTIVE_MAX);
+            u[n as usize] = value(n as usize).clamp(-ACTIVE_MAX, ACTIVE_MAX);
         }
         let mut solver = Self {
             lattice,
@@ -151,7 +175,7 @@ impl SparseFieldSolver {
             distances: Vec::new(),
         };
         solver.layers[slot(0)] = active;
-        // Grow the layers outwards from the active set.
+        // Grow the layers outwards from the active set, with the source's values.
         for layer in 1..=LAYERS {
             for side in [1i8, -1] {
                 let inner = side * (layer - 1);
@@ -161,6 +185,7 @@ impl SparseFieldSolver {
                     for m in solver.lattice.neighbours(n as usize).into_iter().flatten() {
                         if solver.status[m] == far {
                             solver.status[m] = side * layer;
+                            solver.u[m] = value(m);
                             grown.push(m as u32);
                         }
                     }
@@ -168,16 +193,20 @@ impl SparseFieldSolver {
                 solver.layers[slot(side * layer)] = grown;
             }
         }
-        for u in solver.u.iter_mut().zip(&solver.status) {
-            match *u.1 {
-                FAR_IN => *u.0 = FAR_VALUE,
-                FAR_OUT => *u.0 = -FAR_VALUE,
-                _ => {}
-            }
-        }
         solver.propagate_layer_values();
         solver.compact();
         Ok(solver)
+    }
+
+    /// Heap bytes of the solver's state: the embedding and status stores,
+    /// the layer lists and the per-iteration buffers.
+    pub fn heap_bytes(&self) -> usize {
+        let lists: usize = self.layers.iter().map(Vec::capacity).sum();
+        self.u.heap_bytes()
+            + self.status.heap_bytes()
+            + lists * size_of::<u32>()
+            + self.rates.capacity() * size_of::<(f32, f32, f32)>()
+            + self.distances.capacity() * size_of::<Option<f32>>()
     }
 
     /// Number of points in the active set `L0`.
@@ -507,7 +536,7 @@ fn merge_sorted(a: &[u32], b: &[u32]) -> Vec<u32> {
     out
 }
 
-impl Solver for SparseFieldSolver {
+impl<U: NodeStore<f32>, S: NodeStore<i8>> Solver for SparseFieldSolver<U, S> {
     fn step(&mut self, speed: &SpeedGrid, params: &StepParams) -> StepStats {
         self.compute_rates(speed, params.curvature);
         let max_gamma = self.rates.iter().fold(0.0f32, |m, r| m.max(r.1.abs()));
@@ -523,10 +552,6 @@ impl Solver for SparseFieldSolver {
         stats
     }
 
-    fn embedding(&self) -> &[f32] {
-        &self.u
-    }
-
     /// From the layer lists: every node with a face neighbour of the other
     /// sign is in `L−1`, `L0` or `L+1` (positive nodes are in `L0` or
     /// above, negative ones in `L0` or below, and face neighbours' layers
@@ -540,7 +565,69 @@ impl Solver for SparseFieldSolver {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use isomorph_common::{Aabb, Shape};
+    use isomorph_common::glam::Vec3;
+    use isomorph_common::mesh::primitives;
+    use isomorph_common::{Aabb, Control, Shape, Solid};
+    use std::ops::Index;
+
+    /// The values of a store at every node.
+    fn dense<T: Copy>(store: &impl Index<usize, Output = T>, len: usize) -> Vec<T> {
+        (0..len).map(|n| store[n]).collect()
+    }
+
+    /// The bricked solver's frames are bitwise those of the dense one at
+    /// every iteration (analytic sphere → torus at 32³ and 48³, and meshes:
+    /// a polygonal sphere into a polygonal torus at 40³), and so are its
+    /// embedding and status at every node at the end.
+    #[test]
+    fn bricked_storage_equals_dense_storage() {
+        let control = Control::new();
+        let mesh_case = || {
+            let (from, to) = (
+                Solid::mesh(primitives::uv_sphere(Vec3::new(0.02, -0.01, 0.0), 0.3, 24, 32)).unwrap(),
+                Solid::mesh(primitives::torus(0.3, 0.12, 48, 24)).unwrap(),
+            );
+            let bounds = Aabb::cube(0.5);
+            let source = from.distance_volume(&bounds, 40, &control).unwrap();
+            let target = to.distance_volume(&bounds, 40, &control).unwrap();
+            (source, SpeedGrid::from_grid(&target, crate::Response::Identity).unwrap())
+        };
+        let analytic = |n: u32| {
+            let source = Grid3::sample_box(&Shape::sphere(0.3), &Aabb::cube(0.5), n).unwrap();
+            let speed =
+                SpeedGrid::sample(&source, &Shape::torus(0.3, 0.12), |x| x, crate::Response::Identity)
+                    .unwrap();
+            (source, speed)
+        };
+        for (source, speed) in [analytic(32), analytic(48), mesh_case()] {
+            let mut bricked = SparseFieldSolver::new(&source).unwrap();
+            let mut flat = SparseFieldSolver::<Vec<f32>, Vec<i8>>::with_storage(&source).unwrap();
+            let params = StepParams::default();
+            for i in 0..150 {
+                if i > 0 {
+                    assert_eq!(bricked.step(&speed, &params), flat.step(&speed, &params), "iteration {i}");
+                }
+                assert_eq!(bricked.capture(i, 0.0), flat.capture(i, 0.0), "iteration {i}");
+            }
+            let len = source.len();
+            assert_eq!(dense(&bricked.u, len), flat.u);
+            assert_eq!(dense(&bricked.status, len), flat.status);
+        }
+    }
+
+    /// At 256³ the bricked state of the reference case's source (layer lists
+    /// included) takes under a fifth of the dense arrays' 5 bytes per node.
+    #[test]
+    fn bricked_state_is_far_under_dense_at_256() {
+        let source = Grid3::sample_box(&Shape::sphere(0.3), &Aabb::cube(0.5), 256).unwrap();
+        let solver = SparseFieldSolver::new(&source).unwrap();
+        let dense_bytes = 5 * source.len();
+        assert!(
+            solver.heap_bytes() * 5 < dense_bytes,
+            "{} bytes bricked against {dense_bytes} dense",
+            solver.heap_bytes()
+        );
+    }
 
     /// A planar front `u = d − n·x` (unit `n`, positive components): from
     /// its exact values one step (first order) or two steps (second order)
@@ -634,7 +721,8 @@ mod tests {
                     solver.step(&speed, &StepParams::default());
                 }
                 let fast = solver.capture(i, 0.5);
-                assert_eq!(fast, BandFrame::capture(&solver.u, &solver.lattice, i, 0.5), "iteration {i}");
+                let u = dense(&solver.u, solver.lattice.len());
+                assert_eq!(fast, BandFrame::capture(&u, &solver.lattice, i, 0.5), "iteration {i}");
             }
         }
     }
@@ -654,7 +742,8 @@ mod tests {
             }
             // Every node of a layer status is on its list.
             let on_lists: usize = solver.layers.iter().map(Vec::len).sum();
-            let with_status = solver.status.iter().filter(|&&s| (-LAYERS..=LAYERS).contains(&s)).count();
+            let with_status =
+                (0..solver.lattice.len()).filter(|&n| (-LAYERS..=LAYERS).contains(&solver.status[n])).count();
             assert_eq!(on_lists, with_status);
         }
     }
