@@ -249,6 +249,17 @@ impl<T: Copy + PartialEq> Bricks<T> {
         })
     }
 
+    /// Allocates `brick` if needed and sets its values (nodes x-fastest
+    /// within the brick; `BRICK³` of them, including any past the grid's
+    /// dims in an edge brick).
+    ///
+    /// # Panics
+    /// If `values` does not hold `BRICK³` values.
+    pub fn fill_brick(&mut self, brick: usize, values: &[T]) {
+        let slot = self.allocate(brick);
+        self.data[slot * BRICK_NODES..(slot + 1) * BRICK_NODES].copy_from_slice(values);
+    }
+
     /// The allocated bricks (brick index), in slot order.
     pub fn allocated_bricks(&self) -> impl Iterator<Item = usize> + '_ {
         self.owners.iter().filter_map(|o| o.map(|b| b as usize))

@@ -33,11 +33,11 @@ impl DenseSolver {
 
 impl Solver for DenseSolver {
     fn step(&mut self, speed: &SpeedGrid, params: &StepParams) -> StepStats {
-        let (lattice, u, v) = (&self.lattice, &self.u, speed.values());
+        let (lattice, u, v) = (&self.lattice, &self.u, speed.reader());
         let h = speed.spacing();
         // Steps 4a–d: up-wind change per node into a separate volume.
         self.change.par_iter_mut().enumerate().for_each(|(n, c)| {
-            *c = node_rate(lattice, u, n, v[n], h, params.curvature).0;
+            *c = node_rate(lattice, u, n, v.node(n), h, params.curvature).0;
         });
         // Step 5: eq. 24 (λ ≤ 1, so the largest target speed bounds the
         // distance term with or without curvature).

@@ -93,7 +93,7 @@ pub use evolution::{
 pub use placement::{Placement, Warp};
 pub use solver::{Curvature, Solver, StepParams, StepStats};
 pub use sparse_field::SparseFieldSolver;
-pub use speed::{Response, SpeedGrid};
+pub use speed::{Response, SpeedGrid, SpeedSampler};
 
 use isomorph_common::{Grid3, GridError};
 use stencil::Lattice;

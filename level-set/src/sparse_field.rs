@@ -61,8 +61,9 @@
 //! grows with the surface area, not the volume.
 
 use crate::solver::{Curvature, Solver, StepParams, StepStats, node_rate, stable_time_step};
-use crate::stencil::{Lattice, speed_at_zero_crossing};
+use crate::stencil::{Lattice, zero_crossing};
 use crate::{BandFrame, LevelSetError, SpeedGrid};
+use isomorph_common::glam::Vec3;
 use isomorph_common::{Bricks, Grid3, NodeStore};
 use rayon::prelude::*;
 
@@ -110,6 +111,9 @@ pub struct SparseFieldSolver<U = Bricks<f32>, S = Bricks<i8>> {
     /// Per point of the layer list being updated: its distance from the
     /// surface, `None` without an inner neighbour.
     distances: Vec<Option<f32>>,
+    /// Per active point: its nearest zero crossing (voxel coordinates) in
+    /// the current step.
+    crossings: Vec<Vec3>,
 }
 
 fn slot(layer: i8) -> usize {
@@ -173,6 +177,7 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> SparseFieldSolver<U, S> {
             sorted: [0; 5],
             rates: Vec::new(),
             distances: Vec::new(),
+            crossings: Vec::new(),
         };
         solver.layers[slot(0)] = active;
         // Grow the layers outwards from the active set, with the source's values.
@@ -207,6 +212,7 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> SparseFieldSolver<U, S> {
             + lists * size_of::<u32>()
             + self.rates.capacity() * size_of::<(f32, f32, f32)>()
             + self.distances.capacity() * size_of::<Option<f32>>()
+            + self.crossings.capacity() * size_of::<Vec3>()
     }
 
     /// Number of points in the active set `L0`.
@@ -223,11 +229,20 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> SparseFieldSolver<U, S> {
     /// its nearest zero crossing.
     fn compute_rates(&mut self, speed: &SpeedGrid, curvature: Option<Curvature>) {
         let (lattice, u, h) = (&self.lattice, &self.u, speed.spacing());
-        self.layers[slot(0)]
+        let active = &self.layers[slot(0)];
+        active
             .par_iter()
-            .map(|&n| {
+            .map(|&n| zero_crossing(lattice, u, n as usize))
+            .collect_into_vec(&mut self.crossings);
+        // A lazy speed fills the bricks the crossings read, then is read without locking per point.
+        speed.prepare(&self.crossings);
+        let speeds = speed.reader();
+        active
+            .par_iter()
+            .zip(&self.crossings)
+            .map(|(&n, &x)| {
                 let n = n as usize;
-                let d = speed_at_zero_crossing(lattice, u, speed, n);
+                let d = speeds.at_voxel(x);
                 let (rate, gamma) = node_rate(lattice, u, n, d, h, curvature);
                 (rate, gamma, d)
             })
@@ -567,7 +582,7 @@ mod tests {
     use super::*;
     use isomorph_common::glam::Vec3;
     use isomorph_common::mesh::primitives;
-    use isomorph_common::{Aabb, Control, Shape, Solid};
+    use isomorph_common::{Aabb, Control, Field3, Shape, Solid};
     use std::ops::Index;
 
     /// The values of a store at every node.
@@ -613,6 +628,29 @@ mod tests {
             assert_eq!(dense(&bricked.u, len), flat.u);
             assert_eq!(dense(&bricked.status, len), flat.status);
         }
+    }
+
+    /// A lazy speed (bricks computed where the band goes) gives the frames
+    /// of the speed sampled at every node, bitwise, at every iteration, while
+    /// storing a part of it.
+    #[test]
+    fn lazy_speed_equals_the_sampled_speed() {
+        let source = Grid3::sample_box(&Shape::sphere(0.3), &Aabb::cube(0.5), 48).unwrap();
+        let torus = Shape::torus(0.3, 0.12);
+        let sampled = SpeedGrid::sample(&source, &torus, |x| x, crate::Response::Identity).unwrap();
+        let inv_h = 1.0 / source.spacing();
+        let sampler: crate::SpeedSampler = std::sync::Arc::new(move |x| torus.value(x) * inv_h);
+        let lazy = SpeedGrid::lazy(source.dims(), source.origin(), source.spacing(), sampler).unwrap();
+        assert_eq!(lazy.max_abs(), sampled.max_abs());
+        let (mut a, mut b) =
+            (SparseFieldSolver::new(&source).unwrap(), SparseFieldSolver::new(&source).unwrap());
+        let params = StepParams::default();
+        for i in 1..150 {
+            assert_eq!(a.step(&sampled, &params), b.step(&lazy, &params), "iteration {i}");
+            assert_eq!(a.capture(i, 0.0), b.capture(i, 0.0), "iteration {i}");
+        }
+        assert!(lazy.heap_bytes() < sampled.heap_bytes(), "{} bytes", lazy.heap_bytes());
+        assert!((0..source.len()).all(|n| lazy.node_value(n) == sampled.node_value(n)));
     }
 
     /// At 256³ the bricked state of the reference case's source (layer lists

@@ -181,6 +181,13 @@ pub(crate) fn speed_at_zero_crossing(
     speed: &SpeedGrid,
     n: usize,
 ) -> f32 {
+    speed.at_voxel(zero_crossing(lattice, u, n))
+}
+
+/// The zero crossing nearest to node `n` (voxel coordinates): one Newton
+/// step along the central-difference gradient, `x' = x − u ∇u / |∇u|²`
+/// (the node itself where the gradient vanishes).
+pub(crate) fn zero_crossing(lattice: &Lattice, u: &(impl Values + ?Sized), n: usize) -> Vec3 {
     let grad = lattice.central_gradient(u, n);
     let [i, j, k] = lattice.coords(n);
     let mut x = Vec3::new(i as f32, j as f32, k as f32);
@@ -188,7 +195,7 @@ pub(crate) fn speed_at_zero_crossing(
     if g2 > 1e-12 {
         x -= u[n] * grad / g2;
     }
-    speed.at_voxel(x)
+    x
 }
 
 #[cfg(test)]
