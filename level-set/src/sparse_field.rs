@@ -63,8 +63,8 @@
 use crate::solver::{Curvature, Solver, StepParams, StepStats, node_rate, stable_time_step};
 use crate::stencil::{Lattice, zero_crossing};
 use crate::{BandFrame, LevelSetError, SpeedGrid};
-use isomorph_common::glam::Vec3;
-use isomorph_common::{Bricks, Grid3, NodeStore};
+use isomorph_common::glam::{UVec3, Vec3};
+use isomorph_common::{BRICK, Bricks, Field3, Grid3, GridError, NodeStore};
 use rayon::prelude::*;
 
 /// Number of layers on each side of the active set.
@@ -130,6 +130,45 @@ impl SparseFieldSolver {
     pub fn new(source: &Grid3<f32>) -> Result<Self, LevelSetError> {
         Self::with_storage(source)
     }
+
+    /// Builds the active set and layers from the source's signed distance
+    /// `field` (world units, positive inside; changing by at most the
+    /// distance moved, as an exact distance does) on the lattice of `dims`
+    /// nodes at `origin` with `spacing`, without a dense grid: the field is
+    /// sampled in a narrow band of bricks ([`Bricks::sample_band`]) and
+    /// only its side is kept elsewhere. The result equals
+    /// [`Self::with_storage`] of the dense sample of `field`.
+    ///
+    /// # Errors
+    /// [`LevelSetError::NonFinite`] for a NaN or infinite value in the band,
+    /// [`MorphError::Grid`](isomorph_common::MorphError::Grid) for fewer than 3 nodes per axis, a node
+    /// count over `u32`, or over the memory limit, [`LevelSetError::NoSurface`]
+    /// without a sign change.
+    pub fn from_field<F: Field3 + ?Sized>(
+        field: &F,
+        dims: UVec3,
+        origin: Vec3,
+        spacing: f32,
+    ) -> Result<Self, LevelSetError> {
+        if dims.min_element() < 3 {
+            return Err(GridError::TooSmall { dims, min: 3 }.into());
+        }
+        // The layers lie within LAYERS + 1 voxels of the surface; one more for rounding.
+        let band = Bricks::sample_band(field, dims, origin, spacing, (f32::from(LAYERS) + 2.0) * spacing)?;
+        let side = BRICK as usize;
+        for brick in band.allocated_bricks() {
+            let first = band.brick_origin(brick);
+            for (l, v) in band.brick_values(brick).unwrap_or_default().iter().enumerate() {
+                let c = first
+                    + UVec3::new((l % side) as u32, ((l / side) % side) as u32, (l / (side * side)) as u32);
+                if !v.is_finite() && c.cmplt(dims).all() {
+                    return Err(LevelSetError::NonFinite { what: "source", node: band.linear(c) });
+                }
+            }
+        }
+        let inv_h = 1.0 / spacing;
+        Self::build(dims, |n| band[n] * inv_h)
+    }
 }
 
 impl<U: NodeStore<f32>, S: NodeStore<i8>> SparseFieldSolver<U, S> {
@@ -147,10 +186,16 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> SparseFieldSolver<U, S> {
     /// [`LevelSetError::NonFinite`], [`MorphError::Grid`](isomorph_common::MorphError::Grid) (fewer than 3 nodes per axis, or over the memory limit),
     /// [`LevelSetError::NoSurface`] for a source without a sign change.
     pub fn with_storage(source: &Grid3<f32>) -> Result<Self, LevelSetError> {
-        let lattice = crate::check_source(source, 0)?;
+        crate::check_source(source, 0)?;
         let (d, inv_h) = (source.data(), 1.0 / source.spacing());
-        let value = |n: usize| d[n] * inv_h;
-        let active: Vec<u32> = (0..d.len())
+        Self::build(source.dims(), |n| d[n] * inv_h)
+    }
+
+    /// The solver for the source values `value(n)` (voxel units, positive
+    /// inside) on a lattice of `dims` nodes (at least 3 per axis).
+    fn build(dims: UVec3, value: impl Fn(usize) -> f32 + Sync) -> Result<Self, LevelSetError> {
+        let lattice = Lattice::new(dims);
+        let active: Vec<u32> = (0..lattice.len())
             .into_par_iter()
             .filter(|&n| {
                 let (un, inside) = (value(n), value(n) > 0.0);
@@ -161,10 +206,13 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> SparseFieldSolver<U, S> {
             })
             .map(|n| n as u32)
             .collect();
+        if active.is_empty() {
+            return Err(LevelSetError::NoSurface("source"));
+        }
         let inside = |n: usize| value(n) > 0.0;
         let reach = LAYERS as u32;
-        let mut u = U::by_side(source.dims(), inside, &active, reach, [-FAR_VALUE, FAR_VALUE])?;
-        let mut status = S::by_side(source.dims(), inside, &active, reach, [FAR_OUT, FAR_IN])?;
+        let mut u = U::by_side(dims, inside, &active, reach, [-FAR_VALUE, FAR_VALUE])?;
+        let mut status = S::by_side(dims, inside, &active, reach, [FAR_OUT, FAR_IN])?;
         for &n in &active {
             status[n as usize] = 0;
             u[n as usize] = value(n as usize).clamp(-ACTIVE_MAX, ACTIVE_MAX);
@@ -651,6 +699,30 @@ mod tests {
         }
         assert!(lazy.heap_bytes() < sampled.heap_bytes(), "{} bytes", lazy.heap_bytes());
         assert!((0..source.len()).all(|n| lazy.node_value(n) == sampled.node_value(n)));
+    }
+
+    /// Built from the analytic field in a narrow band, without a dense
+    /// grid, the solver is the one built from the dense sample: equal
+    /// frames at every iteration.
+    #[test]
+    fn from_field_equals_the_dense_source() {
+        let sphere = Shape::sphere(0.3);
+        let source = Grid3::sample_box(&sphere, &Aabb::cube(0.5), 56).unwrap();
+        let speed =
+            SpeedGrid::sample(&source, &Shape::torus(0.3, 0.12), |x| x, crate::Response::Identity).unwrap();
+        let mut dense = SparseFieldSolver::new(&source).unwrap();
+        let mut band =
+            SparseFieldSolver::from_field(&sphere, source.dims(), source.origin(), source.spacing()).unwrap();
+        let params = StepParams::default();
+        for i in 0..100 {
+            if i > 0 {
+                assert_eq!(dense.step(&speed, &params), band.step(&speed, &params), "iteration {i}");
+            }
+            assert_eq!(dense.capture(i, 0.0), band.capture(i, 0.0), "iteration {i}");
+        }
+        let outside = Shape::sphere(0.1).translated(Vec3::splat(2.0));
+        let none = SparseFieldSolver::from_field(&outside, source.dims(), source.origin(), source.spacing());
+        assert!(matches!(none, Err(LevelSetError::NoSurface("source"))));
     }
 
     /// At 256³ the bricked state of the reference case's source (layer lists
