@@ -32,6 +32,10 @@ impl DenseSolver {
 }
 
 impl Solver for DenseSolver {
+    fn heap_bytes(&self) -> usize {
+        (self.u.capacity() + self.change.capacity()) * size_of::<f32>()
+    }
+
     fn step(&mut self, speed: &SpeedGrid, params: &StepParams) -> StepStats {
         let (lattice, u, v) = (&self.lattice, &self.u, speed.reader());
         let h = speed.spacing();

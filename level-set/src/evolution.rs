@@ -308,8 +308,9 @@ fn evolve_on_pool(
         Outcome::IterationCap
     };
     let stored: usize = frames.iter().map(BandFrame::stored_bytes).sum();
-    // The solver's embedding and change grids, the speed and the source.
-    let working = 4 * source.len() * size_of::<f32>();
+    // The solver's state at the end (bricks are kept once allocated), the
+    // speed's stored values and the source grid.
+    let working = solver.heap_bytes() + speed.heap_bytes() + source.len() * size_of::<f32>();
     let report = MorphReport::new("level-set", outcome)
         .with_iterations(stats.len())
         .with_residual(Residual {

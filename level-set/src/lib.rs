@@ -13,6 +13,11 @@
 //! - [`DenseSolver`]: the up-wind scheme over the whole grid (eq. 18–24);
 //! - [`SparseFieldSolver`]: Whitaker's sparse field (§5.2.2) with the speed
 //!   sampled at the subvoxel zero crossing; cost per iteration ∝ surface.
+//!   Its embedding and status live in 8³ bricks allocated where the band is
+//!   or has been ([`isomorph_common::Bricks`]), the far side elsewhere;
+//!   [`SparseFieldSolver::from_field`] builds it from a narrow band of the
+//!   source's distance and [`SpeedGrid::lazy`] computes the target speed
+//!   per brick where the band goes, so no dense grid is needed at all.
 //!
 //! [`evolve`] runs either to convergence and keeps frames in memory
 //! proportional to the surface ([`BandFrame`]); the result is a

@@ -96,6 +96,10 @@ pub trait Solver: Send {
     /// step within `params`.
     fn step(&mut self, speed: &SpeedGrid, params: &StepParams) -> StepStats;
 
+    /// Heap bytes of the solver's state (embedding, status or change
+    /// arrays, lists, buffers).
+    fn heap_bytes(&self) -> usize;
+
     /// The current embedding as a kept frame, stamped with the `iteration`
     /// and evolution `time` reached (`O(surface)` work for the sparse
     /// field).

@@ -251,18 +251,6 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> SparseFieldSolver<U, S> {
         Ok(solver)
     }
 
-    /// Heap bytes of the solver's state: the embedding and status stores,
-    /// the layer lists and the per-iteration buffers.
-    pub fn heap_bytes(&self) -> usize {
-        let lists: usize = self.layers.iter().map(Vec::capacity).sum();
-        self.u.heap_bytes()
-            + self.status.heap_bytes()
-            + lists * size_of::<u32>()
-            + self.rates.capacity() * size_of::<(f32, f32, f32)>()
-            + self.distances.capacity() * size_of::<Option<f32>>()
-            + self.crossings.capacity() * size_of::<Vec3>()
-    }
-
     /// Number of points in the active set `L0`.
     pub fn active_len(&self) -> usize {
         self.layers[slot(0)].len()
@@ -600,6 +588,18 @@ fn merge_sorted(a: &[u32], b: &[u32]) -> Vec<u32> {
 }
 
 impl<U: NodeStore<f32>, S: NodeStore<i8>> Solver for SparseFieldSolver<U, S> {
+    /// The embedding and status stores, the layer lists and the
+    /// per-iteration buffers.
+    fn heap_bytes(&self) -> usize {
+        let lists: usize = self.layers.iter().map(Vec::capacity).sum();
+        self.u.heap_bytes()
+            + self.status.heap_bytes()
+            + lists * size_of::<u32>()
+            + self.rates.capacity() * size_of::<(f32, f32, f32)>()
+            + self.distances.capacity() * size_of::<Option<f32>>()
+            + self.crossings.capacity() * size_of::<Vec3>()
+    }
+
     fn step(&mut self, speed: &SpeedGrid, params: &StepParams) -> StepStats {
         self.compute_rates(speed, params.curvature);
         let max_gamma = self.rates.iter().fold(0.0f32, |m, r| m.max(r.1.abs()));

@@ -169,14 +169,29 @@ impl SpeedGrid {
             let [i, j, k] = lat.coords(n);
             sampler(origin + Vec3::new(i as f32, j as f32, k as f32) * spacing)
         };
-        let bad = (0..lat.len()).into_par_iter().find_first(|&n| !at(n).is_finite());
+        // One pass: the first non-finite node, whether any node is inside, the largest magnitude.
+        let (bad, any_inside, max_abs) = (0..lat.len())
+            .into_par_iter()
+            .map(|n| {
+                let v = at(n);
+                ((!v.is_finite()).then_some(n), v > 0.0, v.abs())
+            })
+            .reduce(
+                || (None, false, 0.0f32),
+                |a, b| {
+                    let bad = match (a.0, b.0) {
+                        (Some(x), Some(y)) => Some(x.min(y)),
+                        (x, y) => x.or(y),
+                    };
+                    (bad, a.1 || b.1, a.2.max(b.2))
+                },
+            );
         if let Some(node) = bad {
             return Err(LevelSetError::NonFinite { what: "target", node });
         }
-        if !(0..lat.len()).into_par_iter().any(|n| at(n) > 0.0) {
+        if !any_inside {
             return Err(LevelSetError::NoSurface("target"));
         }
-        let max_abs = (0..lat.len()).into_par_iter().map(|n| at(n).abs()).reduce(|| 0.0, f32::max);
         let values = Speeds::Lazy { dims, origin, spacing, bricks: RwLock::new(bricks), sampler };
         Ok(Self { values, max_abs })
     }
