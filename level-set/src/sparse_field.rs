@@ -53,7 +53,11 @@
 //!   level-set equation, not with a layer update), and an active point
 //!   leaves only past `±0.55`: the margin keeps a point whose converged
 //!   value lies just past `½` while its layer value lies just inside it
-//!   from leaving and rejoining forever;
+//!   from leaving and rejoining forever, and a point past it whose layer
+//!   value would still lie within `½` stays active, held at `±0.55` (where
+//!   the level-set equation and the layer update disagree by more than
+//!   the margin, on a target the grid does not resolve, it would
+//!   otherwise leave and rejoin every few iterations);
 //! - the speed is interpolated with trilinear's second-order error term
 //!   removed ([`SpeedGrid`]).
 //!
@@ -89,6 +93,18 @@ const ACTIVE_MAX: f32 = 0.5;
 /// (without the margin the reference case stalls short of convergence).
 const LEAVE_MAX: f32 = ACTIVE_MAX + 0.05;
 
+/// How much nearer the surface (voxels) the point beyond an `L±1` point's
+/// nearest neighbour along an axis must lie for that axis's difference to
+/// be fully second order; the one-sided difference is blended from first
+/// to second order over `[0, ORDER_RAMP]`. Both orders are exact for a
+/// planar front, so the blend is too; the alternative, a switch
+/// to second order as soon as the point beyond is nearer, makes the layer
+/// value jump by up to a third of a voxel as that point's value crosses
+/// its neighbour's, and on a target the grid does not resolve the active
+/// values and the layer values next to them then flip between two states
+/// every iteration, never settling (`docs/EXPERIMENTS.md`).
+const ORDER_RAMP: f32 = 0.5;
+
 /// The sparse-field level-set solver, with its per-node embedding `U` and
 /// layer status `S` kept in a [`NodeStore`]: by default sparse
 /// ([`Bricks`]: values only in the bricks the band occupies or has
@@ -114,6 +130,11 @@ pub struct SparseFieldSolver<U = Bricks<f32>, S = Bricks<i8>> {
     /// Per active point: its nearest zero crossing (voxel coordinates) in
     /// the current step.
     crossings: Vec<Vec3>,
+    /// Per active point: its value before the current step.
+    before: Vec<f32>,
+    /// Per active point: whether it leaves the active set this step
+    /// (`±1`, towards `L±1`) or stays (`0`).
+    leaving: Vec<i8>,
 }
 
 fn slot(layer: i8) -> usize {
@@ -226,6 +247,8 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> SparseFieldSolver<U, S> {
             rates: Vec::new(),
             distances: Vec::new(),
             crossings: Vec::new(),
+            before: Vec::new(),
+            leaving: Vec::new(),
         };
         solver.layers[slot(0)] = active;
         // Grow the layers outwards from the active set, with the source's values.
@@ -287,43 +310,83 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> SparseFieldSolver<U, S> {
 
     /// Step 2: applies the changes; returns the two status lists `S+1`, `S−1`
     /// and the RMS statistics.
+    ///
+    /// A point past `±LEAVE_MAX` leaves the active set only if it would stay
+    /// out: if its distance as a layer point (step 4, from its neighbours'
+    /// new values) is under `ACTIVE_MAX`, step 4 would take it straight back
+    /// with that distance, and where the level-set equation and the layer
+    /// update disagree by more than the margin (a target the grid does not
+    /// resolve, whose residual speed keeps pushing the point out) it would
+    /// leave and rejoin forever, the RMS change never settling. Such a point
+    /// stays active, held at `±LEAVE_MAX`.
     fn apply_rates(&mut self, dt: f32) -> (Vec<u32>, Vec<u32>, StepStats) {
         let (mut up, mut down) = (Vec::new(), Vec::new());
         let (mut sum_change, mut sum_dist) = (0.0f64, 0.0f64);
         let active = std::mem::take(&mut self.layers[slot(0)]);
-        for (&n, &(rate, _, distance)) in active.iter().zip(&self.rates) {
+        // The new values first: whether a point may leave reads its neighbours'.
+        let mut before = std::mem::take(&mut self.before);
+        before.clear();
+        for (&n, &(rate, _, _)) in active.iter().zip(&self.rates) {
             let n = n as usize;
-            let new = self.u[n] + dt * rate;
+            before.push(self.u[n]);
+            self.u[n] += dt * rate;
+        }
+        let mut leaving = std::mem::take(&mut self.leaving);
+        let solver = &*self;
+        active
+            .par_iter()
+            .map(|&n| {
+                let new = solver.u[n as usize];
+                let direction: i8 = if new > LEAVE_MAX {
+                    1
+                } else if new < -LEAVE_MAX {
+                    -1
+                } else {
+                    return 0;
+                };
+                match solver.layer_distance(n as usize, direction) {
+                    Some(v) if v < ACTIVE_MAX => 0,
+                    _ => direction,
+                }
+            })
+            .collect_into_vec(&mut leaving);
+        for ((&n, &(_, _, distance)), (&old, &direction)) in
+            active.iter().zip(&self.rates).zip(before.iter().zip(&leaving))
+        {
+            let n = n as usize;
+            let new = self.u[n];
             sum_dist += f64::from(distance * distance);
-            let direction: i8 = if new > LEAVE_MAX {
-                1
-            } else if new < -LEAVE_MAX {
-                -1
-            } else {
-                0
-            };
-            if direction != 0 {
-                let (opposite_move, opposite_layer, mine) =
-                    if direction > 0 { (ACTIVE_DOWN, -1, ACTIVE_UP) } else { (ACTIVE_UP, 1, ACTIVE_DOWN) };
-                let neighbours = self.lattice.neighbours(n);
-                if neighbours.iter().flatten().any(|&m| self.status[m] == opposite_move) {
-                    continue;
-                }
-                let handed = new - f32::from(direction);
-                for m in neighbours.into_iter().flatten() {
-                    if self.status[m] == opposite_layer
-                        && (self.u[m].abs() > ACTIVE_MAX || handed.abs() < self.u[m].abs())
-                    {
-                        self.u[m] = handed;
-                    }
-                }
-                self.status[n] = mine;
-                if direction > 0 { up.push(n as u32) } else { down.push(n as u32) }
+            if direction == 0 {
+                let kept = new.clamp(-LEAVE_MAX, LEAVE_MAX);
+                sum_change += f64::from((kept - old).powi(2));
+                self.u[n] = kept;
+                continue;
             }
-            sum_change += f64::from((new - self.u[n]).powi(2));
-            self.u[n] = new;
+            let (opposite_move, opposite_layer, mine) =
+                if direction > 0 { (ACTIVE_DOWN, -1, ACTIVE_UP) } else { (ACTIVE_UP, 1, ACTIVE_DOWN) };
+            let neighbours = self.lattice.neighbours(n);
+            if neighbours.iter().flatten().any(|&m| self.status[m] == opposite_move) {
+                self.u[n] = old;
+                continue;
+            }
+            let handed = new - f32::from(direction);
+            for m in neighbours.into_iter().flatten() {
+                if self.status[m] == opposite_layer
+                    && (self.u[m].abs() > ACTIVE_MAX || handed.abs() < self.u[m].abs())
+                {
+                    self.u[m] = handed;
+                }
+            }
+            self.status[n] = mine;
+            if direction > 0 {
+                up.push(n as u32)
+            } else {
+                down.push(n as u32)
+            }
+            sum_change += f64::from((new - old).powi(2));
         }
         self.layers[slot(0)] = active;
+        (self.before, self.leaving) = (before, leaving);
         let count = self.rates.len().max(1) as f64;
         let stats = StepStats {
             dt,
@@ -459,9 +522,9 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> SparseFieldSolver<U, S> {
     /// `L±1`, whose values the active points' differences and the
     /// polygonized surface read: the up-wind (Godunov) solution of
     /// `|∇u| = 1` ([`eikonal_update`]) from, per axis, the neighbour nearest
-    /// the surface among those of `L0` and of `n`'s own layer, second order
-    /// when the next point on along the axis is in the band and nearer
-    /// still. Own-layer neighbours carry the values of the last iteration
+    /// the surface among those of `L0` and of `n`'s own layer, blended
+    /// towards second order as the next point on along the axis (in the
+    /// band) lies nearer still ([`ORDER_RAMP`]). Own-layer neighbours carry the values of the last iteration
     /// (a Jacobi sweep, converged once the front stops): without them, a
     /// point whose nearest `L0` neighbours lie along one or two axes only
     /// would be given its distance along those axes, too far by up to
@@ -501,16 +564,17 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> SparseFieldSolver<U, S> {
                     nearest = Some((m, up));
                 }
             }
-            // Second order when the point beyond is in the band and nearer still.
+            // Towards second order as the point beyond is nearer still:
+            // c (v − a) = (v − u₁) + ½ w (v − 2u₁ + u₂), w ∈ [0, 1].
             let Some((m, up)) = nearest else { continue };
             let beyond = if up { (at + 2 < len).then(|| m + s) } else { (at >= 2).then(|| m - s) };
             let near = axes[axis].0;
-            if let Some(b) = beyond
-                .filter(|&k| (-LAYERS..=LAYERS).contains(&self.status[k]))
-                .map(|k| side * self.u[k])
-                .filter(|&b| b <= near)
+            if let Some(b) =
+                beyond.filter(|&k| (-LAYERS..=LAYERS).contains(&self.status[k])).map(|k| side * self.u[k])
             {
-                axes[axis] = ((4.0 * near - b) / 3.0, 1.5);
+                let w = ((near - b) / ORDER_RAMP).clamp(0.0, 1.0);
+                let c = 1.0 + 0.5 * w;
+                axes[axis] = (((1.0 + w) * near - 0.5 * w * b) / c, c);
             }
         }
         reached.then(|| eikonal_update(axes))
@@ -542,7 +606,8 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> SparseFieldSolver<U, S> {
 /// `(a, c)` per axis: the one-sided difference along the axis is
 /// `c (v − a)` (first order: `a` the nearest neighbour's distance, `c = 1`;
 /// second order: `a = (4 u₁ − u₂)/3` from the next two points, `c = 3/2`;
-/// `a` infinite for an axis without one). `v` is the largest root of
+/// a blend `c = 1 + w/2`, `a = ((1 + w) u₁ − (w/2) u₂)/c` in between; `a`
+/// infinite for an axis without one). `v` is the largest root of
 /// `Σ c² max(v − a, 0)² = 1`. Exact for a planar front, where the paper's
 /// city-block update (nearest neighbour plus one) overestimates the
 /// distance by up to `√3 − 1` voxels along a diagonal.
@@ -598,6 +663,8 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> Solver for SparseFieldSolver<U, S> {
             + self.rates.capacity() * size_of::<(f32, f32, f32)>()
             + self.distances.capacity() * size_of::<Option<f32>>()
             + self.crossings.capacity() * size_of::<Vec3>()
+            + self.before.capacity() * size_of::<f32>()
+            + self.leaving.capacity()
     }
 
     fn step(&mut self, speed: &SpeedGrid, params: &StepParams) -> StepStats {
