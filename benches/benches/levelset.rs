@@ -67,27 +67,34 @@ fn morph(c: &mut Criterion) {
     let settings =
         EvolveSettings { frames: FrameSchedule::EveryIterations(usize::MAX), ..Default::default() };
     for n in [64u32, 128, 256] {
-        let (source, speed) = case(n);
-        let sparse = evolve(&source, &speed, Placement::Identity, &settings, &Control::new()).unwrap();
-        print_accuracy(n, &sparse, source.spacing());
+        // Built (and the accuracy printed) only when a bench of this size is selected.
+        let mut setup = None;
+        let mut prepare = || {
+            let (source, speed) = case(n);
+            let sparse = evolve(&source, &speed, Placement::Identity, &settings, &Control::new()).unwrap();
+            print_accuracy(n, &sparse, source.spacing());
+            (source, speed, sparse.end_time())
+        };
         group.bench_function(BenchmarkId::new("sparse", n), |b| {
+            let (source, speed, _) = setup.get_or_insert_with(&mut prepare);
             b.iter(|| {
                 black_box(
-                    evolve(&source, &speed, Placement::Identity, &settings, &Control::new()).unwrap().len(),
+                    evolve(source, speed, Placement::Identity, &settings, &Control::new()).unwrap().len(),
                 )
             })
         });
         if n <= 128 {
-            let dense = EvolveSettings {
-                solver: SolverKind::Dense,
-                end_time: sparse.end_time(),
-                max_iterations: 100_000,
-                ..settings
-            };
             group.bench_function(BenchmarkId::new("dense", n), |b| {
+                let (source, speed, end_time) = setup.get_or_insert_with(&mut prepare);
+                let dense = EvolveSettings {
+                    solver: SolverKind::Dense,
+                    end_time: *end_time,
+                    max_iterations: 100_000,
+                    ..settings
+                };
                 b.iter(|| {
                     black_box(
-                        evolve(&source, &speed, Placement::Identity, &dense, &Control::new()).unwrap().len(),
+                        evolve(source, speed, Placement::Identity, &dense, &Control::new()).unwrap().len(),
                     )
                 })
             });
