@@ -3,19 +3,22 @@
 //! on N³ nodes with the target signed distance as speed.
 //!
 //! `cargo bench -p isomorph-benches --bench levelset -- morph/sphere_torus/sparse/128`
-//! `cargo bench -p isomorph-benches --bench levelset -- step/sphere_torus`
+//! `cargo bench -p isomorph-benches --bench levelset -- step/sphere_torus/sparse/1024`
+//! `cargo bench -p isomorph-benches --bench levelset -- memory/sphere_torus/512` (one size per run:
+//! the peak resident set is the process's)
 //! `cargo bench -p isomorph-benches --bench levelset -- cli/sphere_torus/128`
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use isomorph_cli::methods::{Method, Settings, build, load_input};
-use isomorph_common::{Aabb, Control, Field3, Grid3, Morph, Shape};
+use isomorph_common::{Aabb, Bytes, Control, Field3, Grid3, Morph, Shape, lattice_for_box};
 use isomorph_io::export::{ExportSettings, export_sequence};
 use isomorph_levelset::{
-    DenseSolver, EvolveSettings, FrameSchedule, LevelSetMorph, Placement, Response, Solver, SolverKind,
-    SparseFieldSolver, SpeedGrid, StepParams, evolve,
+    BandFrame, DenseSolver, EvolveSettings, FrameSchedule, LevelSetMorph, Placement, Response, Solver,
+    SolverKind, SparseFieldSolver, SpeedGrid, StepParams, evolve,
 };
 use std::hint::black_box;
-use std::time::Duration;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
 
 /// Prints the error of the final surface (marching-cubes vertices) against
 /// the analytic torus, in voxels, with the iterations it took, beside the
@@ -64,27 +67,34 @@ fn morph(c: &mut Criterion) {
     let settings =
         EvolveSettings { frames: FrameSchedule::EveryIterations(usize::MAX), ..Default::default() };
     for n in [64u32, 128, 256] {
-        let (source, speed) = case(n);
-        let sparse = evolve(&source, &speed, Placement::Identity, &settings, &Control::new()).unwrap();
-        print_accuracy(n, &sparse, source.spacing());
+        // Built (and the accuracy printed) only when a bench of this size is selected.
+        let mut setup = None;
+        let mut prepare = || {
+            let (source, speed) = case(n);
+            let sparse = evolve(&source, &speed, Placement::Identity, &settings, &Control::new()).unwrap();
+            print_accuracy(n, &sparse, source.spacing());
+            (source, speed, sparse.end_time())
+        };
         group.bench_function(BenchmarkId::new("sparse", n), |b| {
+            let (source, speed, _) = setup.get_or_insert_with(&mut prepare);
             b.iter(|| {
                 black_box(
-                    evolve(&source, &speed, Placement::Identity, &settings, &Control::new()).unwrap().len(),
+                    evolve(source, speed, Placement::Identity, &settings, &Control::new()).unwrap().len(),
                 )
             })
         });
         if n <= 128 {
-            let dense = EvolveSettings {
-                solver: SolverKind::Dense,
-                end_time: sparse.end_time(),
-                max_iterations: 100_000,
-                ..settings
-            };
             group.bench_function(BenchmarkId::new("dense", n), |b| {
+                let (source, speed, end_time) = setup.get_or_insert_with(&mut prepare);
+                let dense = EvolveSettings {
+                    solver: SolverKind::Dense,
+                    end_time: *end_time,
+                    max_iterations: 100_000,
+                    ..settings
+                };
                 b.iter(|| {
                     black_box(
-                        evolve(&source, &speed, Placement::Identity, &dense, &Control::new()).unwrap().len(),
+                        evolve(source, speed, Placement::Identity, &dense, &Control::new()).unwrap().len(),
                     )
                 })
             });
@@ -93,29 +103,109 @@ fn morph(c: &mut Criterion) {
     group.finish();
 }
 
+/// The reference case's state at `n³` without any dense grid: the source
+/// sampled in a narrow band of bricks (`SparseFieldSolver::from_field`) and
+/// the target speed computed per brick where the band goes
+/// (`SpeedGrid::lazy`), as at 512³ and 1024³ the dense grids would not fit
+/// the memory targets.
+fn lean_case(n: u32) -> (SparseFieldSolver, SpeedGrid) {
+    let (dims, origin, spacing) = lattice_for_box(&Aabb::cube(0.5), n).unwrap();
+    let solver = SparseFieldSolver::from_field(&Shape::sphere(0.3), dims, origin, spacing).unwrap();
+    let (torus, inv_h) = (Shape::torus(0.3, 0.12), 1.0 / spacing);
+    let speed = SpeedGrid::lazy(dims, origin, spacing, Arc::new(move |x| torus.value(x) * inv_h)).unwrap();
+    (solver, speed)
+}
+
 /// One iteration of the evolution, on a solver that keeps evolving from
-/// the source (criterion's warm-up already takes it most of the way to the
-/// torus, where the surface then stays): the steady per-iteration cost,
-/// which grows like the surface for the sparse field and like the volume
-/// for the dense solver. Each solver is stepped in place, so the grids stay
-/// as warm in the caches as they are during a real morph (a freshly cloned
-/// 256³ state would make every access a cache miss).
+/// the source (criterion's warm-up already takes it part or most of the way
+/// to the torus): the steady per-iteration cost, which grows like the
+/// surface for the sparse field (bricked state, lazy speed: `lean_case`)
+/// and like the volume for the dense solver. Each solver is stepped in
+/// place, so its state stays as warm in the caches as during a real morph.
+/// States are built only for the sizes the filter selects.
 fn step(c: &mut Criterion) {
     let mut group = c.benchmark_group("step/sphere_torus");
     group.sample_size(10);
-    for n in [64u32, 128, 256] {
-        let (source, speed) = case(n);
-        let params = StepParams::default();
-        let mut sparse = SparseFieldSolver::new(&source).unwrap();
+    let params = StepParams::default();
+    for n in [64u32, 128, 256, 512, 1024] {
+        let mut sparse = None;
         group.bench_function(BenchmarkId::new("sparse", n), |b| {
-            b.iter(|| black_box(sparse.step(&speed, &params)))
+            let (solver, speed) = sparse.get_or_insert_with(|| lean_case(n));
+            b.iter(|| black_box(solver.step(speed, &params)))
         });
-        let mut dense = DenseSolver::new(&source).unwrap();
-        group.bench_function(BenchmarkId::new("dense", n), |b| {
-            b.iter(|| black_box(dense.step(&speed, &params)))
+        if n <= 256 {
+            let mut dense = None;
+            group.bench_function(BenchmarkId::new("dense", n), |b| {
+                let (solver, speed) = dense.get_or_insert_with(|| {
+                    let (source, speed) = case(n);
+                    (DenseSolver::new(&source).unwrap(), speed)
+                });
+                b.iter(|| black_box(solver.step(speed, &params)))
+            });
+        }
+    }
+    group.finish();
+}
+
+/// Peak memory of the whole reference morph at `n³` on the lean state
+/// (`lean_case`), run once to convergence (the evolution's default
+/// thresholds) keeping one frame in ten as `evolve` does by default: prints
+/// the process's peak resident set (`VmHWM` of `/proc/self/status`, reset
+/// through `/proc/self/clear_refs` before the run, so it holds this run
+/// alone plus the process's own baseline), the solver's and the speed's
+/// heap bytes, the kept frames' bytes, the iterations and the wall time of
+/// that one run. Criterion then times the capture of one kept frame.
+fn memory(c: &mut Criterion) {
+    let mut group = c.benchmark_group("memory/sphere_torus");
+    group.sample_size(10);
+    let settings = EvolveSettings::default();
+    for n in [512u32, 1024] {
+        let mut state = None;
+        group.bench_function(BenchmarkId::from_parameter(n), |b| {
+            let (solver, _) = state.get_or_insert_with(|| {
+                let _ = std::fs::write("/proc/self/clear_refs", "5");
+                let start = Instant::now();
+                let (mut solver, speed) = lean_case(n);
+                let built = start.elapsed();
+                let params = StepParams::default();
+                let (mut frames, mut iterations) = (Vec::new(), 0);
+                for i in 1..=settings.max_iterations {
+                    let s = solver.step(&speed, &params);
+                    iterations = i;
+                    if i % 10 == 0 {
+                        frames.push(solver.capture(i, 0.0));
+                    }
+                    if s.rms_distance <= settings.rms_distance || s.rms_change <= settings.rms_change {
+                        break;
+                    }
+                }
+                let frame_bytes: usize = frames.iter().map(BandFrame::stored_bytes).sum();
+                println!(
+                    "memory/sphere_torus/{n}: peak RSS {} (VmHWM), solver state {}, speed bricks {}, \
+                     {} kept frames {}; {iterations} iterations, {:.1} s (of which {:.1} s building the \
+                     band source and checking the lazy speed)",
+                    Bytes(peak_rss()),
+                    Bytes(solver.heap_bytes()),
+                    Bytes(speed.heap_bytes()),
+                    frames.len(),
+                    Bytes(frame_bytes),
+                    start.elapsed().as_secs_f64(),
+                    built.as_secs_f64(),
+                );
+                (solver, speed)
+            });
+            b.iter(|| black_box(solver.capture(0, 0.0).band_len()))
         });
     }
     group.finish();
+}
+
+/// The process's peak resident set (`VmHWM`, bytes; 0 where
+/// `/proc/self/status` is not available).
+fn peak_rss() -> usize {
+    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+    let line = status.lines().find(|l| l.starts_with("VmHWM:")).unwrap_or("VmHWM: 0 kB");
+    line.split_whitespace().nth(1).and_then(|kb| kb.parse::<usize>().ok()).unwrap_or(0) * 1024
 }
 
 /// The whole `isomorph morph --method level-set --source sphere --target
@@ -152,5 +242,5 @@ fn cli(c: &mut Criterion) {
     let _ = std::fs::remove_dir_all(&out);
 }
 
-criterion_group!(benches, morph, step, cli);
+criterion_group!(benches, morph, step, memory, cli);
 criterion_main!(benches);

@@ -14,6 +14,7 @@
 //! | Breen & Whitaker eq. 25–26, Yang & Jüttler eq. 11: interpolated affine placement | [`AffineParts`], [`AffinePath`] |
 //! | Breen & Whitaker Fig. 6, Turk & O'Brien Fig. 3 top row: the distance-volume blend | [`DistanceBlend`] |
 //! | Breen & Whitaker's CSG of Barr superellipsoids (their Figs. 4–13) | [`Shape`], [`models`] |
+//! | OpenVDB's sparse bricks (Museth 2013): values near a surface, a background side elsewhere | [`Bricks`] |
 //! | Sethian's fast marching; Chopp's subvoxel projection | [`fast_marching`] |
 //! | Lorensen & Cline's marching cubes (with a consistent face rule), marching squares | [`marching_cubes`], [`marching_squares`] |
 //! | Hartmann 1998, the marching method (near-equilateral triangles of a chosen edge length; Yang & Jüttler's mesher) | [`marching_triangulation`] |
@@ -61,6 +62,7 @@
 
 mod aabb;
 pub mod alignment;
+mod bricks;
 #[cfg(feature = "conformance")]
 pub mod conformance;
 mod control;
@@ -81,6 +83,7 @@ mod solid;
 mod transform;
 
 pub use aabb::Aabb;
+pub use bricks::{BRICK, Bricks, NodeStore};
 pub use control::{CancelToken, Control, Progress};
 pub use field::{Bounded, Field3, GRADIENT_STEP};
 pub use glam;

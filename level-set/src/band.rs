@@ -6,7 +6,7 @@
 //! from a [`BandFrame`] polygonizes to exactly the surface of the grid it
 //! was captured from.
 
-use crate::stencil::Lattice;
+use crate::stencil::{Lattice, Values};
 use rayon::prelude::*;
 
 /// Value (voxel units) given to nodes away from the zero set when a frame is
@@ -67,7 +67,7 @@ impl BandFrame {
     /// last node to the next row's first are read from the grid (a read per
     /// row).
     pub(crate) fn capture_near(
-        u: &[f32],
+        u: &(impl Values + ?Sized),
         lattice: &Lattice,
         near: [&[u32]; 3],
         iteration: usize,
@@ -91,10 +91,13 @@ impl BandFrame {
             .filter(|&n| n % nx != 0 && inside(n) != inside(n - 1))
             .map(|n| n as u32)
             .collect();
-        let across: Vec<u32> =
-            (nx..u.len()).step_by(nx).filter(|&n| inside(n) != inside(n - 1)).map(|n| n as u32).collect();
+        let across: Vec<u32> = (nx..lattice.len())
+            .step_by(nx)
+            .filter(|&n| inside(n) != inside(n - 1))
+            .map(|n| n as u32)
+            .collect();
         let flips = merge(&within, &across, |&n| n);
-        let first_inside = u.first().is_some_and(|&v| v > 0.0);
+        let first_inside = u[0] > 0.0;
         Self { band, flips, first_inside, iteration, time }
     }
 

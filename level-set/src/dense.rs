@@ -32,12 +32,16 @@ impl DenseSolver {
 }
 
 impl Solver for DenseSolver {
+    fn heap_bytes(&self) -> usize {
+        (self.u.capacity() + self.change.capacity()) * size_of::<f32>()
+    }
+
     fn step(&mut self, speed: &SpeedGrid, params: &StepParams) -> StepStats {
-        let (lattice, u, v) = (&self.lattice, &self.u, speed.values());
+        let (lattice, u, v) = (&self.lattice, &self.u, speed.reader());
         let h = speed.spacing();
         // Steps 4a–d: up-wind change per node into a separate volume.
         self.change.par_iter_mut().enumerate().for_each(|(n, c)| {
-            *c = node_rate(lattice, u, n, v[n], h, params.curvature).0;
+            *c = node_rate(lattice, u, n, v.node(n), h, params.curvature).0;
         });
         // Step 5: eq. 24 (λ ≤ 1, so the largest target speed bounds the
         // distance term with or without curvature).
@@ -62,10 +66,6 @@ impl Solver for DenseSolver {
             rms_distance: (sum_dist / denom).sqrt(),
             surface_nodes: count,
         }
-    }
-
-    fn embedding(&self) -> &[f32] {
-        &self.u
     }
 
     fn capture(&self, iteration: usize, time: f64) -> BandFrame {

@@ -169,14 +169,16 @@ pub fn check_overlap(
     max_unreached_share: f32,
 ) -> Result<Overlap, LevelSetError> {
     let lattice = Lattice::new(source.dims());
-    let (u, v) = (source.data(), speed.values());
-    let joined = |m: usize| v[m] > -JOIN_VOXELS;
-    let mut seen = vec![false; v.len()];
+    let u = source.data();
+    let reader = speed.reader();
+    let v = |n: usize| reader.node(n);
+    let joined = |m: usize| v(m) > -JOIN_VOXELS;
+    let mut seen = vec![false; u.len()];
     let (mut parts, mut inside) = (0, 0usize);
     let mut missed = Vec::new();
     let mut stack = Vec::new();
-    for start in 0..v.len() {
-        if seen[start] || v[start] <= 0.0 {
+    for start in 0..u.len() {
+        if seen[start] || v(start) <= 0.0 {
             continue;
         }
         parts += 1;
@@ -185,7 +187,7 @@ pub fn check_overlap(
         seen[start] = true;
         stack.push(start);
         while let Some(n) = stack.pop() {
-            if v[n] > 0.0 {
+            if v(n) > 0.0 {
                 overlaps |= u[n] > 0.0;
                 nodes += 1;
                 let c = source.node_of(n);
@@ -252,7 +254,12 @@ fn evolve_on_pool(
 ) -> Result<LevelSetMorph, LevelSetError> {
     let mut stages = Stages::start();
     check_settings(settings)?;
-    source.check_same_lattice(speed.grid())?;
+    if !speed.on_lattice_of(source) {
+        let dims = (source.dims(), speed.dims());
+        let message =
+            format!("the speed's lattice ({} nodes) is not the source's ({} nodes)", dims.1, dims.0);
+        return Err(isomorph_common::GridError::Mismatch(message).into());
+    }
     let mut solver: Box<dyn Solver> = match settings.solver {
         SolverKind::SparseField => Box::new(SparseFieldSolver::new(source)?),
         SolverKind::Dense => Box::new(DenseSolver::new(source)?),
@@ -301,8 +308,9 @@ fn evolve_on_pool(
         Outcome::IterationCap
     };
     let stored: usize = frames.iter().map(BandFrame::stored_bytes).sum();
-    // The solver's embedding and change grids, the speed and the source.
-    let working = 4 * source.len() * size_of::<f32>();
+    // The solver's state at the end (bricks are kept once allocated), the
+    // speed's stored values and the source grid.
+    let working = solver.heap_bytes() + speed.heap_bytes() + source.len() * size_of::<f32>();
     let report = MorphReport::new("level-set", outcome)
         .with_iterations(stats.len())
         .with_residual(Residual {

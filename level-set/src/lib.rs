@@ -13,6 +13,11 @@
 //! - [`DenseSolver`]: the up-wind scheme over the whole grid (eq. 18–24);
 //! - [`SparseFieldSolver`]: Whitaker's sparse field (§5.2.2) with the speed
 //!   sampled at the subvoxel zero crossing; cost per iteration ∝ surface.
+//!   Its embedding and status live in 8³ bricks allocated where the band is
+//!   or has been ([`isomorph_common::Bricks`]), the far side elsewhere;
+//!   [`SparseFieldSolver::from_field`] builds it from a narrow band of the
+//!   source's distance and [`SpeedGrid::lazy`] computes the target speed
+//!   per brick where the band goes, so no dense grid is needed at all.
 //!
 //! [`evolve`] runs either to convergence and keeps frames in memory
 //! proportional to the surface ([`BandFrame`]); the result is a
@@ -93,7 +98,7 @@ pub use evolution::{
 pub use placement::{Placement, Warp};
 pub use solver::{Curvature, Solver, StepParams, StepStats};
 pub use sparse_field::SparseFieldSolver;
-pub use speed::{Response, SpeedGrid};
+pub use speed::{Response, SpeedGrid, SpeedSampler};
 
 use isomorph_common::{Grid3, GridError};
 use stencil::Lattice;
@@ -105,6 +110,15 @@ fn initial_embedding(
     source: &Grid3<f32>,
     bytes_per_node: usize,
 ) -> Result<(Lattice, Vec<f32>), LevelSetError> {
+    let lattice = check_source(source, bytes_per_node)?;
+    let inv_h = 1.0 / source.spacing();
+    Ok((lattice, source.data().iter().map(|&d| d * inv_h).collect()))
+}
+
+/// Checks a source distance grid: at least 3 nodes per axis,
+/// `bytes_per_node` of solver state per node within the memory limit,
+/// finite values, and a sign change (in voxel units, as the solvers see it).
+fn check_source(source: &Grid3<f32>, bytes_per_node: usize) -> Result<Lattice, LevelSetError> {
     let dims = source.dims();
     if dims.min_element() < 3 {
         return Err(GridError::TooSmall { dims, min: 3 }.into());
@@ -118,10 +132,9 @@ fn initial_embedding(
         return Err(LevelSetError::NonFinite { what: "source", node });
     }
     let inv_h = 1.0 / source.spacing();
-    let u: Vec<f32> = source.data().iter().map(|&d| d * inv_h).collect();
-    let lattice = Lattice::new(dims);
-    if !u.iter().any(|&v| v > 0.0) || u.iter().all(|&v| v > 0.0) {
+    let inside = |&d: &f32| d * inv_h > 0.0;
+    if !source.data().iter().any(inside) || source.data().iter().all(inside) {
         return Err(LevelSetError::NoSurface("source"));
     }
-    Ok((lattice, u))
+    Ok(Lattice::new(dims))
 }

@@ -1,7 +1,7 @@
 //! What both solvers share: the [`Solver`] interface and per-iteration
 //! statistics.
 
-use crate::stencil::{Lattice, upwind_norm};
+use crate::stencil::{Lattice, Values, upwind_norm};
 use crate::{BandFrame, SpeedGrid};
 
 /// Statistics of one solver iteration; distances in voxels.
@@ -58,7 +58,7 @@ impl Default for StepParams {
 /// step: `(rate, distance term speed)`.
 pub(crate) fn node_rate(
     lattice: &Lattice,
-    u: &[f32],
+    u: &(impl Values + ?Sized),
     n: usize,
     d: f32,
     spacing: f32,
@@ -96,10 +96,9 @@ pub trait Solver: Send {
     /// step within `params`.
     fn step(&mut self, speed: &SpeedGrid, params: &StepParams) -> StepStats;
 
-    /// The embedding `φ` at every node (voxel units, positive inside). Only
-    /// its sign and the values next to the zero set are meaningful for the
-    /// sparse-field solver.
-    fn embedding(&self) -> &[f32];
+    /// Heap bytes of the solver's state (embedding, status or change
+    /// arrays, lists, buffers).
+    fn heap_bytes(&self) -> usize;
 
     /// The current embedding as a kept frame, stamped with the `iteration`
     /// and evolution `time` reached (`O(surface)` work for the sparse

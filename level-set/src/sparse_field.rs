@@ -65,9 +65,10 @@
 //! grows with the surface area, not the volume.
 
 use crate::solver::{Curvature, Solver, StepParams, StepStats, node_rate, stable_time_step};
-use crate::stencil::{Lattice, speed_at_zero_crossing};
+use crate::stencil::{Lattice, zero_crossing};
 use crate::{BandFrame, LevelSetError, SpeedGrid};
-use isomorph_common::Grid3;
+use isomorph_common::glam::{UVec3, Vec3};
+use isomorph_common::{BRICK, Bricks, Field3, Grid3, GridError, NodeStore};
 use rayon::prelude::*;
 
 /// Number of layers on each side of the active set.
@@ -104,12 +105,16 @@ const LEAVE_MAX: f32 = ACTIVE_MAX + 0.05;
 /// every iteration, never settling (`docs/EXPERIMENTS.md`).
 const ORDER_RAMP: f32 = 0.5;
 
-/// The sparse-field level-set solver.
+/// The sparse-field level-set solver, with its per-node embedding `U` and
+/// layer status `S` kept in a [`NodeStore`]: by default sparse
+/// ([`Bricks`]: values only in the bricks the band occupies or has
+/// crossed, the far side elsewhere, so memory grows with the surface), or
+/// dense (`Vec`, a value per node; the same results).
 #[derive(Debug, Clone)]
-pub struct SparseFieldSolver {
+pub struct SparseFieldSolver<U = Bricks<f32>, S = Bricks<i8>> {
     lattice: Lattice,
-    u: Vec<f32>,
-    status: Vec<i8>,
+    u: U,
+    status: S,
     /// Layer lists `L−2 … L+2` at index `ℓ + 2`; entries whose status no
     /// longer matches are dropped at the end of each iteration.
     layers: [Vec<u32>; 5],
@@ -122,6 +127,9 @@ pub struct SparseFieldSolver {
     /// Per point of the layer list being updated: its distance from the
     /// surface, `None` without an inner neighbour.
     distances: Vec<Option<f32>>,
+    /// Per active point: its nearest zero crossing (voxel coordinates) in
+    /// the current step.
+    crossings: Vec<Vec3>,
     /// Per active point: its value before the current step.
     before: Vec<f32>,
     /// Per active point: whether it leaves the active set this step
@@ -135,32 +143,100 @@ fn slot(layer: i8) -> usize {
 
 impl SparseFieldSolver {
     /// Builds the active set and layers from the source's signed distance
-    /// grid (world units, positive inside).
+    /// grid (world units, positive inside), with the embedding and status
+    /// in bricks: see [`Self::with_storage`].
+    ///
+    /// # Errors
+    /// As [`Self::with_storage`].
+    pub fn new(source: &Grid3<f32>) -> Result<Self, LevelSetError> {
+        Self::with_storage(source)
+    }
+
+    /// Builds the active set and layers from the source's signed distance
+    /// `field` (world units, positive inside; changing by at most the
+    /// distance moved, as an exact distance does) on the lattice of `dims`
+    /// nodes at `origin` with `spacing`, without a dense grid: the field is
+    /// sampled in a narrow band of bricks ([`Bricks::sample_band`]) and
+    /// only its side is kept elsewhere. The result equals
+    /// [`Self::with_storage`] of the dense sample of `field`.
+    ///
+    /// # Errors
+    /// [`LevelSetError::NonFinite`] for a NaN or infinite value in the band,
+    /// [`MorphError::Grid`](isomorph_common::MorphError::Grid) for fewer than 3 nodes per axis, a node
+    /// count over `u32`, or over the memory limit, [`LevelSetError::NoSurface`]
+    /// without a sign change.
+    pub fn from_field<F: Field3 + ?Sized>(
+        field: &F,
+        dims: UVec3,
+        origin: Vec3,
+        spacing: f32,
+    ) -> Result<Self, LevelSetError> {
+        if dims.min_element() < 3 {
+            return Err(GridError::TooSmall { dims, min: 3 }.into());
+        }
+        // The layers lie within LAYERS + 1 voxels of the surface; one more for rounding.
+        let band = Bricks::sample_band(field, dims, origin, spacing, (f32::from(LAYERS) + 2.0) * spacing)?;
+        let side = BRICK as usize;
+        for brick in band.allocated_bricks() {
+            let first = band.brick_origin(brick);
+            for (l, v) in band.brick_values(brick).unwrap_or_default().iter().enumerate() {
+                let c = first
+                    + UVec3::new((l % side) as u32, ((l / side) % side) as u32, (l / (side * side)) as u32);
+                if !v.is_finite() && c.cmplt(dims).all() {
+                    return Err(LevelSetError::NonFinite { what: "source", node: band.linear(c) });
+                }
+            }
+        }
+        let inv_h = 1.0 / spacing;
+        Self::build(dims, |n| band[n] * inv_h)
+    }
+}
+
+impl<U: NodeStore<f32>, S: NodeStore<i8>> SparseFieldSolver<U, S> {
+    /// Builds the active set and layers from the source's signed distance
+    /// grid (world units, positive inside), keeping the embedding in `U`
+    /// and the status in `S`.
     ///
     /// The active set is, for every grid edge the zero set crosses, the end
     /// closer to it (and every node within half a voxel of it); values are
     /// clamped to `[−½, ½]`, and the layers are then filled as in step 4.
+    /// A sparse store holds values only in the bricks within two nodes of
+    /// the active set; every other brick lies on one side of the surface.
     ///
     /// # Errors
     /// [`LevelSetError::NonFinite`], [`MorphError::Grid`](isomorph_common::MorphError::Grid) (fewer than 3 nodes per axis, or over the memory limit),
     /// [`LevelSetError::NoSurface`] for a source without a sign change.
-    pub fn new(source: &Grid3<f32>) -> Result<Self, LevelSetError> {
-        // The embedding and the status byte per node.
-        let (lattice, mut u) = crate::initial_embedding(source, 5)?;
-        let active: Vec<u32> = (0..u.len())
+    pub fn with_storage(source: &Grid3<f32>) -> Result<Self, LevelSetError> {
+        crate::check_source(source, 0)?;
+        let (d, inv_h) = (source.data(), 1.0 / source.spacing());
+        Self::build(source.dims(), |n| d[n] * inv_h)
+    }
+
+    /// The solver for the source values `value(n)` (voxel units, positive
+    /// inside) on a lattice of `dims` nodes (at least 3 per axis).
+    fn build(dims: UVec3, value: impl Fn(usize) -> f32 + Sync) -> Result<Self, LevelSetError> {
+        let lattice = Lattice::new(dims);
+        let active: Vec<u32> = (0..lattice.len())
             .into_par_iter()
             .filter(|&n| {
-                let inside = u[n] > 0.0;
+                let (un, inside) = (value(n), value(n) > 0.0);
                 lattice.neighbours(n).iter().flatten().any(|&m| {
-                    (u[m] > 0.0) != inside && (u[n].abs() <= u[m].abs() || u[n].abs() <= ACTIVE_MAX)
+                    let um = value(m);
+                    (um > 0.0) != inside && (un.abs() <= um.abs() || un.abs() <= ACTIVE_MAX)
                 })
             })
             .map(|n| n as u32)
             .collect();
-        let mut status: Vec<i8> = u.iter().map(|&v| if v > 0.0 { FAR_IN } else { FAR_OUT }).collect();
+        if active.is_empty() {
+            return Err(LevelSetError::NoSurface("source"));
+        }
+        let inside = |n: usize| value(n) > 0.0;
+        let reach = LAYERS as u32;
+        let mut u = U::by_side(dims, inside, &active, reach, [-FAR_VALUE, FAR_VALUE])?;
+        let mut status = S::by_side(dims, inside, &active, reach, [FAR_OUT, FAR_IN])?;
         for &n in &active {
             status[n as usize] = 0;
-            u[n as usize] = u[n as usize].clamp(-ACTIVE_MAX, ACTIVE_MAX);
+            u[n as usize] = value(n as usize).clamp(-ACTIVE_MAX, ACTIVE_MAX);
         }
         let mut solver = Self {
             lattice,
@@ -170,11 +246,12 @@ impl SparseFieldSolver {
             sorted: [0; 5],
             rates: Vec::new(),
             distances: Vec::new(),
+            crossings: Vec::new(),
             before: Vec::new(),
             leaving: Vec::new(),
         };
         solver.layers[slot(0)] = active;
-        // Grow the layers outwards from the active set.
+        // Grow the layers outwards from the active set, with the source's values.
         for layer in 1..=LAYERS {
             for side in [1i8, -1] {
                 let inner = side * (layer - 1);
@@ -184,18 +261,12 @@ impl SparseFieldSolver {
                     for m in solver.lattice.neighbours(n as usize).into_iter().flatten() {
                         if solver.status[m] == far {
                             solver.status[m] = side * layer;
+                            solver.u[m] = value(m);
                             grown.push(m as u32);
                         }
                     }
                 }
                 solver.layers[slot(side * layer)] = grown;
-            }
-        }
-        for u in solver.u.iter_mut().zip(&solver.status) {
-            match *u.1 {
-                FAR_IN => *u.0 = FAR_VALUE,
-                FAR_OUT => *u.0 = -FAR_VALUE,
-                _ => {}
             }
         }
         solver.propagate_layer_values();
@@ -217,11 +288,20 @@ impl SparseFieldSolver {
     /// its nearest zero crossing.
     fn compute_rates(&mut self, speed: &SpeedGrid, curvature: Option<Curvature>) {
         let (lattice, u, h) = (&self.lattice, &self.u, speed.spacing());
-        self.layers[slot(0)]
+        let active = &self.layers[slot(0)];
+        active
             .par_iter()
-            .map(|&n| {
+            .map(|&n| zero_crossing(lattice, u, n as usize))
+            .collect_into_vec(&mut self.crossings);
+        // A lazy speed fills the bricks the crossings read, then is read without locking per point.
+        speed.prepare(&self.crossings);
+        let speeds = speed.reader();
+        active
+            .par_iter()
+            .zip(&self.crossings)
+            .map(|(&n, &x)| {
                 let n = n as usize;
-                let d = speed_at_zero_crossing(lattice, u, speed, n);
+                let d = speeds.at_voxel(x);
                 let (rate, gamma) = node_rate(lattice, u, n, d, h, curvature);
                 (rate, gamma, d)
             })
@@ -572,7 +652,21 @@ fn merge_sorted(a: &[u32], b: &[u32]) -> Vec<u32> {
     out
 }
 
-impl Solver for SparseFieldSolver {
+impl<U: NodeStore<f32>, S: NodeStore<i8>> Solver for SparseFieldSolver<U, S> {
+    /// The embedding and status stores, the layer lists and the
+    /// per-iteration buffers.
+    fn heap_bytes(&self) -> usize {
+        let lists: usize = self.layers.iter().map(Vec::capacity).sum();
+        self.u.heap_bytes()
+            + self.status.heap_bytes()
+            + lists * size_of::<u32>()
+            + self.rates.capacity() * size_of::<(f32, f32, f32)>()
+            + self.distances.capacity() * size_of::<Option<f32>>()
+            + self.crossings.capacity() * size_of::<Vec3>()
+            + self.before.capacity() * size_of::<f32>()
+            + self.leaving.capacity()
+    }
+
     fn step(&mut self, speed: &SpeedGrid, params: &StepParams) -> StepStats {
         self.compute_rates(speed, params.curvature);
         let max_gamma = self.rates.iter().fold(0.0f32, |m, r| m.max(r.1.abs()));
@@ -588,10 +682,6 @@ impl Solver for SparseFieldSolver {
         stats
     }
 
-    fn embedding(&self) -> &[f32] {
-        &self.u
-    }
-
     /// From the layer lists: every node with a face neighbour of the other
     /// sign is in `L−1`, `L0` or `L+1` (positive nodes are in `L0` or
     /// above, negative ones in `L0` or below, and face neighbours' layers
@@ -605,7 +695,116 @@ impl Solver for SparseFieldSolver {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use isomorph_common::{Aabb, Shape};
+    use isomorph_common::glam::Vec3;
+    use isomorph_common::mesh::primitives;
+    use isomorph_common::{Aabb, Control, Field3, Shape, Solid};
+    use std::ops::Index;
+
+    /// The values of a store at every node.
+    fn dense<T: Copy>(store: &impl Index<usize, Output = T>, len: usize) -> Vec<T> {
+        (0..len).map(|n| store[n]).collect()
+    }
+
+    /// The bricked solver's frames are bitwise those of the dense one at
+    /// every iteration (analytic sphere → torus at 32³ and 48³, and meshes:
+    /// a polygonal sphere into a polygonal torus at 40³), and so are its
+    /// embedding and status at every node at the end.
+    #[test]
+    fn bricked_storage_equals_dense_storage() {
+        let control = Control::new();
+        let mesh_case = || {
+            let (from, to) = (
+                Solid::mesh(primitives::uv_sphere(Vec3::new(0.02, -0.01, 0.0), 0.3, 24, 32)).unwrap(),
+                Solid::mesh(primitives::torus(0.3, 0.12, 48, 24)).unwrap(),
+            );
+            let bounds = Aabb::cube(0.5);
+            let source = from.distance_volume(&bounds, 40, &control).unwrap();
+            let target = to.distance_volume(&bounds, 40, &control).unwrap();
+            (source, SpeedGrid::from_grid(&target, crate::Response::Identity).unwrap())
+        };
+        let analytic = |n: u32| {
+            let source = Grid3::sample_box(&Shape::sphere(0.3), &Aabb::cube(0.5), n).unwrap();
+            let speed =
+                SpeedGrid::sample(&source, &Shape::torus(0.3, 0.12), |x| x, crate::Response::Identity)
+                    .unwrap();
+            (source, speed)
+        };
+        for (source, speed) in [analytic(32), analytic(48), mesh_case()] {
+            let mut bricked = SparseFieldSolver::new(&source).unwrap();
+            let mut flat = SparseFieldSolver::<Vec<f32>, Vec<i8>>::with_storage(&source).unwrap();
+            let params = StepParams::default();
+            for i in 0..150 {
+                if i > 0 {
+                    assert_eq!(bricked.step(&speed, &params), flat.step(&speed, &params), "iteration {i}");
+                }
+                assert_eq!(bricked.capture(i, 0.0), flat.capture(i, 0.0), "iteration {i}");
+            }
+            let len = source.len();
+            assert_eq!(dense(&bricked.u, len), flat.u);
+            assert_eq!(dense(&bricked.status, len), flat.status);
+        }
+    }
+
+    /// A lazy speed (bricks computed where the band goes) gives the frames
+    /// of the speed sampled at every node, bitwise, at every iteration, while
+    /// storing a part of it.
+    #[test]
+    fn lazy_speed_equals_the_sampled_speed() {
+        let source = Grid3::sample_box(&Shape::sphere(0.3), &Aabb::cube(0.5), 48).unwrap();
+        let torus = Shape::torus(0.3, 0.12);
+        let sampled = SpeedGrid::sample(&source, &torus, |x| x, crate::Response::Identity).unwrap();
+        let inv_h = 1.0 / source.spacing();
+        let sampler: crate::SpeedSampler = std::sync::Arc::new(move |x| torus.value(x) * inv_h);
+        let lazy = SpeedGrid::lazy(source.dims(), source.origin(), source.spacing(), sampler).unwrap();
+        assert_eq!(lazy.max_abs(), sampled.max_abs());
+        let (mut a, mut b) =
+            (SparseFieldSolver::new(&source).unwrap(), SparseFieldSolver::new(&source).unwrap());
+        let params = StepParams::default();
+        for i in 1..150 {
+            assert_eq!(a.step(&sampled, &params), b.step(&lazy, &params), "iteration {i}");
+            assert_eq!(a.capture(i, 0.0), b.capture(i, 0.0), "iteration {i}");
+        }
+        assert!(lazy.heap_bytes() < sampled.heap_bytes(), "{} bytes", lazy.heap_bytes());
+        assert!((0..source.len()).all(|n| lazy.node_value(n) == sampled.node_value(n)));
+    }
+
+    /// Built from the analytic field in a narrow band, without a dense
+    /// grid, the solver is the one built from the dense sample: equal
+    /// frames at every iteration.
+    #[test]
+    fn from_field_equals_the_dense_source() {
+        let sphere = Shape::sphere(0.3);
+        let source = Grid3::sample_box(&sphere, &Aabb::cube(0.5), 56).unwrap();
+        let speed =
+            SpeedGrid::sample(&source, &Shape::torus(0.3, 0.12), |x| x, crate::Response::Identity).unwrap();
+        let mut dense = SparseFieldSolver::new(&source).unwrap();
+        let mut band =
+            SparseFieldSolver::from_field(&sphere, source.dims(), source.origin(), source.spacing()).unwrap();
+        let params = StepParams::default();
+        for i in 0..100 {
+            if i > 0 {
+                assert_eq!(dense.step(&speed, &params), band.step(&speed, &params), "iteration {i}");
+            }
+            assert_eq!(dense.capture(i, 0.0), band.capture(i, 0.0), "iteration {i}");
+        }
+        let outside = Shape::sphere(0.1).translated(Vec3::splat(2.0));
+        let none = SparseFieldSolver::from_field(&outside, source.dims(), source.origin(), source.spacing());
+        assert!(matches!(none, Err(LevelSetError::NoSurface("source"))));
+    }
+
+    /// At 256³ the bricked state of the reference case's source (layer lists
+    /// included) takes under a fifth of the dense arrays' 5 bytes per node.
+    #[test]
+    fn bricked_state_is_far_under_dense_at_256() {
+        let source = Grid3::sample_box(&Shape::sphere(0.3), &Aabb::cube(0.5), 256).unwrap();
+        let solver = SparseFieldSolver::new(&source).unwrap();
+        let dense_bytes = 5 * source.len();
+        assert!(
+            solver.heap_bytes() * 5 < dense_bytes,
+            "{} bytes bricked against {dense_bytes} dense",
+            solver.heap_bytes()
+        );
+    }
 
     /// A planar front `u = d − n·x` (unit `n`, positive components): from
     /// its exact values one step (first order) or two steps (second order)
@@ -699,7 +898,8 @@ mod tests {
                     solver.step(&speed, &StepParams::default());
                 }
                 let fast = solver.capture(i, 0.5);
-                assert_eq!(fast, BandFrame::capture(&solver.u, &solver.lattice, i, 0.5), "iteration {i}");
+                let u = dense(&solver.u, solver.lattice.len());
+                assert_eq!(fast, BandFrame::capture(&u, &solver.lattice, i, 0.5), "iteration {i}");
             }
         }
     }
@@ -719,7 +919,8 @@ mod tests {
             }
             // Every node of a layer status is on its list.
             let on_lists: usize = solver.layers.iter().map(Vec::len).sum();
-            let with_status = solver.status.iter().filter(|&&s| (-LAYERS..=LAYERS).contains(&s)).count();
+            let with_status =
+                (0..solver.lattice.len()).filter(|&n| (-LAYERS..=LAYERS).contains(&solver.status[n])).count();
             assert_eq!(on_lists, with_status);
         }
     }

@@ -1,11 +1,15 @@
-//! The target speed `γ_B(x) = f(D_B(T(x)))` of Breen & Whitaker eq. 6,
-//! sampled once on the evolution lattice.
+//! The target speed `γ_B(x) = f(D_B(T(x)))` of Breen & Whitaker eq. 6 on
+//! the evolution lattice: sampled once at every node ([`SpeedGrid::sample`]),
+//! or computed per brick where the evolving surface goes
+//! ([`SpeedGrid::lazy`]: memory ∝ the surface's path, not the volume).
 
 use crate::LevelSetError;
 use crate::stencil::Lattice;
 use isomorph_common::glam::{UVec3, Vec3};
-use isomorph_common::{Field3, Grid3};
+use isomorph_common::{BRICK, Bricks, Field3, Grid3};
 use rayon::prelude::*;
+use std::fmt;
+use std::sync::{Arc, RwLock, RwLockReadGuard};
 
 /// The monotone map `f` with `f(0) = 0` turning the target's signed distance
 /// (world units, positive inside) into a speed.
@@ -36,11 +40,61 @@ impl Response {
 /// The speed at every node of the evolution lattice, in voxel units (target
 /// distance divided by the grid spacing), positive where the target is
 /// inside (the surface expands there).
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub struct SpeedGrid {
     /// Speeds in voxel units on the evolution lattice.
-    grid: Grid3<f32>,
+    values: Speeds,
     max_abs: f32,
+}
+
+/// A target speed at a world point (voxel units), for [`SpeedGrid::lazy`].
+pub type SpeedSampler = Arc<dyn Fn(Vec3) -> f32 + Send + Sync>;
+
+/// Where a [`SpeedGrid`] keeps its node speeds.
+enum Speeds {
+    /// A speed at every node.
+    Dense(Grid3<f32>),
+    /// Speeds in the bricks filled so far ([`SpeedGrid::prepare`]); other
+    /// nodes are computed when read.
+    Lazy {
+        /// Nodes per axis.
+        dims: UVec3,
+        /// World position of node `(0, 0, 0)`.
+        origin: Vec3,
+        /// World units per voxel.
+        spacing: f32,
+        /// The filled bricks (voxel units).
+        bricks: RwLock<Bricks<f32>>,
+        /// The speed at a world point (voxel units).
+        sampler: SpeedSampler,
+    },
+}
+
+impl fmt::Debug for Speeds {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Speeds::Dense(grid) => f.debug_tuple("Dense").field(&grid.dims()).finish(),
+            Speeds::Lazy { dims, bricks, .. } => {
+                let filled = bricks.read().map_or(0, |b| b.allocated());
+                f.debug_struct("Lazy").field("dims", dims).field("filled_bricks", &filled).finish()
+            }
+        }
+    }
+}
+
+/// The node speeds as [`SpeedGrid::reader`] sees them while a step reads
+/// them (the lazy bricks locked for reading once, not per point).
+pub(crate) enum SpeedReader<'a> {
+    /// A speed at every node.
+    Dense(&'a Grid3<f32>),
+    /// The filled bricks, and the sampler for the other nodes.
+    Lazy {
+        dims: UVec3,
+        origin: Vec3,
+        spacing: f32,
+        bricks: RwLockReadGuard<'a, Bricks<f32>>,
+        sampler: &'a SpeedSampler,
+    },
 }
 
 impl SpeedGrid {
@@ -86,6 +140,131 @@ impl SpeedGrid {
         Self::from_voxel_values(target, values)
     }
 
+    /// The speed `sampler(x)` (voxel units: the response of the target's
+    /// distance at `T(x)` divided by the spacing) on the lattice of `dims`
+    /// nodes at `origin` with `spacing`, computed per [`BRICK`]³ brick the
+    /// first time the evolving surface needs it there and kept: memory
+    /// proportional to the region the surface sweeps, not to the volume.
+    ///
+    /// Every node is evaluated once here, in parallel and without storing,
+    /// for the checks of [`SpeedGrid::sample`] and the largest magnitude;
+    /// the dense solver and [`check_overlap`](crate::check_overlap) read
+    /// unfilled nodes through `sampler` (slower, same values).
+    ///
+    /// # Errors
+    /// As [`SpeedGrid::sample`], and [`MorphError::Grid`](isomorph_common::MorphError::Grid)
+    /// for a lattice under 3 nodes per axis or over 2³² nodes.
+    pub fn lazy(
+        dims: UVec3,
+        origin: Vec3,
+        spacing: f32,
+        sampler: SpeedSampler,
+    ) -> Result<Self, LevelSetError> {
+        let bricks = Bricks::new(dims, 0.0f32, 0.0)?;
+        if dims.min_element() < 3 {
+            return Err(isomorph_common::GridError::TooSmall { dims, min: 3 }.into());
+        }
+        let lat = Lattice::new(dims);
+        let at = |n: usize| {
+            let [i, j, k] = lat.coords(n);
+            sampler(origin + Vec3::new(i as f32, j as f32, k as f32) * spacing)
+        };
+        // One pass: the first non-finite node, whether any node is inside, the largest magnitude.
+        let (bad, any_inside, max_abs) = (0..lat.len())
+            .into_par_iter()
+            .map(|n| {
+                let v = at(n);
+                ((!v.is_finite()).then_some(n), v > 0.0, v.abs())
+            })
+            .reduce(
+                || (None, false, 0.0f32),
+                |a, b| {
+                    let bad = match (a.0, b.0) {
+                        (Some(x), Some(y)) => Some(x.min(y)),
+                        (x, y) => x.or(y),
+                    };
+                    (bad, a.1 || b.1, a.2.max(b.2))
+                },
+            );
+        if let Some(node) = bad {
+            return Err(LevelSetError::NonFinite { what: "target", node });
+        }
+        if !any_inside {
+            return Err(LevelSetError::NoSurface("target"));
+        }
+        let values = Speeds::Lazy { dims, origin, spacing, bricks: RwLock::new(bricks), sampler };
+        Ok(Self { values, max_abs })
+    }
+
+    /// Fills (lazy speeds) every brick that interpolation at the voxel
+    /// points `points` reads: the cell of each point and one node beyond it
+    /// per axis. A no-op for sampled speeds.
+    pub(crate) fn prepare(&self, points: &[Vec3]) {
+        let Speeds::Lazy { dims, origin, spacing, bricks, sampler } = &self.values else { return };
+        // The unfilled bricks the points read, with their first nodes.
+        let missing: Vec<(usize, UVec3)> = {
+            let Ok(read) = bricks.read() else { return };
+            let last = (*dims - UVec3::ONE).as_vec3();
+            let b = read.brick_dims();
+            let mut wanted: Vec<usize> = points
+                .par_iter()
+                .flat_map_iter(|&g| {
+                    // The cell `at_voxel` reads, and one node beyond it per axis.
+                    let base = g.clamp(Vec3::ZERO, last).floor().min(last - Vec3::ONE);
+                    let lo = (base - Vec3::ONE).max(Vec3::ZERO).as_uvec3() / BRICK;
+                    let hi = (base + Vec3::splat(2.0)).min(last).as_uvec3() / BRICK;
+                    (lo.z..=hi.z).flat_map(move |k| {
+                        (lo.y..=hi.y)
+                            .flat_map(move |j| (lo.x..=hi.x).map(move |i| (i + b.x * (j + b.y * k)) as usize))
+                    })
+                })
+                .filter(|&brick| !read.is_allocated(brick))
+                .collect();
+            wanted.par_sort_unstable();
+            wanted.dedup();
+            wanted.into_iter().map(|brick| (brick, read.brick_origin(brick))).collect()
+        };
+        if missing.is_empty() {
+            return;
+        }
+        let side = BRICK as usize;
+        let filled: Vec<Vec<f32>> = missing
+            .par_iter()
+            .map(|&(_, first)| {
+                (0..side * side * side)
+                    .map(|l| {
+                        let local = UVec3::new(
+                            (l % side) as u32,
+                            ((l / side) % side) as u32,
+                            (l / (side * side)) as u32,
+                        );
+                        // Nodes past the lattice (edge bricks) are never read.
+                        let c = (first + local).min(*dims - UVec3::ONE);
+                        sampler(*origin + c.as_vec3() * *spacing)
+                    })
+                    .collect()
+            })
+            .collect();
+        let Ok(mut write) = bricks.write() else { return };
+        for (&(brick, _), values) in missing.iter().zip(filled) {
+            write.fill_brick(brick, &values);
+        }
+    }
+
+    /// The node speeds for interpolation, locked for reading (lazy speeds).
+    pub(crate) fn reader(&self) -> SpeedReader<'_> {
+        match &self.values {
+            Speeds::Dense(grid) => SpeedReader::Dense(grid),
+            Speeds::Lazy { dims, origin, spacing, bricks, sampler } => SpeedReader::Lazy {
+                dims: *dims,
+                origin: *origin,
+                spacing: *spacing,
+                bricks: bricks.read().unwrap_or_else(std::sync::PoisonError::into_inner),
+                sampler,
+            },
+        }
+    }
+
     /// Wraps voxel-unit `values` on the lattice of `like`.
     fn from_voxel_values(like: &Grid3<f32>, values: Vec<f32>) -> Result<Self, LevelSetError> {
         if let Some(node) = values.iter().position(|v| !v.is_finite()) {
@@ -96,12 +275,39 @@ impl SpeedGrid {
         }
         let max_abs = values.par_iter().map(|v| v.abs()).reduce(|| 0.0, f32::max);
         let grid = Grid3::from_vec(like.dims(), like.origin(), like.spacing(), values)?;
-        Ok(Self { grid, max_abs })
+        Ok(Self { values: Speeds::Dense(grid), max_abs })
     }
 
-    /// Speeds per node (voxel units), x-fastest.
-    pub fn values(&self) -> &[f32] {
-        self.grid.data()
+    /// The speed at linear node `n` (voxel units): read, or computed for a
+    /// lazy speed's unfilled node.
+    pub fn node_value(&self, n: usize) -> f32 {
+        self.reader().node(n)
+    }
+
+    /// Heap bytes of the stored speeds (a lazy speed's filled bricks).
+    pub fn heap_bytes(&self) -> usize {
+        match &self.values {
+            Speeds::Dense(grid) => grid.len() * size_of::<f32>(),
+            Speeds::Lazy { bricks, .. } => bricks.read().map_or(0, |b| b.heap_bytes()),
+        }
+    }
+
+    /// Nodes per axis of the lattice.
+    pub fn dims(&self) -> UVec3 {
+        match &self.values {
+            Speeds::Dense(grid) => grid.dims(),
+            Speeds::Lazy { dims, .. } => *dims,
+        }
+    }
+
+    /// Whether the speeds lie on the lattice of `grid`.
+    pub fn on_lattice_of(&self, grid: &Grid3<f32>) -> bool {
+        match &self.values {
+            Speeds::Dense(own) => own.same_lattice(grid),
+            Speeds::Lazy { dims, origin, spacing, .. } => {
+                *dims == grid.dims() && *origin == grid.origin() && *spacing == grid.spacing()
+            }
+        }
     }
 
     /// Largest speed magnitude (voxels per unit time).
@@ -111,12 +317,49 @@ impl SpeedGrid {
 
     /// Grid spacing (world units per voxel).
     pub fn spacing(&self) -> f32 {
-        self.grid.spacing()
+        match &self.values {
+            Speeds::Dense(grid) => grid.spacing(),
+            Speeds::Lazy { spacing, .. } => *spacing,
+        }
     }
 
-    /// The speeds as a grid (voxel units) on the evolution lattice.
-    pub fn grid(&self) -> &Grid3<f32> {
-        &self.grid
+    /// The speeds as a grid (voxel units) on the evolution lattice; `None`
+    /// for a lazy speed.
+    pub fn grid(&self) -> Option<&Grid3<f32>> {
+        match &self.values {
+            Speeds::Dense(grid) => Some(grid),
+            Speeds::Lazy { .. } => None,
+        }
+    }
+
+    /// The interpolated speed at voxel coordinates `g`
+    /// ([`SpeedReader::at_voxel`]).
+    pub(crate) fn at_voxel(&self, g: Vec3) -> f32 {
+        self.reader().at_voxel(g)
+    }
+}
+
+impl SpeedReader<'_> {
+    /// The speed at linear node `n` (voxel units).
+    pub(crate) fn node(&self, n: usize) -> f32 {
+        match self {
+            SpeedReader::Dense(grid) => grid.data()[n],
+            SpeedReader::Lazy { origin, spacing, bricks, sampler, .. } => {
+                if bricks.is_allocated(bricks.brick_of(n)) {
+                    bricks[n]
+                } else {
+                    sampler(*origin + bricks.coords(n).as_vec3() * *spacing)
+                }
+            }
+        }
+    }
+
+    /// Nodes per axis.
+    fn dims(&self) -> UVec3 {
+        match self {
+            SpeedReader::Dense(grid) => grid.dims(),
+            SpeedReader::Lazy { dims, .. } => *dims,
+        }
     }
 
     /// Speed at voxel coordinates `g` (clamped to the grid): trilinear
@@ -142,8 +385,8 @@ impl SpeedGrid {
     /// sits on the jump flip across it every iteration, a period-2
     /// oscillation that never settles (seen on an under-resolved target).
     pub(crate) fn at_voxel(&self, g: Vec3) -> f32 {
-        let dims = self.grid.dims();
-        let v = self.grid.data();
+        let dims = self.dims();
+        let v = |n: usize| self.node(n);
         let strides = [1usize, dims.x as usize, (dims.x * dims.y) as usize];
         let g = g.clamp(Vec3::ZERO, (dims - UVec3::ONE).as_vec3());
         // Solver lattices have at least 3 nodes per axis.
@@ -151,7 +394,7 @@ impl SpeedGrid {
         let t = g - base;
         let b = base.as_uvec3();
         let corner = b.x as usize + b.y as usize * strides[1] + b.z as usize * strides[2];
-        let c = |i: usize, j: usize, k: usize| v[corner + i + j * strides[1] + k * strides[2]];
+        let c = |i: usize, j: usize, k: usize| v(corner + i + j * strides[1] + k * strides[2]);
         let x00 = c(0, 0, 0) + t.x * (c(1, 0, 0) - c(0, 0, 0));
         let x10 = c(0, 1, 0) + t.x * (c(1, 1, 0) - c(0, 1, 0));
         let x01 = c(0, 0, 1) + t.x * (c(1, 0, 1) - c(0, 0, 1));
@@ -171,7 +414,7 @@ impl SpeedGrid {
             for (j, wj) in [(0, 1.0 - t[p]), (1, t[p])] {
                 for (k, wk) in [(0, 1.0 - t[q]), (1, t[q])] {
                     let n = corner + j * strides[p] + k * strides[q];
-                    let (before, first, second, after) = (v[n - s], v[n], v[n + s], v[n + 2 * s]);
+                    let (before, first, second, after) = (v(n - s), v(n), v(n + s), v(n + 2 * s));
                     let (d_first, d_second) = (before - 2.0 * first + second, first - 2.0 * second + after);
                     let limited = if d_first * d_second <= 0.0 {
                         0.0
@@ -208,7 +451,7 @@ mod tests {
                 let (a, b) = (i as f32 * 0.157, 0.05 + j as f32 * 0.155);
                 let p = 0.3 * Vec3::new(b.sin() * a.cos(), b.sin() * a.sin(), b.cos());
                 corrected = corrected.max(speed.at_voxel((p - grid.origin()) / h).abs());
-                trilinear = trilinear.max(speed.grid().trilinear(p).abs());
+                trilinear = trilinear.max(speed.grid().unwrap().trilinear(p).abs());
             }
         }
         assert!(
@@ -264,7 +507,7 @@ mod tests {
             let p = Vec3::new(0.013, -0.021, -0.05 + 0.1 * k as f32 / 40.0);
             let exact = slab.value(p) / h;
             let got = speed.at_voxel((p - grid.origin()) / h);
-            let tri = speed.grid().trilinear(p);
+            let tri = speed.grid().unwrap().trilinear(p);
             assert!((got - exact).abs() <= (tri - exact).abs() + 1e-5, "z {}: {got} vs {exact}", p.z);
         }
     }

@@ -7,6 +7,13 @@
 
 use crate::SpeedGrid;
 use isomorph_common::glam::{UVec3, Vec3};
+use std::ops::Index;
+
+/// Node values read by linear node index: a dense slice or a sparse
+/// [`isomorph_common::Bricks`] (voxel units, positive inside).
+pub(crate) trait Values: Index<usize, Output = f32> + Sync {}
+
+impl<T: Index<usize, Output = f32> + Sync + ?Sized> Values for T {}
 
 /// An x-fastest lattice of `dims` nodes: linear indices, coordinates and the
 /// six face neighbours.
@@ -64,14 +71,14 @@ impl Lattice {
 
     /// Whether node `n` has a face neighbour on the other side of the zero
     /// set (inside means `u > 0`).
-    pub(crate) fn on_zero_set(&self, u: &[f32], n: usize) -> bool {
+    pub(crate) fn on_zero_set(&self, u: &(impl Values + ?Sized), n: usize) -> bool {
         let inside = u[n] > 0.0;
         self.neighbours(n).iter().flatten().any(|&m| (u[m] > 0.0) != inside)
     }
 
     /// One-sided differences at `n` (eq. 19–22): `(δ⁻, δ⁺)` per axis, zero
     /// towards the outside of the grid (Neumann boundary).
-    pub(crate) fn one_sided(&self, u: &[f32], n: usize) -> ([f32; 3], [f32; 3]) {
+    pub(crate) fn one_sided(&self, u: &(impl Values + ?Sized), n: usize) -> ([f32; 3], [f32; 3]) {
         let nb = self.neighbours(n);
         let un = u[n];
         let mut minus = [0.0; 3];
@@ -91,7 +98,7 @@ impl Lattice {
     /// principal curvatures, negative on convex parts of a positive-inside
     /// embedding) from central differences over the 3×3×3 neighbourhood
     /// (clamped at the boundary), and the central gradient magnitude.
-    pub(crate) fn mean_curvature(&self, u: &[f32], n: usize) -> (f32, f32) {
+    pub(crate) fn mean_curvature(&self, u: &(impl Values + ?Sized), n: usize) -> (f32, f32) {
         let c = self.coords(n);
         let at = |d: [isize; 3]| {
             let mut m = 0;
@@ -133,7 +140,7 @@ impl Lattice {
 
     /// Central-difference gradient at `n` (one-sided at the boundary), in
     /// value units per voxel.
-    pub(crate) fn central_gradient(&self, u: &[f32], n: usize) -> Vec3 {
+    pub(crate) fn central_gradient(&self, u: &(impl Values + ?Sized), n: usize) -> Vec3 {
         let (minus, plus) = self.one_sided(u, n);
         let nb = self.neighbours(n);
         let g = |axis: usize| {
@@ -168,7 +175,19 @@ pub(crate) fn upwind_norm(minus: [f32; 3], plus: [f32; 3], speed: f32) -> f32 {
 /// first-order modification): one Newton step along the central-difference
 /// gradient, `x' = x − u ∇u / |∇u|²`, then trilinear interpolation of the
 /// node speeds (same lattice).
-pub(crate) fn speed_at_zero_crossing(lattice: &Lattice, u: &[f32], speed: &SpeedGrid, n: usize) -> f32 {
+pub(crate) fn speed_at_zero_crossing(
+    lattice: &Lattice,
+    u: &(impl Values + ?Sized),
+    speed: &SpeedGrid,
+    n: usize,
+) -> f32 {
+    speed.at_voxel(zero_crossing(lattice, u, n))
+}
+
+/// The zero crossing nearest to node `n` (voxel coordinates): one Newton
+/// step along the central-difference gradient, `x' = x − u ∇u / |∇u|²`
+/// (the node itself where the gradient vanishes).
+pub(crate) fn zero_crossing(lattice: &Lattice, u: &(impl Values + ?Sized), n: usize) -> Vec3 {
     let grad = lattice.central_gradient(u, n);
     let [i, j, k] = lattice.coords(n);
     let mut x = Vec3::new(i as f32, j as f32, k as f32);
@@ -176,7 +195,7 @@ pub(crate) fn speed_at_zero_crossing(lattice: &Lattice, u: &[f32], speed: &Speed
     if g2 > 1e-12 {
         x -= u[n] * grad / g2;
     }
-    speed.at_voxel(x)
+    x
 }
 
 #[cfg(test)]

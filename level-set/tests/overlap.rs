@@ -77,7 +77,7 @@ fn a_thin_feature_split_by_sampling_stays_one_part() {
         .filter(|&n| {
             let c = source.node_of(n);
             let p = source.position(c.x, c.y, c.z);
-            p.x.abs() < 0.15 && speed.values()[n] > 0.0
+            p.x.abs() < 0.15 && speed.node_value(n) > 0.0
         })
         .count();
     assert_eq!(rod_nodes, 0, "the rod was meant to fall between the nodes");
