@@ -29,7 +29,7 @@ use crate::alignment::Moments;
 use crate::control::Control;
 use crate::fast_marching::{FastMarchingSettings, redistance};
 use crate::grid::lattice_for_box;
-use crate::marching_cubes::{level_set_mesh, marching_cubes};
+use crate::marching_cubes::marching_cubes;
 use crate::morph::{MorphError, Side};
 use crate::scan_conversion::scan_convert;
 use crate::sdf::MeshSdf;
@@ -379,9 +379,7 @@ impl Solid {
 
     /// The surface as a mesh: the mesh itself, or marching cubes of the
     /// distance volume over the solid's box (padded by 5 % per side) with
-    /// `res` nodes along its longest edge. For analytic shapes with an exact
-    /// distance the distance is evaluated only near the surface
-    /// ([`level_set_mesh`]: the same mesh, without sampling the whole box).
+    /// `res` nodes along its longest edge.
     ///
     /// # Errors
     /// As [`Solid::distance_volume`].
@@ -389,10 +387,6 @@ impl Solid {
         let bounds = self.bounds().padded(0.05);
         Ok(match &*self.0 {
             Repr::Mesh { mesh, .. } => Cow::Borrowed(mesh),
-            Repr::Shape(shape) if shape.is_exact_distance() => {
-                control.check()?;
-                Cow::Owned(control.install(|| level_set_mesh(shape, &bounds, res, 0.0))?)
-            }
             _ => Cow::Owned(marching_cubes(&self.distance_volume(&bounds, res, control)?, 0.0)),
         })
     }
