@@ -62,6 +62,16 @@ pub struct EvolveSettings {
     /// Stop once the evolution time (eq. 17's `t`) reaches this; infinite by
     /// default. Lets two solvers be compared over the same evolution time.
     pub end_time: f64,
+    /// Converged also when the RMS target distance (voxels) is at most this
+    /// and has not fallen below 99 % of its best value for
+    /// `settle_iterations`: the surface has reached what the grid resolves
+    /// and oscillates by thousandths of a voxel above `rms_distance` (an open
+    /// target's inner sheets, thin parts). Default 0.01 voxel; 0 turns it
+    /// off.
+    pub settled_rms_distance: f32,
+    /// Iterations without improvement that make a run under
+    /// `settled_rms_distance` converged. Default 50.
+    pub settle_iterations: usize,
     /// Stop (as stalled) when the RMS target distance has not fallen below
     /// 99 % of its best value for this many iterations: a speed that is not
     /// a distance (seen through an anisotropic map, or a target the grid
@@ -88,6 +98,8 @@ impl Default for EvolveSettings {
             curvature: None,
             end_time: f64::INFINITY,
             stall_iterations: 500,
+            settled_rms_distance: 0.01,
+            settle_iterations: 50,
             max_unreached_share: 0.05,
         }
     }
@@ -279,10 +291,12 @@ fn evolve_on_pool(
         control.progress("evolution", Some(iteration as f32 / settings.max_iterations as f32), || {
             format!("iteration {iteration}, RMS distance {:.3} voxels", s.rms_distance)
         });
-        converged = s.rms_distance <= settings.rms_distance || s.rms_change <= settings.rms_change;
         if s.rms_distance < 0.99 * best {
             (best, best_at) = (s.rms_distance, iteration);
         }
+        let settled =
+            best <= settings.settled_rms_distance && iteration - best_at >= settings.settle_iterations;
+        converged = s.rms_distance <= settings.rms_distance || s.rms_change <= settings.rms_change || settled;
         stalled = !converged && iteration - best_at >= settings.stall_iterations;
         let done = converged || stalled || time >= settings.end_time;
         let due = match settings.frames {
@@ -377,8 +391,13 @@ fn check_settings(s: &EvolveSettings) -> Result<(), MorphError> {
     check::count("max_iterations", s.max_iterations as u64, 1, u64::MAX)?;
     check::positive("max_time_step", f64::from(s.max_time_step))?;
     check::count("stall_iterations", s.stall_iterations as u64, 1, u64::MAX)?;
+    check::count("settle_iterations", s.settle_iterations as u64, 1, u64::MAX)?;
     check::range("max_unreached_share", f64::from(s.max_unreached_share), 0.0, 1.0)?;
-    for (name, v) in [("rms_distance", f64::from(s.rms_distance)), ("rms_change", f64::from(s.rms_change))] {
+    for (name, v) in [
+        ("rms_distance", f64::from(s.rms_distance)),
+        ("rms_change", f64::from(s.rms_change)),
+        ("settled_rms_distance", f64::from(s.settled_rms_distance)),
+    ] {
         if v.is_nan() {
             return Err(MorphError::bad_setting(name, v, "a threshold (not NaN)"));
         }

@@ -77,6 +77,7 @@ fn dense_and_sparse_solvers_agree() {
             max_iterations: 150,
             rms_change: 0.0,
             rms_distance: 0.0,
+            settled_rms_distance: 0.0,
             ..EvolveSettings::default()
         };
         evolve(&source, &speed, Placement::Identity, &settings, &Control::new()).unwrap()
