@@ -247,3 +247,30 @@ fn warp_placement_carries_the_last_frame_onto_the_target() {
     assert!(worst(&first, &sphere) < 0.5, "first frame off the sphere by {} voxels", worst(&first, &sphere));
     assert_eq!(morph.report().details.get("placement"), Some(&isomorph_common::Value::Text("warp".into())));
 }
+
+#[test]
+fn a_run_that_stops_improving_under_the_settled_distance_has_converged() {
+    // Thresholds no run reaches: only the settle rule (or the cap) stops it.
+    let source = Grid3::sample_box(&Shape::sphere(0.3), &Aabb::cube(0.5), 32).unwrap();
+    let speed = SpeedGrid::sample(&source, &Shape::torus(0.3, 0.12), |x| x, Response::Identity).unwrap();
+    let run = |settled_rms_distance| {
+        let settings = EvolveSettings {
+            rms_distance: 0.0,
+            rms_change: 0.0,
+            settled_rms_distance,
+            settle_iterations: 20,
+            stall_iterations: 60,
+            max_iterations: 2000,
+            ..EvolveSettings::default()
+        };
+        evolve(&source, &speed, Placement::Identity, &settings, &Control::new()).unwrap()
+    };
+    let settled = run(0.05);
+    let best = settled.stats().iter().map(|s| s.rms_distance).fold(f32::INFINITY, f32::min);
+    assert!(settled.report().converged, "{:?}", settled.report().outcome);
+    assert!(best <= 0.05, "best RMS distance {best} voxels");
+    // Without the rule the same run is a stall, 40 iterations later.
+    let stalled = run(0.0);
+    assert!(!stalled.report().converged, "{:?}", stalled.report().outcome);
+    assert_eq!(stalled.stats().len(), settled.stats().len() + 40);
+}
