@@ -445,14 +445,10 @@ impl Grid3<f32> {
     /// are clamped to its boundary. Exact at nodes.
     pub fn trilinear(&self, p: Vec3) -> f32 {
         let (base, w) = self.cell_and_weights(p);
-        let c = |di: u32, dj: u32, dk: u32| self.data[self.index(base.x + di, base.y + dj, base.z + dk)];
-        let x00 = c(0, 0, 0) + w.x * (c(1, 0, 0) - c(0, 0, 0));
-        let x10 = c(0, 1, 0) + w.x * (c(1, 1, 0) - c(0, 1, 0));
-        let x01 = c(0, 0, 1) + w.x * (c(1, 0, 1) - c(0, 0, 1));
-        let x11 = c(0, 1, 1) + w.x * (c(1, 1, 1) - c(0, 1, 1));
-        let y0 = x00 + w.y * (x10 - x00);
-        let y1 = x01 + w.y * (x11 - x01);
-        y0 + w.z * (y1 - y0)
+        trilinear_blend(
+            |i, j, k| self.data[self.index(base.x + i as u32, base.y + j as u32, base.z + k as u32)],
+            w,
+        )
     }
 
     /// Lower corner node of the cell containing `p` (clamped) and the local
@@ -571,6 +567,22 @@ impl<T: Clone> Grid2<T> {
     pub fn position(&self, i: u32, j: u32) -> Vec2 {
         self.origin + self.spacing * Vec2::new(i as f32, j as f32)
     }
+}
+
+/// The trilinear blend of a cell's eight corner values `corner(i, j, k)`
+/// (`i, j, k ∈ {0, 1}` along x, y, z) at the weights `w ∈ [0, 1]³`:
+/// lerps along x, then y, then z (the order fixes the rounding, so every
+/// caller interpolates bit for bit alike).
+#[inline]
+pub fn trilinear_blend(corner: impl Fn(usize, usize, usize) -> f32, w: Vec3) -> f32 {
+    let c = corner;
+    let x00 = c(0, 0, 0) + w.x * (c(1, 0, 0) - c(0, 0, 0));
+    let x10 = c(0, 1, 0) + w.x * (c(1, 1, 0) - c(0, 1, 0));
+    let x01 = c(0, 0, 1) + w.x * (c(1, 0, 1) - c(0, 0, 1));
+    let x11 = c(0, 1, 1) + w.x * (c(1, 1, 1) - c(0, 1, 1));
+    let y0 = x00 + w.y * (x10 - x00);
+    let y1 = x01 + w.y * (x11 - x01);
+    y0 + w.z * (y1 - y0)
 }
 
 #[cfg(test)]

@@ -6,7 +6,7 @@
 use crate::LevelSetError;
 use crate::stencil::Lattice;
 use isomorph_common::glam::{UVec3, Vec3};
-use isomorph_common::{BRICK, Bricks, Field3, Grid3};
+use isomorph_common::{BRICK, Bricks, Field3, Grid3, trilinear_blend};
 use rayon::prelude::*;
 use std::fmt;
 use std::sync::{Arc, RwLock, RwLockReadGuard};
@@ -394,14 +394,7 @@ impl SpeedReader<'_> {
         let t = g - base;
         let b = base.as_uvec3();
         let corner = b.x as usize + b.y as usize * strides[1] + b.z as usize * strides[2];
-        let c = |i: usize, j: usize, k: usize| v(corner + i + j * strides[1] + k * strides[2]);
-        let x00 = c(0, 0, 0) + t.x * (c(1, 0, 0) - c(0, 0, 0));
-        let x10 = c(0, 1, 0) + t.x * (c(1, 1, 0) - c(0, 1, 0));
-        let x01 = c(0, 0, 1) + t.x * (c(1, 0, 1) - c(0, 0, 1));
-        let x11 = c(0, 1, 1) + t.x * (c(1, 1, 1) - c(0, 1, 1));
-        let y0 = x00 + t.y * (x10 - x00);
-        let y1 = x01 + t.y * (x11 - x01);
-        let trilinear = y0 + t.z * (y1 - y0);
+        let trilinear = trilinear_blend(|i, j, k| v(corner + i + j * strides[1] + k * strides[2]), t);
         let mut correction = 0.0;
         for axis in 0..3 {
             if b[axis] == 0 || b[axis] + 2 >= dims[axis] {
