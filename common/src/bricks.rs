@@ -71,9 +71,9 @@ impl<T: Copy + PartialEq> Bricks<T> {
         let bricks = (dims + UVec3::splat(BRICK - 1)) >> SHIFT;
         let count = bricks.as_u64vec3().element_product() as usize;
         let requested = count.saturating_mul(size_of::<u32>());
-        let limit = crate::memory_limit();
-        if requested > limit || nodes > u64::from(u32::MAX) {
-            return Err(GridError::TooLarge { dims, requested, limit });
+        crate::grid::check_grid_bytes(dims, requested)?;
+        if nodes > u64::from(u32::MAX) {
+            return Err(GridError::TooLarge { dims, requested, limit: crate::memory_limit() });
         }
         Ok(Self {
             dims,
@@ -415,11 +415,7 @@ impl<T: Copy + Debug + Send + Sync> NodeStore<T> for Vec<T> {
             return Err(GridError::TooSmall { dims, min: 1 });
         }
         let len = dims.as_u64vec3().element_product() as usize;
-        let requested = len.saturating_mul(size_of::<T>());
-        let limit = crate::memory_limit();
-        if requested > limit {
-            return Err(GridError::TooLarge { dims, requested, limit });
-        }
+        crate::grid::check_grid_bytes(dims, len.saturating_mul(size_of::<T>()))?;
         Ok((0..len).into_par_iter().map(|n| values[usize::from(is_inside(n))]).collect())
     }
 

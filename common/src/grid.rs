@@ -151,13 +151,20 @@ pub fn reserve_memory(
     Ok(())
 }
 
-/// Allocates `len` copies of `value`, checked against the memory limit.
-fn checked_vec<T: Clone>(dims: UVec3, len: usize, value: T) -> Result<Vec<T>, GridError> {
-    let requested = len.saturating_mul(size_of::<T>());
+/// [`GridError::TooLarge`] when `requested` bytes for a grid of `dims`
+/// nodes are over the memory limit.
+pub(crate) fn check_grid_bytes(dims: UVec3, requested: usize) -> Result<(), GridError> {
     let limit = memory_limit();
     if requested > limit {
         return Err(GridError::TooLarge { dims, requested, limit });
     }
+    Ok(())
+}
+
+/// Allocates `len` copies of `value`, checked against the memory limit.
+fn checked_vec<T: Clone>(dims: UVec3, len: usize, value: T) -> Result<Vec<T>, GridError> {
+    let requested = len.saturating_mul(size_of::<T>());
+    check_grid_bytes(dims, requested)?;
     let mut v = Vec::new();
     v.try_reserve_exact(len).map_err(|_| GridError::OutOfMemory(requested))?;
     v.resize(len, value);
