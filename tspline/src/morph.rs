@@ -54,6 +54,19 @@ pub enum Mesher {
     },
 }
 
+impl Mesher {
+    /// The mesher and its edge length as the report states it (e.g.
+    /// `marching triangulation, edge 0.02 domain units`).
+    pub fn describe(&self) -> String {
+        match self {
+            Mesher::MarchingCubes => "marching cubes".to_string(),
+            Mesher::MarchingTriangulation { edge } => {
+                format!("marching triangulation, edge {edge} domain units")
+            }
+        }
+    }
+}
+
 /// Settings of [`TsplineMorph::new`] and [`morph`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct TsplineSettings {
@@ -570,7 +583,8 @@ fn report(
         .with_detail("coefficients", fit.coefficients)
         .with_detail("fit_max_surface_error", fit.max_surface_error)
         .with_detail("level_sets", evolution.frames.len())
-        .with_detail("frames", frames.len());
+        .with_detail("frames", frames.len())
+        .with_detail("mesher", settings.mesher.describe());
     let steps = evolution.steps.len();
     let warning = match evolution.outcome {
         Stop::Vanished => Some("the zero set vanished during the evolution".to_string()),
