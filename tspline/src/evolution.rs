@@ -34,7 +34,7 @@
 
 use crate::error::{TsplineError, check_range};
 use crate::lsq::{self, LeafRows};
-use crate::sampling::{Sample, zero_set_samples};
+use crate::sampling::{Sample, Sampler, zero_set_samples};
 use crate::tspline::TSpline;
 use glam::DVec3;
 use isomorph_common::Control;
@@ -90,7 +90,10 @@ pub struct EvolveSettings {
     /// functions with large supports that barely touch the zero set from
     /// creating spurious surfaces far away (note §5.5).
     pub far_field_weight: f64,
-    /// Marching-cubes nodes per finest cell for the zero-set samples (1–4).
+    /// Where the zero-set samples come from (paper §3.3).
+    pub sampler: Sampler,
+    /// Marching-cubes nodes per finest cell for the zero-set samples (1–4;
+    /// [`Sampler::MarchingCubes`]).
     pub samples_per_cell: u32,
     /// Report a stall when the error has not dropped by 1 % over this many
     /// steps (and stop).
@@ -108,6 +111,7 @@ impl Default for EvolveSettings {
             relaxation: 1.0,
             tikhonov: 1e-2,
             far_field_weight: 0.1,
+            sampler: Sampler::MarchingCubes,
             samples_per_cell: 3,
             stall_steps: 8,
         }
@@ -139,6 +143,9 @@ impl EvolveSettings {
         check_range("far_field_weight", self.far_field_weight, 0.0, 1e6, ">= 0")?;
         check_range("samples_per_cell", f64::from(self.samples_per_cell), 1.0, 4.0, "1..=4")?;
         check_range("stall_steps", self.stall_steps as f64, 1.0, 1e9, ">= 1")?;
+        if let Sampler::MarchingTriangulation { edge_cells } = self.sampler {
+            check_range("sampler edge_cells", edge_cells, 0.05, 4.0, "0.05..=4")?;
+        }
         if let Speed::Robust { v_max, beta_cells: beta } = self.speed {
             check_range("v_max", v_max, 1e-9, 1e6, "> 0")?;
             check_range("beta_cells", beta, 0.0, 1e6, ">= 0")?;
@@ -249,7 +256,7 @@ fn evolve_on_pool<D: Fn(DVec3) -> f64 + Sync + Send>(
     let mut symbolic = lsq::SymbolicCache::default();
     let final_error;
     let outcome = loop {
-        let samples = zero_set_samples(&spline, settings.samples_per_cell)?;
+        let samples = zero_set_samples(&spline, settings.sampler, settings.samples_per_cell)?;
         if samples.is_empty() {
             final_error = f64::INFINITY;
             break Outcome::Vanished;
@@ -430,6 +437,10 @@ mod tests {
     use std::sync::Arc;
 
     fn run(r0: f64, r1: f64, speed: Speed) -> Evolution {
+        run_sampled(r0, r1, speed, Sampler::MarchingCubes)
+    }
+
+    fn run_sampled(r0: f64, r1: f64, speed: Speed, sampler: Sampler) -> Evolution {
         let (a, b) = (
             crate::demo::sphere_samples(1500, r0, DVec3::ZERO),
             crate::demo::sphere_samples(1500, r1, DVec3::ZERO),
@@ -438,7 +449,7 @@ mod tests {
         let s = TMeshSettings { max_depth: 4, min_depth: 3, sample_spacing: 0.05, ..Default::default() };
         let mesh = Arc::new(TMesh::build(&all, &s).unwrap());
         let (f0, _) = fit(mesh, move |p: DVec3| r0 - p.length(), &a, &FitSettings::default()).unwrap();
-        let settings = EvolveSettings { speed, max_steps: 60, ..Default::default() };
+        let settings = EvolveSettings { speed, sampler, max_steps: 60, ..Default::default() };
         evolve(&f0, move |p: DVec3| r1 - p.length(), &b, &settings, &Control::new()).unwrap()
     }
 
@@ -458,5 +469,23 @@ mod tests {
     fn growing_sphere_converges_with_the_robust_speed() {
         let e = run(0.3, 0.6, Speed::Robust { v_max: 0.2, beta_cells: 1.0 });
         assert_eq!(e.outcome, Outcome::Converged, "{:?}", e.steps.last());
+    }
+
+    #[test]
+    fn marching_triangulation_samples_drive_the_same_evolution() {
+        let speed = Speed::Robust { v_max: 0.2, beta_cells: 1.0 };
+        let cubes = run(0.3, 0.6, speed);
+        let tri = run_sampled(0.3, 0.6, speed, Sampler::MarchingTriangulation { edge_cells: 0.5 });
+        assert_eq!(tri.outcome, Outcome::Converged, "{:?}", tri.steps.last());
+        // Uniform points, about 2/√3 per (edge)² of area, fewer than the
+        // marching-cubes vertices at 3 nodes per cell.
+        let (a, b) = (tri.steps[0].samples, cubes.steps[0].samples);
+        assert!(a < b, "{a} triangulation samples vs {b}");
+        assert!(
+            tri.steps.len().abs_diff(cubes.steps.len()) <= 3,
+            "{} vs {} steps",
+            tri.steps.len(),
+            cubes.steps.len()
+        );
     }
 }

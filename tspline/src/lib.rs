@@ -170,5 +170,6 @@ pub use error::TsplineError;
 pub use evolution::{Evolution, EvolveSettings, Outcome, Speed, StepStats, evolve};
 pub use fit::{FitReport, FitRound, FitSettings, Refinement, fit};
 pub use morph::{Align, FrameField, Mesher, TsplineMorph, TsplineSettings, morph};
+pub use sampling::Sampler;
 pub use tmesh::{MAX_DEPTH, TMesh, TMeshSettings};
 pub use tspline::TSpline;

@@ -1,7 +1,10 @@
-//! Points on the current zero set (paper §3.3 samples `x_j` along `L_τ`):
-//! marching cubes on a lattice of the finest cell size restricted to the
-//! leaves whose coefficients change sign, then Newton projection onto
-//! `f = 0` (note §7.1, Hartmann's surface-point step).
+//! Points on the current zero set (paper §3.3 samples `x_j` along `L_τ`),
+//! by one of two [`Sampler`]s: marching cubes on a lattice of the finest
+//! cell size restricted to the leaves whose coefficients change sign, or
+//! the paper's marching triangulation (Hartmann 1998, uniformly spaced
+//! points); either way every point is then moved onto `f = 0` by Newton
+//! projection (note §7.1, Hartmann's surface-point step) in double
+//! precision.
 //!
 //! Culling is exact: `f` is a convex combination of the coefficients of the
 //! leaf's anchors (`R_i ≥ 0`, `Σ R_i = 1`), so a leaf whose coefficients all
@@ -11,8 +14,29 @@ use crate::basis::{Eval, RowValues};
 use crate::tspline::TSpline;
 use glam::{DVec3, UVec3, Vec3};
 use isomorph_common::marching_cubes::marching_cubes;
-use isomorph_common::{Grid3, GridError, TriMesh};
+use isomorph_common::marching_triangulation::{TriangulationSettings, marching_triangulation};
+use isomorph_common::{Aabb, Grid3, GridError, MorphError, TriMesh};
 use rayon::prelude::*;
+
+/// Where the evolution's zero-set samples `x_j` (paper §3.3) come from.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Sampler {
+    /// The vertices of a marching-cubes mesh with
+    /// [`EvolveSettings::samples_per_cell`](crate::EvolveSettings::samples_per_cell)
+    /// nodes per finest cell, evaluated only in leaves that hold a zero
+    /// (fast; the points cluster where the surface cuts the lattice
+    /// obliquely).
+    #[default]
+    MarchingCubes,
+    /// The vertices of Hartmann's marching triangulation, as the paper does
+    /// ("uniformly distributed sample points", §3.3): near-equilateral
+    /// triangles with edges of `edge_cells` finest cells (0.05–4), seeded
+    /// from a lattice of one node per finest cell.
+    MarchingTriangulation {
+        /// The triangles' edge length in finest cells of the T-mesh.
+        edge_cells: f64,
+    },
+}
 
 /// A point on the zero set with the function's derivatives there.
 #[derive(Debug, Clone, Copy)]
@@ -100,9 +124,25 @@ pub(crate) fn project(spline: &TSpline, x: DVec3, max_drift: f64) -> Option<Samp
     (eval.value.abs() < 1e-6).then_some(Sample { p, eval })
 }
 
-/// Samples of the zero set: the marching-cubes vertices projected onto it.
-pub(crate) fn zero_set_samples(spline: &TSpline, sub: u32) -> Result<Vec<Sample>, GridError> {
-    let mc = zero_set_mesh(spline, sub)?;
+/// Samples of the zero set by `sampler` (`sub` marching-cubes nodes per
+/// finest cell), each projected onto it.
+pub(crate) fn zero_set_samples(
+    spline: &TSpline,
+    sampler: Sampler,
+    sub: u32,
+) -> Result<Vec<Sample>, MorphError> {
     let (_, step) = lattice(spline, sub);
-    Ok(mc.positions.par_iter().filter_map(|&v| project(spline, v.as_dvec3(), 2.0 * step)).collect())
+    let points = match sampler {
+        Sampler::MarchingCubes => zero_set_mesh(spline, sub)?.positions,
+        Sampler::MarchingTriangulation { edge_cells } => {
+            let h = spline.mesh().finest_cell();
+            let settings = TriangulationSettings {
+                edge: (edge_cells * h) as f32,
+                seed_resolution: lattice(spline, 1).0,
+                ..Default::default()
+            };
+            marching_triangulation(spline, &Aabb::cube(1.0), 0.0, &settings)?.0.positions
+        }
+    };
+    Ok(points.par_iter().filter_map(|&v| project(spline, v.as_dvec3(), 2.0 * step)).collect())
 }
