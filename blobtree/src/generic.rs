@@ -386,7 +386,7 @@ impl MorphSpec {
 #[derive(Debug, Clone)]
 enum SkeletonPath {
     /// `(1 − s) S_A ⊕ s S_B` with its generic topology (§3.4.1).
-    Minkowski(MinkowskiPath),
+    Minkowski(Box<MinkowskiPath>),
     /// For bounds only: the skeletons' local boxes, combined linearly,
     /// which is exactly the box of `(1 − s) S_A ⊕ s S_B` (a box is
     /// Minkowski-linear), stand in for the skeleton. A tree of such leaves
@@ -403,7 +403,8 @@ impl SkeletonPath {
             SkeletonPath::Boxes(a, b) => {
                 let (min, max) = (a.min.lerp(b.min, s), a.max.lerp(b.max, s));
                 let mut corners = Aabb::new(min, max).corners().to_vec();
-                corners.sort_by(|p, q| p.to_array().partial_cmp(&q.to_array()).expect("finite corners"));
+                corners
+                    .sort_by(|p, q| p.x.total_cmp(&q.x).then(p.y.total_cmp(&q.y)).then(p.z.total_cmp(&q.z)));
                 corners.dedup();
                 Skeleton::Generic(crate::Polytope::hull(&corners))
             }
@@ -514,7 +515,7 @@ fn build(pair: &Pair, coplanar: bool, boxes: bool) -> Result<GNode, BlobMorphErr
                 skeleton: if boxes {
                     SkeletonPath::Boxes(pa.bounds(), pb.bounds())
                 } else {
-                    SkeletonPath::Minkowski(MinkowskiPath::new(&pa, &pb))
+                    SkeletonPath::Minkowski(Box::new(MinkowskiPath::new(&pa, &pb)))
                 },
                 frame_a,
                 frame_b,
@@ -814,7 +815,8 @@ pub struct KeyShape {
 pub struct BlobSettings {
     /// Links, pairing heuristic, speed curves and trajectories of the
     /// segment that arrives at the target (the whole morph without `via`;
-    /// default: the nearest-centre heuristic, no links).
+    /// default: the nearest-centre heuristic, no links); its `levels`
+    /// (like those of the `via` specs) link a Bézier morph's upper levels.
     pub spec: MorphSpec,
     /// Key shapes between the source and the target (default none),
     /// combined as `via_mode` says.
@@ -972,15 +974,19 @@ impl BlobMorph {
     /// `C(0)` is the source and `C(1)` the target; the inner shapes are
     /// control shapes, generally not reached.
     ///
-    /// The correspondence of each level `r ≥ 2` is made once, by the
-    /// nearest-centre heuristic on the shapes at `t = ½`, and kept as links
+    /// The correspondence of each level `r ≥ 2` is made once, on the
+    /// shapes at `t = ½`, with the links the controls' specs give for it
+    /// ([`LevelLinks`]) and by the nearest-centre heuristic elsewhere, and kept as links
     /// for every `t` (instances of a generic tree share one structure, mix
     /// nodes written as blends of scaled operators), so `C(t)` is
     /// continuous in `t`.
     ///
     /// # Errors
     /// As [`BlobMorph::through`]; a level's correspondence fails as
-    /// [`GenericTree::new`].
+    /// [`GenericTree::new`], wrapped in [`BlobMorphError::Level`]; level
+    /// links for a level or pair the morph does not have are
+    /// [`isomorph_common::MorphError::BadSetting`] (as are any level links
+    /// given to [`BlobMorph::through`] or [`BlobMorph::from_trees`]).
     pub fn bezier(source: &BlobTree, controls: &[KeyShape]) -> Result<Self, BlobMorphError> {
         Self::finished(
             Self::segments_of(source, controls, &Control::new())?,
