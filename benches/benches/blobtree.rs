@@ -3,7 +3,7 @@
 //! thread, and in parallel), and polygonizing one frame at 128³; building
 //! the frame at t = 0.5 of rook → queen → bear, the queen a Bézier control
 //! shape (de Casteljau: a level-2 generic tree per frame) or a chained key
-//! shape.
+//! shape; building that morph (correspondences and the bounds stage).
 //!
 //! `cargo bench -p isomorph-benches --bench blobtree -- eval/rook_queen/pruned`
 
@@ -67,12 +67,17 @@ fn polygonize_frame(c: &mut Criterion) {
     });
 }
 
-fn instantiate(c: &mut Criterion) {
-    let (rook, queen) = (scenes::rook(), scenes::queen());
+/// The rook, and the queen and the bear as key shapes.
+fn rook_queen_bear() -> (BlobTree, [KeyShape; 2]) {
     let keys = [
-        KeyShape { shape: queen, spec: scenes::demo_spec("rook", "queen").expect("built-in pair") },
+        KeyShape { shape: scenes::queen(), spec: scenes::demo_spec("rook", "queen").expect("built-in pair") },
         KeyShape { shape: scenes::bear(), spec: MorphSpec::default() },
     ];
+    (scenes::rook(), keys)
+}
+
+fn instantiate(c: &mut Criterion) {
+    let (rook, keys) = rook_queen_bear();
     let bezier = BlobMorph::bezier(&rook, &keys).expect("valid shapes");
     let chain = BlobMorph::through(&rook, &keys).expect("valid shapes");
     let mut group = c.benchmark_group("frame/rook_queen_bear");
@@ -81,5 +86,15 @@ fn instantiate(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, eval, polygonize_frame, instantiate);
+/// Building the morph: correspondences, generic trees, and the bounds
+/// stage (65 sampled instants; Bézier: each a de Casteljau tree).
+fn build(c: &mut Criterion) {
+    let (rook, keys) = rook_queen_bear();
+    let mut group = c.benchmark_group("build/rook_queen_bear");
+    group.bench_function("bezier", |b| b.iter(|| BlobMorph::bezier(black_box(&rook), &keys).expect("valid")));
+    group.bench_function("chain", |b| b.iter(|| BlobMorph::through(black_box(&rook), &keys).expect("valid")));
+    group.finish();
+}
+
+criterion_group!(benches, eval, polygonize_frame, instantiate, build);
 criterion_main!(benches);

@@ -304,6 +304,18 @@ pub enum BlobMorphError {
         /// Why (printed as the error's source).
         source: Box<BlobMorphError>,
     },
+    /// The correspondence of a de Casteljau level above the first (a
+    /// Bézier-like morph) failed with the links given for it
+    /// ([`crate::LevelLinks`]): pair `pair` of level `level`.
+    #[error("de Casteljau level {level}, pair {pair}")]
+    Level {
+        /// The level `r ≥ 2`.
+        level: usize,
+        /// The pair `i`: between `P_i^{r−1}` and `P_{i+1}^{r−1}`.
+        pair: usize,
+        /// Why (printed as the error's source).
+        source: Box<BlobMorphError>,
+    },
 }
 
 impl From<GridError> for BlobMorphError {
@@ -316,7 +328,7 @@ impl MorphFailure for BlobMorphError {
     fn shared(&self) -> Option<&isomorph_common::MorphError> {
         match self {
             BlobMorphError::Morph(e) => Some(e),
-            BlobMorphError::Segment { source, .. } => source.shared(),
+            BlobMorphError::Segment { source, .. } | BlobMorphError::Level { source, .. } => source.shared(),
             _ => None,
         }
     }

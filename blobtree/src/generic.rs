@@ -301,6 +301,32 @@ pub struct MorphSpec {
     /// polyhedra (default off: the scene's own frames).
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub coplanar_frames: bool,
+    /// Links for the de Casteljau levels above the first of a Bézier-like
+    /// morph ([`BlobMorph::bezier`]); the morph gathers them from the specs
+    /// of all its segments. [`GenericTree::new`] ignores them.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub levels: Vec<LevelLinks>,
+}
+
+/// The animator's links for one pair of a de Casteljau level `r ≥ 2` of a
+/// Bézier-like morph through the shapes `P_0 … P_n` ([`BlobMorph::bezier`]):
+/// the correspondence between `P_i^{r−1}(t)` and `P_{i+1}^{r−1}(t)`, made
+/// once with these links (children of linked nodes without a link get
+/// phantom partners, as in the first level) and kept for every `t`.
+/// Without them a level is matched by nearest centres at `t = ½`.
+///
+/// Node paths `a` name nodes of `P_i^{r−1}`, `b` nodes of `P_{i+1}^{r−1}`,
+/// as [`BlobMorph::level_shapes`] returns them and their scene files
+/// ([`BlobTree::to_ron`]) write them: their structure does not depend on `t`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LevelLinks {
+    /// The level `r`, from 2 to `n` (the number of shapes minus one).
+    pub level: usize,
+    /// The pair `i`, from 0 to `n − r`: between `P_i^{r−1}` and `P_{i+1}^{r−1}`.
+    pub pair: usize,
+    /// The links.
+    pub links: Vec<Link>,
 }
 
 impl MorphSpec {
@@ -356,11 +382,41 @@ impl MorphSpec {
     }
 }
 
+/// How a generic leaf interpolates its skeleton.
+#[derive(Debug, Clone)]
+enum SkeletonPath {
+    /// `(1 − s) S_A ⊕ s S_B` with its generic topology (§3.4.1).
+    Minkowski(Box<MinkowskiPath>),
+    /// For bounds only: the skeletons' local boxes, combined linearly,
+    /// which is exactly the box of `(1 − s) S_A ⊕ s S_B` (a box is
+    /// Minkowski-linear), stand in for the skeleton. A tree of such leaves
+    /// has the same support as the real one at a fraction of the cost (no
+    /// hull of vertex pairs is built).
+    Boxes(Aabb, Aabb),
+}
+
+impl SkeletonPath {
+    /// The skeleton at `s ∈ (0, 1)`.
+    fn at(&self, s: f32) -> Skeleton {
+        match self {
+            SkeletonPath::Minkowski(path) => Skeleton::Generic(path.at(s)),
+            SkeletonPath::Boxes(a, b) => {
+                let (min, max) = (a.min.lerp(b.min, s), a.max.lerp(b.max, s));
+                let mut corners = Aabb::new(min, max).corners().to_vec();
+                corners
+                    .sort_by(|p, q| p.x.total_cmp(&q.x).then(p.y.total_cmp(&q.y)).then(p.z.total_cmp(&q.z)));
+                corners.dedup();
+                Skeleton::Generic(crate::Polytope::hull(&corners))
+            }
+        }
+    }
+}
+
 #[derive(Debug, Clone)]
 struct GLeaf {
     a: Primitive,
     b: Primitive,
-    skeleton: MinkowskiPath,
+    skeleton: SkeletonPath,
     frame_a: AffineParts,
     frame_b: AffineParts,
     path: FramePath,
@@ -429,10 +485,11 @@ fn frame_parts(
 }
 
 /// The generic node of `pair` and below; `coplanar`: automatic coplanar
-/// frames for flat leaf pairs ([`MorphSpec::coplanar_frames`]).
-fn build(pair: &Pair, coplanar: bool) -> Result<GNode, BlobMorphError> {
+/// frames for flat leaf pairs ([`MorphSpec::coplanar_frames`]); `boxes`:
+/// leaves interpolate only their skeletons' boxes ([`SkeletonPath::Boxes`]).
+fn build(pair: &Pair, coplanar: bool, boxes: bool) -> Result<GNode, BlobMorphError> {
     let origin = pair.origin().clone();
-    let build = |p: &Pair| build(p, coplanar);
+    let build = |p: &Pair| build(p, coplanar, boxes);
     let (kind, children) = match pair {
         Pair::Leaf { a: ends_a, b: ends_b, .. } => {
             // The ends are returned as given; the in-betweens interpolate
@@ -455,7 +512,11 @@ fn build(pair: &Pair, coplanar: bool) -> Result<GNode, BlobMorphError> {
             let leaf = GLeaf {
                 a: (**ends_a).clone(),
                 b: (**ends_b).clone(),
-                skeleton: MinkowskiPath::new(&pa, &pb),
+                skeleton: if boxes {
+                    SkeletonPath::Boxes(pa.bounds(), pb.bounds())
+                } else {
+                    SkeletonPath::Minkowski(Box::new(MinkowskiPath::new(&pa, &pb)))
+                },
                 frame_a,
                 frame_b,
                 path: FramePath::default(),
@@ -551,7 +612,7 @@ impl GLeaf {
         };
         let parts = self.path.at(&self.frame_a, &self.frame_b, s);
         Primitive {
-            skeleton: Skeleton::Generic(self.skeleton.at(s)),
+            skeleton: self.skeleton.at(s),
             kernel: a.kernel.lerp(&b.kernel, s),
             p,
             frame: parts.to_affine(),
@@ -626,13 +687,20 @@ impl GenericTree {
     /// bad speed curves and trajectories (handles must be finite with
     /// magnitudes ≤ [`MAX_MAGNITUDE`]).
     pub fn new(a: &BlobTree, b: &BlobTree, spec: &MorphSpec) -> Result<Self, BlobMorphError> {
+        Self::built(a, b, spec, false)
+    }
+
+    /// [`GenericTree::new`]; with `boxes`, a tree for bounds only, whose
+    /// instances have the same supports as the real tree's
+    /// ([`SkeletonPath::Boxes`]).
+    fn built(a: &BlobTree, b: &BlobTree, spec: &MorphSpec, boxes: bool) -> Result<Self, BlobMorphError> {
         let corr = Correspondence {
             links: spec.links.clone(),
             heuristic: spec.heuristic,
             phantoms: spec.phantoms.clone(),
         };
         let pair = decompose(a.root(), a.threshold(), b.root(), b.threshold(), &corr)?;
-        let mut root = build(&pair, spec.coplanar_frames)?;
+        let mut root = build(&pair, spec.coplanar_frames, boxes)?;
         // Later curves for the same pair override earlier ones.
         let mut speeds = HashMap::new();
         for (k, sc) in spec.speeds.iter().enumerate() {
@@ -747,7 +815,8 @@ pub struct KeyShape {
 pub struct BlobSettings {
     /// Links, pairing heuristic, speed curves and trajectories of the
     /// segment that arrives at the target (the whole morph without `via`;
-    /// default: the nearest-centre heuristic, no links).
+    /// default: the nearest-centre heuristic, no links); its `levels`
+    /// (like those of the `via` specs) link a Bézier morph's upper levels.
     pub spec: MorphSpec,
     /// Key shapes between the source and the target (default none),
     /// combined as `via_mode` says.
@@ -805,6 +874,11 @@ pub struct BlobMorph {
     report: MorphReport,
 }
 
+/// The level links of every key shape's spec.
+fn level_links(keys: &[KeyShape]) -> Vec<LevelLinks> {
+    keys.iter().flat_map(|k| k.spec.levels.iter().cloned()).collect()
+}
+
 /// Instants sampled to bound the frames' supports.
 const BOUND_SAMPLES: usize = 33;
 
@@ -846,7 +920,7 @@ impl BlobMorph {
             control.progress("correspondence", None, String::new);
             control.check()?;
             let segments = Self::segments_of(a, &keys, control)?;
-            let mut morph = Self::combined(segments, settings.via_mode)?;
+            let mut morph = Self::combined(segments, settings.via_mode, &level_links(&keys))?;
             stages.lap("correspondence");
             morph.bounds = morph.support(control)?;
             stages.lap("bounds");
@@ -862,7 +936,7 @@ impl BlobMorph {
     /// As [`GenericTree::new`].
     pub fn from_trees(a: &BlobTree, b: &BlobTree, spec: &MorphSpec) -> Result<Self, BlobMorphError> {
         let generic = GenericTree::new(a, b, spec)?;
-        Self::finished(vec![generic], ViaMode::Chain)
+        Self::finished(vec![generic], ViaMode::Chain, &spec.levels)
     }
 
     /// The morph from `source` through the key shapes `keys` (the last is
@@ -879,7 +953,7 @@ impl BlobMorph {
     /// [`BlobMorphError::Segment`] wrapping the errors of
     /// [`GenericTree::new`] for the segment that failed.
     pub fn through(source: &BlobTree, keys: &[KeyShape]) -> Result<Self, BlobMorphError> {
-        Self::finished(Self::segments_of(source, keys, &Control::new())?, ViaMode::Chain)
+        Self::finished(Self::segments_of(source, keys, &Control::new())?, ViaMode::Chain, &level_links(keys))
     }
 
     /// The Bézier-like morph (§1, §3: "combine interpolations together so
@@ -900,36 +974,81 @@ impl BlobMorph {
     /// `C(0)` is the source and `C(1)` the target; the inner shapes are
     /// control shapes, generally not reached.
     ///
-    /// The correspondence of each level `r ≥ 2` is made once, by the
-    /// nearest-centre heuristic on the shapes at `t = ½`, and kept as links
+    /// The correspondence of each level `r ≥ 2` is made once, on the
+    /// shapes at `t = ½`, with the links the controls' specs give for it
+    /// ([`LevelLinks`]) and by the nearest-centre heuristic elsewhere, and kept as links
     /// for every `t` (instances of a generic tree share one structure, mix
     /// nodes written as blends of scaled operators), so `C(t)` is
     /// continuous in `t`.
     ///
     /// # Errors
     /// As [`BlobMorph::through`]; a level's correspondence fails as
-    /// [`GenericTree::new`].
+    /// [`GenericTree::new`], wrapped in [`BlobMorphError::Level`]; level
+    /// links for a level or pair the morph does not have are
+    /// [`isomorph_common::MorphError::BadSetting`] (as are any level links
+    /// given to [`BlobMorph::through`] or [`BlobMorph::from_trees`]).
     pub fn bezier(source: &BlobTree, controls: &[KeyShape]) -> Result<Self, BlobMorphError> {
-        Self::finished(Self::segments_of(source, controls, &Control::new())?, ViaMode::Bezier)
+        Self::finished(
+            Self::segments_of(source, controls, &Control::new())?,
+            ViaMode::Bezier,
+            &level_links(controls),
+        )
     }
 
     /// The morph of `segments` combined as `mode` says, with its bounds and report.
-    fn finished(segments: Vec<GenericTree>, mode: ViaMode) -> Result<Self, BlobMorphError> {
-        let mut morph = Self::combined(segments, mode)?;
+    fn finished(
+        segments: Vec<GenericTree>,
+        mode: ViaMode,
+        given: &[LevelLinks],
+    ) -> Result<Self, BlobMorphError> {
+        let mut morph = Self::combined(segments, mode, given)?;
         morph.bounds = morph.support(&Control::new())?;
         Ok(morph)
     }
 
     /// The morph of `segments` combined as `mode` says (Bézier: the
-    /// correspondences of the de Casteljau levels), bounds not yet computed.
-    fn combined(segments: Vec<GenericTree>, mode: ViaMode) -> Result<Self, BlobMorphError> {
+    /// correspondences of the de Casteljau levels, made at `t = ½` with the
+    /// `given` links), bounds not yet computed.
+    fn combined(
+        segments: Vec<GenericTree>,
+        mode: ViaMode,
+        given: &[LevelLinks],
+    ) -> Result<Self, BlobMorphError> {
+        let n = segments.len();
+        if let Some(l) = given
+            .iter()
+            .find(|l| mode != ViaMode::Bezier || !(2..=n).contains(&l.level) || l.pair > n - l.level)
+        {
+            let expected = if mode == ViaMode::Bezier && n > 1 {
+                format!(
+                    "a level from 2 to {n} and a pair from 0 to n − level (a Bézier morph through {} shapes)",
+                    n + 1
+                )
+            } else {
+                "no level links: they need a Bézier-like morph through control shapes (--via)".into()
+            };
+            return Err(isomorph_common::MorphError::BadSetting {
+                name: "levels",
+                value: format!("level {}, pair {}", l.level, l.pair),
+                expected,
+            }
+            .into());
+        }
         let mut levels = Vec::new();
         if mode == ViaMode::Bezier {
             let mut row = segments.iter().map(|g| g.at_fixed(0.5)).collect::<Result<Vec<_>, _>>()?;
             while row.len() > 1 {
+                let level = levels.len() + 2;
                 let (mut specs, mut next) = (Vec::new(), Vec::new());
-                for w in row.windows(2) {
-                    let generic = GenericTree::new(&w[0], &w[1], &MorphSpec::default())?;
+                for (pair, w) in row.windows(2).enumerate() {
+                    let links = given
+                        .iter()
+                        .filter(|l| (l.level, l.pair) == (level, pair))
+                        .flat_map(|l| l.links.iter().cloned())
+                        .collect();
+                    let spec = MorphSpec { links, ..MorphSpec::default() };
+                    let generic = GenericTree::new(&w[0], &w[1], &spec)
+                        .map_err(|e| BlobMorphError::Level { level, pair, source: Box::new(e) })?;
                     specs.push(MorphSpec { links: links_of(generic.pair()), ..MorphSpec::default() });
                     next.push(generic.at_fixed(0.5)?);
                 }
@@ -979,23 +1098,68 @@ impl BlobMorph {
     }
 
     /// The Bézier-like `C(t)` by de Casteljau's construction (see
-    /// [`BlobMorph::bezier`]).
-    fn casteljau(&self, t: f32) -> Result<BlobTree, BlobMorphError> {
-        let mut row = self.segments.iter().map(|g| g.at_fixed(t)).collect::<Result<Vec<_>, _>>()?;
-        for specs in &self.levels {
-            row = row
-                .windows(2)
-                .zip(specs)
-                .map(|(w, spec)| GenericTree::new(&w[0], &w[1], spec)?.at_fixed(t))
-                .collect::<Result<_, _>>()?;
-        }
+    /// [`BlobMorph::bezier`]); with `boxes`, a tree with the same support
+    /// whose levels above the first interpolate only skeleton boxes
+    /// ([`SkeletonPath::Boxes`]).
+    fn casteljau(&self, t: f32, boxes: bool) -> Result<BlobTree, BlobMorphError> {
+        let mut row = self.row(self.segments.len(), t, boxes)?;
         Ok(row.pop().expect("one shape is left"))
     }
 
-    /// `C(t)` for `t ∈ [0, 1]`.
-    fn shape_at(&self, t: f32) -> Result<BlobTree, BlobMorphError> {
+    /// The shapes `P_i^level(t)` of de Casteljau level `level ≥ 1`.
+    fn row(&self, level: usize, t: f32, boxes: bool) -> Result<Vec<BlobTree>, BlobMorphError> {
+        let mut row = self.segments.iter().map(|g| g.at_fixed(t)).collect::<Result<Vec<_>, _>>()?;
+        for specs in &self.levels[..level - 1] {
+            row = row
+                .windows(2)
+                .zip(specs)
+                .map(|(w, spec)| GenericTree::built(&w[0], &w[1], spec, boxes)?.at_fixed(t))
+                .collect::<Result<_, _>>()?;
+        }
+        Ok(row)
+    }
+
+    /// The links the correspondence of pair `pair` of de Casteljau level
+    /// `level ≥ 2` keeps for every `t` (the given [`LevelLinks`] and the
+    /// pairs nearest centres made at `t = ½`); empty for a level or pair
+    /// the morph does not have.
+    pub fn level_links(&self, level: usize, pair: usize) -> &[Link] {
+        level
+            .checked_sub(2)
+            .and_then(|r| self.levels.get(r)?.get(pair))
+            .map_or(&[], |spec| spec.links.as_slice())
+    }
+
+    /// The shapes `P_0^r(t) … P_{n−r}^r(t)` of de Casteljau level `r`
+    /// (`level`, from 1 to `n`) of a Bézier-like morph through `n + 1`
+    /// shapes ([`BlobMorph::bezier`]); level 1 is the pairwise generic
+    /// trees. Their structure does not depend on `t` (mix nodes are written
+    /// as blends of scaled operators): the node paths of
+    /// [`LevelLinks`] for level `r + 1` name their nodes.
+    ///
+    /// # Errors
+    /// [`isomorph_common::MorphError::InvalidTime`] for `t ∉ [0, 1]`;
+    /// [`isomorph_common::MorphError::BadSetting`] for a level outside
+    /// `1..=n` or a morph that is not Bézier-like.
+    pub fn level_shapes(&self, level: usize, t: f32) -> Result<Vec<BlobTree>, BlobMorphError> {
+        let t = isomorph_common::check_time(t)?;
+        let n = self.segments.len();
+        if self.mode != ViaMode::Bezier || !(1..=n).contains(&level) {
+            return Err(isomorph_common::MorphError::BadSetting {
+                name: "level",
+                value: level.to_string(),
+                expected: format!("1 to {n} in a Bézier-like morph"),
+            }
+            .into());
+        }
+        self.row(level, t, false)
+    }
+
+    /// `C(t)` for `t ∈ [0, 1]`; with `boxes`, a tree with the same support
+    /// (see [`BlobMorph::casteljau`]).
+    fn shape_at(&self, t: f32, boxes: bool) -> Result<BlobTree, BlobMorphError> {
         match self.mode {
-            ViaMode::Bezier if self.segments.len() > 1 => self.casteljau(t),
+            ViaMode::Bezier if self.segments.len() > 1 => self.casteljau(t, boxes),
             _ => {
                 let (segment, u) = self.locate(t);
                 segment.at(u)
@@ -1004,7 +1168,10 @@ impl BlobMorph {
     }
 
     /// The union of the supports of `C(t)` at 33 instants per segment,
-    /// padded by 5 % against motion between samples.
+    /// padded by 5 % against motion between samples. A Bézier morph's
+    /// supports come from de Casteljau trees whose upper levels carry
+    /// skeleton boxes instead of Minkowski sums: the same supports, without
+    /// the hulls.
     fn support(&self, control: &Control) -> Result<Aabb, BlobMorphError> {
         let mut bounds = Aabb::EMPTY;
         let samples = BOUND_SAMPLES * self.segments.len() - (self.segments.len() - 1);
@@ -1012,7 +1179,7 @@ impl BlobMorph {
             let t = i as f32 / (samples - 1) as f32;
             control.progress("bounds", Some(t), String::new);
             control.check()?;
-            bounds = bounds.union(&self.shape_at(t)?.support());
+            bounds = bounds.union(&self.shape_at(t, true)?.support());
         }
         Ok(bounds.padded(0.05))
     }
@@ -1055,7 +1222,7 @@ impl Morph for BlobMorph {
     }
 
     fn frame(&self, t: f32) -> Result<Frame<BlobTree>, BlobMorphError> {
-        let field = self.shape_at(isomorph_common::check_time(t)?)?;
+        let field = self.shape_at(isomorph_common::check_time(t)?, false)?;
         Ok(Frame { field, iso: 0.0, transform: Affine3A::IDENTITY })
     }
 
@@ -1137,6 +1304,180 @@ mod tests {
                 prop_assert!((c1.value(p) - tc.value(p)).abs() < 1e-5 * (1.0 + tc.value(p).abs()), "C(1) at {}", p);
                 prop_assert!(mid.value(p).is_finite());
             }
+        }
+
+        /// The bounds stage's de Casteljau trees of skeleton boxes have the
+        /// supports of the real frames (three random control trees), and the
+        /// morph's bounds hold the frames' supports at the sampled instants
+        /// `i/64`. (Between samples they need not: a bend whose rate grows
+        /// from 0 has image bounds of size ~1/rate, which shrink fast near
+        /// t = 0; the 5 % pad does not cover that.)
+        #[test]
+        fn bezier_bounds_are_the_frames_supports(a in testutil::tree(), b in testutil::tree(), c in testutil::tree()) {
+            let trees = [(a, 0.5), (b, 0.4), (c, 0.45)].map(|(n, t)| BlobTree::new(n, t).unwrap());
+            let keys: Vec<KeyShape> =
+                trees[1..].iter().map(|t| KeyShape { shape: t.clone(), spec: MorphSpec::default() }).collect();
+            let m = BlobMorph::bezier(&trees[0], &keys).unwrap();
+            for t in [0.0, 0.013, 0.37, 0.5, 0.971, 1.0] {
+                let (real, boxed) = (m.shape_at(t, false).unwrap().support(), m.shape_at(t, true).unwrap().support());
+                prop_assert!(support_eq(&real, &boxed), "t = {}: {:?} vs {:?}", t, real, boxed);
+            }
+            for i in [0, 1, 21, 32, 64] {
+                let real = m.shape_at(i as f32 / 64.0, false).unwrap().support();
+                prop_assert!(holds(&m.field_bounds(), &real), "t = {}/64: {:?} outside {:?}", i, real, m.field_bounds());
+            }
+        }
+    }
+
+    /// Three de Casteljau levels (four control shapes: a box, a segment, a
+    /// triangle and a point, each turned and moved): levels 3 and up are
+    /// built on box skeletons in the bounds stage, and still have the real
+    /// frames' supports.
+    #[test]
+    fn bezier_bounds_hold_through_three_levels() {
+        let shape = |node: &str, axis: &str, degrees: f32, at: &str| {
+            BlobTree::from_ron(&format!(
+                "(root: (kind: \"blend\", children: [{node}, (kind: \"point\", vertices: [(0, 0, 0)], radius: 0.5,                  frame: (translate: {at}, rotate: (axis: {axis}, degrees: {degrees})))]))"
+            ))
+            .unwrap()
+        };
+        let trees = [
+            shape(r#"(kind: "box", half: (0.4, 0.1, 0.2), radius: 0.3)"#, "(0, 0, 1)", 30.0, "(0.5, 0, 0)"),
+            shape(
+                r#"(kind: "segment", vertices: [(0, -0.5, 0), (0, 0.5, 0.2)], radius: 0.4, frame: (rotate: (axis: (1, 1, 0), degrees: 70)))"#,
+                "(1, 0, 0)",
+                80.0,
+                "(0, 0.6, 0)",
+            ),
+            shape(
+                r#"(kind: "polygon", vertices: [(0, 0, 0), (0.6, 0, 0), (0, 0.5, 0.1)], radius: 0.3, frame: (translate: (0, 0, 1)))"#,
+                "(0, 1, 0)",
+                150.0,
+                "(-0.4, 0, 0.2)",
+            ),
+            shape(
+                r#"(kind: "point", vertices: [(0.2, 0.3, 0)], radius: 0.6)"#,
+                "(0, 0, 1)",
+                -90.0,
+                "(0, -0.5, 0)",
+            ),
+        ];
+        let keys: Vec<KeyShape> =
+            trees[1..].iter().map(|t| KeyShape { shape: t.clone(), spec: MorphSpec::default() }).collect();
+        let m = BlobMorph::bezier(&trees[0], &keys).unwrap();
+        assert_eq!(m.levels.len(), 2);
+        for k in 0..=20 {
+            let t = k as f32 / 20.0 + if k % 2 == 1 { 0.011 } else { 0.0 };
+            let (real, boxed) =
+                (m.shape_at(t, false).unwrap().support(), m.shape_at(t, true).unwrap().support());
+            assert!(support_eq(&real, &boxed), "t = {t}: {real:?} vs {boxed:?}");
+            assert!(holds(&m.field_bounds(), &real), "t = {t}");
+        }
+    }
+
+    /// Two support boxes equal up to float rounding.
+    fn support_eq(a: &Aabb, b: &Aabb) -> bool {
+        if a.is_empty() || b.is_empty() {
+            return a.is_empty() == b.is_empty();
+        }
+        let tolerance = 1e-5 * (1.0 + a.diagonal());
+        (a.min - b.min).abs().max_element() <= tolerance && (a.max - b.max).abs().max_element() <= tolerance
+    }
+
+    /// `outer` holds `inner` (an empty box is held by any).
+    fn holds(outer: &Aabb, inner: &Aabb) -> bool {
+        inner.is_empty() || (outer.contains(inner.min) && outer.contains(inner.max))
+    }
+
+    /// Links given for de Casteljau level 2 are honoured: three shapes of
+    /// two points each (at x = ±1); by nearest centres level 2 pairs
+    /// each point with the one on its side, with the given crossed links
+    /// each with the one opposite, so at t = ½ both points meet at the
+    /// origin. The paths are those of the level-1 shapes as written to a
+    /// scene file. Bad level links are refused with the level named.
+    #[test]
+    fn level_links_are_honoured() {
+        let pair = BlobTree::from_ron(
+            r#"(root: (kind: "blend", children: [
+                (kind: "point", vertices: [(-1, 0, 0)], radius: 1),
+                (kind: "point", vertices: [(1, 0, 0)], radius: 1)]))"#,
+        )
+        .unwrap();
+        let key = |spec: MorphSpec| KeyShape { shape: pair.clone(), spec };
+        let automatic =
+            BlobMorph::bezier(&pair, &[key(MorphSpec::default()), key(MorphSpec::default())]).unwrap();
+        let crossed = MorphSpec::from_ron(
+            "(levels: [(level: 2, pair: 0, links: [(a: [0], b: [1]), (a: [1], b: [0])])])",
+        )
+        .unwrap();
+        let m = BlobMorph::bezier(&pair, &[key(MorphSpec::default()), key(crossed.clone())]).unwrap();
+        let recorded = &m.levels[0][0].links;
+        for (a, b) in [(0, 1), (1, 0)] {
+            assert!(recorded.contains(&Link { a: NodePath(vec![a]), b: NodePath(vec![b]) }), "{recorded:?}");
+        }
+        assert!(!automatic.levels[0][0].links.contains(&Link { a: NodePath(vec![0]), b: NodePath(vec![1]) }));
+        // The level-1 shapes keep their paths when written and read back.
+        for shape in m.level_shapes(1, 0.3).unwrap() {
+            let text = shape.to_ron().unwrap();
+            let again = BlobTree::from_ron(&text).unwrap();
+            assert_eq!(again.to_ron().unwrap(), text);
+            assert!(again.root().get(&NodePath(vec![1])).is_some());
+            assert!(testutil::points().into_iter().all(|p| (again.value(p) - shape.value(p)).abs() < 1e-6));
+        }
+        let mid = |m: &BlobMorph| m.frame(0.5).unwrap().field.potential(Vec3::ZERO);
+        assert!((mid(&m) - 2.0).abs() < 1e-5, "{}", mid(&m));
+        assert!(mid(&automatic) < 0.5, "{}", mid(&automatic));
+        // The ends are kept; the morph is continuous.
+        for p in testutil::points() {
+            assert!((m.frame(0.0).unwrap().field.value(p) - pair.value(p)).abs() < 1e-6);
+            assert!((m.frame(1.0).unwrap().field.value(p) - pair.value(p)).abs() < 1e-6);
+        }
+        // Bad level links.
+        let error = |spec: &str, mode: ViaMode| {
+            let spec = MorphSpec::from_ron(spec).unwrap();
+            let keys = [key(MorphSpec::default()), key(spec)];
+            match mode {
+                ViaMode::Bezier => BlobMorph::bezier(&pair, &keys),
+                ViaMode::Chain => BlobMorph::through(&pair, &keys),
+            }
+            .unwrap_err()
+        };
+        let e = error("(levels: [(level: 2, pair: 0, links: [(a: [2], b: [0])])])", ViaMode::Bezier);
+        assert!(
+            matches!(&e, BlobMorphError::Level { level: 2, pair: 0, source } if matches!(**source, BlobMorphError::NoSuchNode { .. })),
+            "{e:?}"
+        );
+        for bad in
+            ["(levels: [(level: 3, pair: 0, links: [])])", "(levels: [(level: 2, pair: 1, links: [])])"]
+        {
+            let e = error(bad, ViaMode::Bezier).to_string();
+            assert!(e.contains("levels") && e.contains("from 2 to 2"), "{e}");
+        }
+        let e = error("(levels: [(level: 2, pair: 0, links: [])])", ViaMode::Chain).to_string();
+        assert!(e.contains("Bézier"), "{e}");
+        assert!(BlobMorph::from_trees(&pair, &pair, &crossed).is_err());
+        assert!(m.level_shapes(2, 0.5).unwrap().len() == 1 && m.level_shapes(3, 0.5).is_err());
+    }
+
+    /// The built-in rook → queen → bear Bézier morph: the bounds stage's
+    /// box-skeleton trees have the real frames' supports, and the bounds
+    /// hold every frame's support.
+    #[test]
+    fn bezier_bounds_of_scenes_are_the_frames_supports() {
+        let keys = [
+            KeyShape {
+                shape: crate::scenes::queen(),
+                spec: crate::scenes::demo_spec("rook", "queen").unwrap(),
+            },
+            KeyShape { shape: crate::scenes::bear(), spec: MorphSpec::default() },
+        ];
+        let m = BlobMorph::bezier(&crate::scenes::rook(), &keys).unwrap();
+        for k in 0..=8 {
+            let t = (k as f32 / 8.0 + 0.013 * (k % 2) as f32).min(1.0);
+            let (real, boxed) =
+                (m.shape_at(t, false).unwrap().support(), m.shape_at(t, true).unwrap().support());
+            assert!(support_eq(&real, &boxed), "t = {t}: {real:?} vs {boxed:?}");
+            assert!(holds(&m.field_bounds(), &real), "t = {t}");
         }
     }
 

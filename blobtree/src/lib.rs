@@ -87,6 +87,7 @@
 //! | `trajectories: [(a: PATH, b: PATH, handles: ((x, y, z), (x, y, z))), …]` | the two inner control points (world units) of the cubic Bézier curve the frame origin of the generic leaf or affine node `a → b` follows (default: uniform straight motion, slerped orientation); or key frames `keys: [(s: 0.5, position: (x, y, z), rotate: (axis: (x, y, z), degrees: a)), …]` at increasing local times `s ∈ (0, 1)`, each with a position and/or an orientation: the origin follows the cubic spline (Catmull–Rom tangents) through the end origins and the key positions, the orientation slerps from key to key ([`Trajectory`], [`FrameKey`]) |
 //! | `coplanar_frames: true` | automatic coplanar frames (§3.4, Figs. 10–11): matched points, segments and polygons are interpolated in local frames where both lie in one plane, so in-between skeletons stay segments or polygons (default `false`) |
 //! | `phantoms: [(target: PATH, position: (x, y, z), radius: R, stiffness: k), …]` | the phantom partner of a node without correspondence (§3.3, Fig. 17; [`Phantom`]): name the node by `source: PATH` or `target: PATH`; its phantom's skeletons are centred at `position` (world units), its primitives get radius `R` and stiffness `k` (each optional; default: the node's own); its intensity stays 0 |
+//! | `levels: [(level: 2, pair: 0, links: [(a: PATH, b: PATH), …]), …]` | a Bézier-like morph through control shapes `P_0 … P_n` only (`--via`, [`BlobMorph::bezier`]): links for pair `i` of de Casteljau level `r` (`2 ≤ r ≤ n`, `0 ≤ i ≤ n − r`), the correspondence between the level-`(r − 1)` shapes `P_i^{r−1}` and `P_{i+1}^{r−1}`, made once with these links (children of linked nodes without a link get phantoms) and kept for every `t`; without them a level pairs nearest centres at `t = ½`. Paths name nodes of those shapes as [`BlobMorph::level_shapes`] returns them and [`BlobTree::to_ron`] writes them (their structure does not depend on `t`). The morph gathers `levels` from every pair's spec (with `--via`, the `--links` file is the last pair's) ([`LevelLinks`]) |
 //!
 //! A full scene and a links spec for it, as in the shipped files:
 //!
@@ -261,8 +262,8 @@ pub use correspond::{
 };
 pub use error::{BlobError, BlobMorphError, NodePath, NodeProblem, Side};
 pub use generic::{
-    BlobMorph, BlobSettings, FrameKey, GenericTree, KeyShape, MorphSpec, Orientation, Speed, SpeedCurve,
-    Trajectory, ViaMode,
+    BlobMorph, BlobSettings, FrameKey, GenericTree, KeyShape, LevelLinks, MorphSpec, Orientation, Speed,
+    SpeedCurve, Trajectory, ViaMode,
 };
 pub use kernel::Kernel;
 pub use minkowski::MinkowskiPath;

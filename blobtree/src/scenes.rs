@@ -418,6 +418,10 @@ mod tests {
     /// (hand-written, for [`bear`] → [`bird`]).
     const EVERY_FEATURE: &str = "bear_bird.every_feature.links.ron";
 
+    /// The shipped links spec with de Casteljau level links (hand-written,
+    /// for the Bézier-like rook → queen → bear).
+    const LEVELS: &str = "rook_queen_bear.levels.links.ron";
+
     /// The folder of shipped example files (`blobtree/scenes/`).
     fn shipped() -> std::path::PathBuf {
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
@@ -445,7 +449,7 @@ mod tests {
     /// hand-written example spec.
     #[test]
     fn shipped_files_equal_the_built_ins() {
-        let mut expected = vec![EVERY_FEATURE.to_string()];
+        let mut expected = vec![EVERY_FEATURE.to_string(), LEVELS.to_string()];
         for name in NAMES {
             let tree = load(name).unwrap();
             let file = format!("{name}.ron");
@@ -480,7 +484,9 @@ mod tests {
     fn the_every_feature_spec_uses_every_control() {
         let spec = MorphSpec::load(&shipped().join(EVERY_FEATURE)).unwrap();
         // Every field given (a field added to MorphSpec must be added to the file).
-        let MorphSpec { links, heuristic: _, speeds, trajectories, phantoms, coplanar_frames } = &spec;
+        // (`levels` need a Bézier morph: `rook_queen_bear.levels.links.ron` shows them.)
+        let MorphSpec { links, heuristic: _, speeds, trajectories, phantoms, coplanar_frames, levels: _ } =
+            &spec;
         assert!(
             !links.is_empty()
                 && !speeds.is_empty()
@@ -505,6 +511,32 @@ mod tests {
         }
         for k in 0..=8 {
             assert_eq!(components(&m, k as f32 / 8.0, 40), 1, "t = {}", k as f32 / 8.0);
+        }
+    }
+
+    /// The shipped level-links spec drives the Bézier-like rook → queen →
+    /// bear: its level-2 links are the ones the morph keeps (the carving
+    /// balls in ring order, where nearest centres turn the ring), and the
+    /// morph reproduces both ends.
+    #[test]
+    fn the_level_links_spec_is_honoured() {
+        let spec = MorphSpec::load(&shipped().join(LEVELS)).unwrap();
+        assert!(spec.links.is_empty() && spec.levels.len() == 1);
+        let (rook, bear) = (rook(), bear());
+        let key = |shape: BlobTree, spec: MorphSpec| crate::KeyShape { shape, spec };
+        let queen = key(queen(), demo_spec("rook", "queen").unwrap());
+        let m = crate::BlobMorph::bezier(&rook, &[queen.clone(), key(bear.clone(), spec.clone())]).unwrap();
+        let automatic =
+            crate::BlobMorph::bezier(&rook, &[queen, key(bear.clone(), MorphSpec::default())]).unwrap();
+        let carving = |m: &crate::BlobMorph, k: usize| {
+            m.level_links(2, 0).iter().any(|l| l.a.0 == [1, 1, k] && l.b.0 == [1, 1, k])
+        };
+        assert!((0..8).all(|k| carving(&m, k)));
+        assert!(!(0..8).all(|k| carving(&automatic, k)), "the example should change the automatic choice");
+        for i in 0..300 {
+            let p = Vec3::new((i as f32 * 0.37).sin(), (i as f32 * 0.61).cos(), (i as f32 * 0.23).sin());
+            assert!((m.frame(0.0).unwrap().field.value(p) - rook.value(p)).abs() < 1e-5, "C(0) at {p}");
+            assert!((m.frame(1.0).unwrap().field.value(p) - bear.value(p)).abs() < 1e-5, "C(1) at {p}");
         }
     }
 

@@ -158,7 +158,11 @@ pub struct MethodArgs {
 
     /// The animator's links, speed curves and trajectories (a RON or JSON
     /// morph spec); the built-in spec of a built-in pair, or automatic
-    /// correspondence, without it.
+    /// correspondence, without it. With --via: the spec of the last pair
+    /// (the last --via shape → the target), whose `levels` may give links
+    /// for the Bézier morph's de Casteljau levels above the first. Format:
+    /// the isomorph-blobtree crate docs, "Scene files"; examples in
+    /// blobtree/scenes/.
     #[arg(long, help_heading = "BlobTree (Galin et al.)")]
     pub links: Option<PathBuf>,
 
@@ -166,8 +170,8 @@ pub struct MethodArgs {
     /// scene file or a built-in scene); repeat for several, in order. The
     /// generic trees of each pair of consecutive shapes are combined as
     /// --via-mode says. Each pair uses its built-in spec (a built-in pair)
-    /// or automatic correspondence.
-    #[arg(long, help_heading = "BlobTree (Galin et al.)", conflicts_with = "links")]
+    /// or automatic correspondence; the last pair uses --links if given.
+    #[arg(long, help_heading = "BlobTree (Galin et al.)")]
     pub via: Vec<String>,
 
     /// How the --via shapes are used: `bezier` (the paper's Bézier-like
