@@ -401,6 +401,17 @@ pub trait NodeStore<T>: IndexMut<usize, Output = T> + Clone + Debug + Send + Syn
 
     /// Heap bytes held.
     fn heap_bytes(&self) -> usize;
+
+    /// The value at node `n`, whose coordinates are `c`: `self[n]`, read
+    /// without recovering `c` from `n` (two integer divisions a brick
+    /// lookup otherwise needs; for a solver's inner loops).
+    #[inline]
+    fn at(&self, n: usize, _c: UVec3) -> T
+    where
+        T: Copy,
+    {
+        self[n]
+    }
 }
 
 impl<T: Copy + Debug + Send + Sync> NodeStore<T> for Vec<T> {
@@ -425,6 +436,11 @@ impl<T: Copy + Debug + Send + Sync> NodeStore<T> for Vec<T> {
 }
 
 impl<T: Copy + PartialEq + Debug + Send + Sync> NodeStore<T> for Bricks<T> {
+    #[inline]
+    fn at(&self, _n: usize, c: UVec3) -> T {
+        self.get(c)
+    }
+
     fn by_side(
         dims: UVec3,
         is_inside: impl Fn(usize) -> bool + Sync,

@@ -65,7 +65,7 @@
 //! grows with the surface area, not the volume.
 
 use crate::solver::{Curvature, Solver, StepParams, StepStats, node_rate, stable_time_step};
-use crate::stencil::{Lattice, zero_crossing};
+use crate::stencil::{Lattice, Stored, zero_crossing};
 use crate::{BandFrame, LevelSetError, SpeedGrid};
 use isomorph_common::glam::{UVec3, Vec3};
 use isomorph_common::{BRICK, Bricks, Field3, Grid3, GridError, NodeStore};
@@ -287,7 +287,7 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> SparseFieldSolver<U, S> {
     /// Step 1: change rate of every active point, with the speed sampled at
     /// its nearest zero crossing.
     fn compute_rates(&mut self, speed: &SpeedGrid, curvature: Option<Curvature>) {
-        let (lattice, u, h) = (&self.lattice, &self.u, speed.spacing());
+        let (lattice, u, h) = (&self.lattice, &Stored(&self.u), speed.spacing());
         let active = &self.layers[slot(0)];
         active
             .par_iter()
@@ -538,12 +538,21 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> SparseFieldSolver<U, S> {
     fn layer_distance(&self, n: usize, layer: i8) -> Option<f32> {
         let side = f32::from(layer.signum());
         let inner = layer - layer.signum();
+        let c = self.lattice.coords(n);
+        // Reads by coordinates: a brick lookup without dividing `m`.
+        let status =
+            |m: usize, c: [usize; 3]| self.status.at(m, UVec3::new(c[0] as u32, c[1] as u32, c[2] as u32));
+        let value = |m: usize, c: [usize; 3]| self.u.at(m, UVec3::new(c[0] as u32, c[1] as u32, c[2] as u32));
         if layer.abs() > 1 {
-            let nearest =
-                self.lattice.neighbours(n).into_iter().flatten().filter(|&m| self.status[m] == inner);
-            return nearest.map(|m| side * self.u[m]).reduce(f32::min).map(|v| v + 1.0);
+            let nearest = self
+                .lattice
+                .neighbours_at(n, c)
+                .into_iter()
+                .flatten()
+                .filter(|&(m, d)| status(m, d) == inner);
+            return nearest.map(|(m, d)| side * value(m, d)).reduce(f32::min).map(|v| v + 1.0);
         }
-        let (c, dims, strides) = (self.lattice.coords(n), self.lattice.dims(), self.lattice.strides());
+        let (dims, strides) = (self.lattice.dims(), self.lattice.strides());
         let mut axes = [(f32::INFINITY, 1.0f32); 3];
         let mut reached = false;
         for axis in 0..3 {
@@ -552,13 +561,19 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> SparseFieldSolver<U, S> {
             // it lies towards +axis.
             let mut nearest: Option<(usize, bool)> = None;
             let lines = [(at >= 1).then(|| (n - s, false)), (at + 1 < len).then(|| (n + s, true))];
+            let moved = |up: bool, by: usize| {
+                let mut d = c;
+                d[axis] = if up { at + by } else { at - by };
+                d
+            };
             for (m, up) in lines.into_iter().flatten() {
-                let status = self.status[m];
-                if status != inner && status != layer {
+                let d = moved(up, 1);
+                let state = status(m, d);
+                if state != inner && state != layer {
                     continue;
                 }
-                reached |= status == inner;
-                let near = side * self.u[m];
+                reached |= state == inner;
+                let near = side * value(m, d);
                 if near < axes[axis].0 {
                     axes[axis].0 = near;
                     nearest = Some((m, up));
@@ -567,10 +582,15 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> SparseFieldSolver<U, S> {
             // Towards second order as the point beyond is nearer still:
             // c (v − a) = (v − u₁) + ½ w (v − 2u₁ + u₂), w ∈ [0, 1].
             let Some((m, up)) = nearest else { continue };
-            let beyond = if up { (at + 2 < len).then(|| m + s) } else { (at >= 2).then(|| m - s) };
+            let beyond = if up {
+                (at + 2 < len).then(|| (m + s, moved(true, 2)))
+            } else {
+                (at >= 2).then(|| (m - s, moved(false, 2)))
+            };
             let near = axes[axis].0;
-            if let Some(b) =
-                beyond.filter(|&k| (-LAYERS..=LAYERS).contains(&self.status[k])).map(|k| side * self.u[k])
+            if let Some(b) = beyond
+                .filter(|&(k, d)| (-LAYERS..=LAYERS).contains(&status(k, d)))
+                .map(|(k, d)| side * value(k, d))
             {
                 let w = ((near - b) / ORDER_RAMP).clamp(0.0, 1.0);
                 let c = 1.0 + 0.5 * w;
@@ -688,7 +708,7 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> Solver for SparseFieldSolver<U, S> {
     /// differ by at most one).
     fn capture(&self, iteration: usize, time: f64) -> BandFrame {
         let near = [&self.layers[slot(-1)][..], &self.layers[slot(0)], &self.layers[slot(1)]];
-        BandFrame::capture_near(&self.u, &self.lattice, near, iteration, time)
+        BandFrame::capture_near(&Stored(&self.u), &self.lattice, near, iteration, time)
     }
 }
 

@@ -6,14 +6,44 @@
 //! `∂φ/∂t = |∇φ| γ` keeps its time scale under that change of units.
 
 use crate::SpeedGrid;
+use isomorph_common::NodeStore;
 use isomorph_common::glam::{UVec3, Vec3};
 use std::ops::Index;
 
-/// Node values read by linear node index: a dense slice or a sparse
-/// [`isomorph_common::Bricks`] (voxel units, positive inside).
-pub(crate) trait Values: Index<usize, Output = f32> + Sync {}
+/// Node values (voxel units, positive inside) read by linear node index: a
+/// dense slice, or a solver's [`NodeStore`] seen through [`Stored`].
+pub(crate) trait Values: Index<usize, Output = f32> + Sync {
+    /// The value at node `n`, whose coordinates are `c`: `self[n]`, without
+    /// the divisions that recover `c` from `n` where the storage needs it.
+    #[inline]
+    fn at(&self, n: usize, _c: [usize; 3]) -> f32 {
+        self[n]
+    }
+}
 
-impl<T: Index<usize, Output = f32> + Sync + ?Sized> Values for T {}
+impl Values for [f32] {}
+
+impl Values for Vec<f32> {}
+
+/// A solver's embedding store ([`NodeStore`]: dense, or bricks read by
+/// coordinates) as [`Values`].
+pub(crate) struct Stored<'a, U>(pub(crate) &'a U);
+
+impl<U: NodeStore<f32>> Index<usize> for Stored<'_, U> {
+    type Output = f32;
+
+    #[inline]
+    fn index(&self, n: usize) -> &f32 {
+        &self.0[n]
+    }
+}
+
+impl<U: NodeStore<f32>> Values for Stored<'_, U> {
+    #[inline]
+    fn at(&self, n: usize, c: [usize; 3]) -> f32 {
+        self.0.at(n, UVec3::new(c[0] as u32, c[1] as u32, c[2] as u32))
+    }
+}
 
 /// An x-fastest lattice of `dims` nodes: linear indices, coordinates and the
 /// six face neighbours.
@@ -69,26 +99,52 @@ impl Lattice {
         out
     }
 
+    /// The six face neighbours of node `n` at coordinates `c`, with their
+    /// coordinates, in the order of [`Self::neighbours`].
+    #[inline]
+    pub(crate) fn neighbours_at(&self, n: usize, c: [usize; 3]) -> [Option<(usize, [usize; 3])>; 6] {
+        let mut out = [None; 6];
+        for axis in 0..3 {
+            let s = self.strides[axis];
+            let mut d = c;
+            if c[axis] > 0 {
+                d[axis] = c[axis] - 1;
+                out[2 * axis] = Some((n - s, d));
+            }
+            if c[axis] + 1 < self.dims[axis] {
+                d[axis] = c[axis] + 1;
+                out[2 * axis + 1] = Some((n + s, d));
+            }
+        }
+        out
+    }
+
     /// Whether node `n` has a face neighbour on the other side of the zero
     /// set (inside means `u > 0`).
     pub(crate) fn on_zero_set(&self, u: &(impl Values + ?Sized), n: usize) -> bool {
-        let inside = u[n] > 0.0;
-        self.neighbours(n).iter().flatten().any(|&m| (u[m] > 0.0) != inside)
+        let c = self.coords(n);
+        let inside = u.at(n, c) > 0.0;
+        self.neighbours_at(n, c).iter().flatten().any(|&(m, d)| (u.at(m, d) > 0.0) != inside)
     }
 
     /// One-sided differences at `n` (eq. 19–22): `(δ⁻, δ⁺)` per axis, zero
     /// towards the outside of the grid (Neumann boundary).
     pub(crate) fn one_sided(&self, u: &(impl Values + ?Sized), n: usize) -> ([f32; 3], [f32; 3]) {
-        let nb = self.neighbours(n);
-        let un = u[n];
+        self.one_sided_at(u, n, self.coords(n))
+    }
+
+    /// [`Self::one_sided`] of node `n` at coordinates `c`.
+    fn one_sided_at(&self, u: &(impl Values + ?Sized), n: usize, c: [usize; 3]) -> ([f32; 3], [f32; 3]) {
+        let nb = self.neighbours_at(n, c);
+        let un = u.at(n, c);
         let mut minus = [0.0; 3];
         let mut plus = [0.0; 3];
         for axis in 0..3 {
-            if let Some(m) = nb[2 * axis] {
-                minus[axis] = un - u[m];
+            if let Some((m, d)) = nb[2 * axis] {
+                minus[axis] = un - u.at(m, d);
             }
-            if let Some(p) = nb[2 * axis + 1] {
-                plus[axis] = u[p] - un;
+            if let Some((p, d)) = nb[2 * axis + 1] {
+                plus[axis] = u.at(p, d) - un;
             }
         }
         (minus, plus)
@@ -101,19 +157,19 @@ impl Lattice {
     pub(crate) fn mean_curvature(&self, u: &(impl Values + ?Sized), n: usize) -> (f32, f32) {
         let c = self.coords(n);
         let at = |d: [isize; 3]| {
-            let mut m = 0;
+            let (mut m, mut at) = (0, [0; 3]);
             for axis in 0..3 {
-                let i = (c[axis] as isize + d[axis]).clamp(0, self.dims[axis] as isize - 1) as usize;
-                m += i * self.strides[axis];
+                at[axis] = (c[axis] as isize + d[axis]).clamp(0, self.dims[axis] as isize - 1) as usize;
+                m += at[axis] * self.strides[axis];
             }
-            u[m]
+            u.at(m, at)
         };
         let e = |axis: usize, s: isize| {
             let mut d = [0isize; 3];
             d[axis] = s;
             d
         };
-        let un = u[n];
+        let un = u.at(n, c);
         let first = |a: usize| 0.5 * (at(e(a, 1)) - at(e(a, -1)));
         let second = |a: usize| at(e(a, 1)) - 2.0 * un + at(e(a, -1));
         let mixed = |a: usize, b: usize| {
@@ -139,12 +195,11 @@ impl Lattice {
     }
 
     /// Central-difference gradient at `n` (one-sided at the boundary), in
-    /// value units per voxel.
-    pub(crate) fn central_gradient(&self, u: &(impl Values + ?Sized), n: usize) -> Vec3 {
-        let (minus, plus) = self.one_sided(u, n);
-        let nb = self.neighbours(n);
+    /// value units per voxel; `c` are `n`'s coordinates.
+    fn central_gradient(&self, u: &(impl Values + ?Sized), n: usize, c: [usize; 3]) -> Vec3 {
+        let (minus, plus) = self.one_sided_at(u, n, c);
         let g = |axis: usize| {
-            let two_sided = nb[2 * axis].is_some() && nb[2 * axis + 1].is_some();
+            let two_sided = c[axis] > 0 && c[axis] + 1 < self.dims[axis];
             let sum = minus[axis] + plus[axis];
             if two_sided { 0.5 * sum } else { sum }
         };
@@ -188,12 +243,12 @@ pub(crate) fn speed_at_zero_crossing(
 /// step along the central-difference gradient, `x' = x − u ∇u / |∇u|²`
 /// (the node itself where the gradient vanishes).
 pub(crate) fn zero_crossing(lattice: &Lattice, u: &(impl Values + ?Sized), n: usize) -> Vec3 {
-    let grad = lattice.central_gradient(u, n);
-    let [i, j, k] = lattice.coords(n);
-    let mut x = Vec3::new(i as f32, j as f32, k as f32);
+    let c = lattice.coords(n);
+    let grad = lattice.central_gradient(u, n, c);
+    let mut x = Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32);
     let g2 = grad.length_squared();
     if g2 > 1e-12 {
-        x -= u[n] * grad / g2;
+        x -= u.at(n, c) * grad / g2;
     }
     x
 }
