@@ -124,12 +124,11 @@ fn moment_free_weights(positions: &[[f32; 4]]) -> Vec<f32> {
     for col in 0..5 {
         let pivot = (col..5).max_by(|&a, &b| m[a][col].abs().total_cmp(&m[b][col].abs())).unwrap();
         m.swap(col, pivot);
-        for r in 0..5 {
+        let pivot_row = m[col];
+        for (r, row) in m.iter_mut().enumerate() {
             if r != col {
-                let f = m[r][col] / m[col][col];
-                for c in col..6 {
-                    m[r][c] -= f * m[col][c];
-                }
+                let f = row[col] / pivot_row[col];
+                row.iter_mut().zip(&pivot_row).skip(col).for_each(|(v, p)| *v -= f * p);
             }
         }
     }
