@@ -6,7 +6,7 @@
 //! A slice's sum `Σ_j λ_j φ(√(|p − c_j|² + w_j))` is the `(S+1)`-dimensional
 //! sum `Σ_j λ_j φ(|x − y_j|)` with targets `x = (p, 0)` and sources
 //! `y_j = (c_j, √w_j)`. The sources are split into a k-d tree (halving the
-//! widest side at the median, leaves of at most [`LEAF`] sources). Every
+//! widest side at the median, leaves of at most 64 sources). Every
 //! cluster with more sources than [`ORDER`]`^k` (`k` its non-flat axes)
 //! carries proxy sources at the tensor-product Chebyshev points of its
 //! bounding box, of weights `Λ_m = Σ_j λ_j L_m(y_j)` (the Lagrange basis of
