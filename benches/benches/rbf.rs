@@ -8,6 +8,7 @@
 //! `cargo bench -p isomorph-benches --bench rbf -- fit/sphere_torus_4d/100000`
 //! `cargo bench -p isomorph-benches --bench rbf -- eval_grid/sphere_torus_4d/8000/64`
 //! `cargo bench -p isomorph-benches --bench rbf -- eval_grid_r3/sphere_torus_4d/8000/64`
+//! `cargo bench -p isomorph-benches --bench rbf -- eval_grid/sphere_torus_4d/100000/128`
 //! `cargo bench -p isomorph-benches --bench rbf -- polygonize/sphere_torus_4d/8000/64`
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
@@ -15,7 +16,7 @@ use isomorph_common::marching_cubes::{SparseSettings, polygonize_near_surface};
 use isomorph_common::marching_cubes::{marching_cubes, polygonize};
 use isomorph_common::{Aabb, Grid3};
 use isomorph_rbf::constraints::{NormalOffset, Subsample, SurfaceSettings, field_constraints};
-use isomorph_rbf::{FitSettings, Interpolant, Kernel, RbfMorph, TransformSettings, lift};
+use isomorph_rbf::{Evaluation, FitSettings, Interpolant, Kernel, RbfMorph, Slice3, TransformSettings, lift};
 use std::hint::black_box;
 
 /// The reference case: a sphere (radius 0.3) and a torus (R = 0.3,
@@ -94,6 +95,80 @@ fn eval_grid(c: &mut Criterion) {
     }
 }
 
+/// Weights for the centres `positions` (4D): seeded pseudo-random values in
+/// `[-1, 1]` with their degree-one moments removed (`Σ λ_j p(x_j) = 0` for
+/// every degree-one `p`, as the weights of a fit satisfy), by least squares.
+fn moment_free_weights(positions: &[[f32; 4]]) -> Vec<f32> {
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut weights: Vec<f64> = positions
+        .iter()
+        .map(|_| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+        })
+        .collect();
+    let basis = |p: &[f32; 4]| [1.0, f64::from(p[0]), f64::from(p[1]), f64::from(p[2]), f64::from(p[3])];
+    // Normal equations (PᵀP) a = Pᵀλ, then λ ← λ − P a.
+    let mut m = [[0.0f64; 6]; 5];
+    for (p, w) in positions.iter().zip(&weights) {
+        let b = basis(p);
+        for r in 0..5 {
+            for c in 0..5 {
+                m[r][c] += b[r] * b[c];
+            }
+            m[r][5] += b[r] * w;
+        }
+    }
+    for col in 0..5 {
+        let pivot = (col..5).max_by(|&a, &b| m[a][col].abs().total_cmp(&m[b][col].abs())).unwrap();
+        m.swap(col, pivot);
+        let pivot_row = m[col];
+        for (r, row) in m.iter_mut().enumerate() {
+            if r != col {
+                let f = row[col] / pivot_row[col];
+                row.iter_mut().zip(&pivot_row).skip(col).for_each(|(v, p)| *v -= f * p);
+            }
+        }
+    }
+    let a: Vec<f64> = (0..5).map(|r| m[r][5] / m[r][r]).collect();
+    for (p, w) in positions.iter().zip(weights.iter_mut()) {
+        *w -= basis(p).iter().zip(&a).map(|(b, a)| b * a).sum::<f64>();
+    }
+    weights.into_iter().map(|w| w as f32).collect()
+}
+
+/// The t = 0.5 slice of a function with centres at the reference case's
+/// 16000 to 100000 constraint positions on the 128³ lattice over
+/// [-0.5, 0.5]³, by the treecode (`Evaluation::Treecode`).
+/// The weights do not come from a fit (the fit of 100000 constraints takes
+/// minutes): [`moment_free_weights`], through `Slice3::from_sources`; the
+/// cost of evaluation does not depend on the weights' values.
+fn eval_grid_large(c: &mut Criterion) {
+    let mut group = c.benchmark_group("eval_grid/sphere_torus_4d");
+    group.sample_size(10);
+    for total in [16_000usize, 32_000, 100_000] {
+        let slice = std::cell::OnceCell::new();
+        let n = 128u32;
+        let mut grid =
+            Grid3::new(glam::UVec3::splat(n), glam::Vec3::splat(-0.5), 1.0 / (n - 1) as f32, 0.0f32).unwrap();
+        group.throughput(Throughput::Elements(u64::from(n).pow(3)));
+        group.bench_function(BenchmarkId::new(total.to_string(), n), |b| {
+            let slice = slice.get_or_init(|| {
+                let cs = constraints(total);
+                let positions: Vec<[f32; 4]> = cs.iter().map(|c| c.position).collect();
+                let centres: Vec<[f32; 3]> = positions.iter().map(|p| [p[0], p[1], p[2]]).collect();
+                let offsets: Vec<f32> = positions.iter().map(|p| (p[3] - 0.5).powi(2)).collect();
+                Slice3::from_sources(Kernel::ThinPlate, &centres, &offsets, &moment_free_weights(&positions))
+                    .with_evaluation(Evaluation::Treecode)
+            });
+            b.iter(|| grid.fill_from(black_box(slice)))
+        });
+    }
+    group.finish();
+}
+
 /// The t = 0.5 frame as a mesh on the 64³ lattice over [-0.5, 0.5]³: the
 /// near-surface polygonizer (`polygonize/…`), the full grid and marching
 /// cubes (`polygonize/…/full`), and marching cubes alone (`…/mc_only`).
@@ -118,5 +193,5 @@ fn polygonize_slice(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, fit, eval_grid, polygonize_slice);
+criterion_group!(benches, fit, eval_grid, eval_grid_large, polygonize_slice);
 criterion_main!(benches);

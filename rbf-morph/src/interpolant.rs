@@ -7,6 +7,7 @@ use crate::greedy::{Centres, GreedyReport, fit_greedy};
 use crate::kernel::Kernel;
 use crate::slice::{Slice2, Slice3, SliceEval};
 pub use crate::solve::{Factorization, Solver};
+use crate::treecode::Evaluation;
 use isomorph_common::MorphError;
 use rayon::prelude::*;
 
@@ -406,7 +407,7 @@ impl<const D: usize> Interpolant<D> {
 
     /// Reduces `f` on an `S`-dimensional axis-aligned slice to an
     /// `S`-dimensional sum with a per-centre offset `w_j = |fixed − c_j,rest|²`.
-    fn slice_eval<const S: usize>(&self, fixed: &[f32]) -> Result<SliceEval<S>, RbfError> {
+    pub(crate) fn slice_eval<const S: usize>(&self, fixed: &[f32]) -> Result<SliceEval<S>, RbfError> {
         if D < S || fixed.len() != D - S {
             return Err(RbfError::SliceArity {
                 dim: D,
@@ -420,26 +421,22 @@ impl<const D: usize> Interpolant<D> {
         }
         let rest: Vec<f64> =
             fixed.iter().enumerate().map(|(i, &v)| (f64::from(v) - self.shift[S + i]) * self.scale).collect();
-        let n = self.centres.len();
-        let mut coords: [Vec<f32>; S] = std::array::from_fn(|_| Vec::with_capacity(n));
-        let mut offset = Vec::with_capacity(n);
-        for c in &self.centres {
-            for k in 0..S {
-                coords[k].push(c[k] as f32);
-            }
-            offset.push(rest.iter().enumerate().map(|(i, r)| (r - c[S + i]).powi(2)).sum::<f64>() as f32);
+        let mut sources = crate::slice::Sources::<S>::default();
+        for (c, d) in self.centres.iter().zip(&self.weights) {
+            let offset = rest.iter().enumerate().map(|(i, r)| (r - c[S + i]).powi(2)).sum::<f64>();
+            sources.push(std::array::from_fn(|k| c[k] as f32), offset as f32, *d as f32);
         }
         let constant =
             self.constant + rest.iter().enumerate().map(|(i, r)| self.linear[S + i] * r).sum::<f64>();
         Ok(SliceEval {
             kernel: self.kernel,
-            coords,
-            offset,
-            weights: self.weights.iter().map(|&w| w as f32).collect(),
+            sources,
             constant,
             linear: std::array::from_fn(|k| self.linear[k]),
             shift: std::array::from_fn(|k| self.shift[k]),
             scale: self.scale,
+            evaluation: Evaluation::Direct,
+            tree: std::sync::OnceLock::new(),
         })
     }
 }

@@ -100,8 +100,10 @@
 //! Non-guarantees: the zero set of a slice between the two shapes has no
 //! bound on its distance to either input (that is the point of the method);
 //! the dense fit costs `O(n³)` time and `12 n²` bytes (3 GiB at 16000
-//! constraints); evaluation is direct (`O(n)` per point), not a fast
-//! multipole method.
+//! constraints); evaluation is direct (`O(n)` per point) by default; a
+//! treecode ([`treecode`], [`Evaluation::Treecode`]: far field interpolated
+//! within a stated bound, near field exact) is available but not yet shown
+//! faster on grids.
 //!
 //! # Cost
 //! The dense fit is `O(n³)` time and `12 n²` bytes for `n` constraints (the
@@ -149,6 +151,7 @@ mod kernel;
 mod reconstruct;
 mod slice;
 mod transform;
+pub mod treecode;
 mod warp;
 
 mod duplicates;
@@ -168,6 +171,7 @@ pub use reconstruct::{ContourSet, ContourSurface, Plane, ReconstructSettings};
 pub use slice::{Slice2, Slice3};
 pub use solve::{Factorization, Solver};
 pub use transform::{ContourMorph, RbfMorph, RbfSettings, TransformSettings, lift};
+pub use treecode::Evaluation;
 pub use warp::{
     DisplacementWarp, HalfwayWarps, WarpedContourMorph, WarpedMorph, WarpedSettings, WarpedSlice,
     WarpedSlice2,

@@ -1,10 +1,12 @@
 //! Fast batch evaluation of 2D and 3D slices of an interpolant.
 
 use crate::kernel::{Kernel, eval_r2_f32};
+use crate::treecode::{Evaluation, Treecode};
 use glam::{Vec2, Vec3};
 use isomorph_common::{Aabb, Field3, Grid2, GridError};
 use pulp::{Arch, Simd, WithSimd};
 use rayon::prelude::*;
+use std::sync::OnceLock;
 
 /// Points evaluated together in the inner loop, per kernel: `r² log r`,
 /// whose long logarithm chain wants many independent lanes in flight, and
@@ -44,35 +46,62 @@ impl AsPoint<2> for Vec2 {
     }
 }
 
-/// The reduced sum of an `S`-dimensional slice.
+/// Weighted kernel sources of a slice's sum, structure-of-arrays `f32`:
+/// source `j` contributes `weights[j] · φ(√(|p − c_j|² + offset[j]))` at a
+/// normalized point `p`. Both the centres of a slice and the proxies of the
+/// [`treecode`](crate::treecode) are sources of this form.
 #[derive(Debug, Clone)]
-pub(crate) struct SliceEval<const S: usize> {
-    pub kernel: Kernel,
-    /// Normalized centre coordinates, one array per axis.
+pub(crate) struct Sources<const S: usize> {
+    /// Normalized coordinates, one array per axis.
     pub coords: [Vec<f32>; S],
-    /// Per-centre squared distance in the fixed coordinates.
+    /// Squared distance in the coordinates the slice fixes (≥ 0).
     pub offset: Vec<f32>,
     pub weights: Vec<f32>,
-    /// Polynomial constant (including the fixed coordinates' part).
-    pub constant: f64,
-    /// Polynomial linear part in normalized coordinates.
-    pub linear: [f64; S],
-    /// World → normalized: `(p − shift) · scale`.
-    pub shift: [f64; S],
-    pub scale: f64,
 }
 
-impl<const S: usize> SliceEval<S> {
-    fn normalize(&self, p: [f32; S]) -> [f32; S] {
-        std::array::from_fn(|k| ((f64::from(p[k]) - self.shift[k]) * self.scale) as f32)
+impl<const S: usize> Default for Sources<S> {
+    fn default() -> Self {
+        Self { coords: std::array::from_fn(|_| Vec::new()), offset: Vec::new(), weights: Vec::new() }
+    }
+}
+
+impl<const S: usize> Sources<S> {
+    /// Number of sources.
+    pub fn len(&self) -> usize {
+        self.weights.len()
     }
 
-    /// Values at up to `LANES` points, in `out`.
+    /// Removes every source, keeping the allocations.
+    pub fn clear(&mut self) {
+        self.coords.iter_mut().for_each(Vec::clear);
+        self.offset.clear();
+        self.weights.clear();
+    }
+
+    /// Appends sources `range` of `other`.
+    pub fn extend_from(&mut self, other: &Self, range: std::ops::Range<usize>) {
+        for k in 0..S {
+            self.coords[k].extend_from_slice(&other.coords[k][range.clone()]);
+        }
+        self.offset.extend_from_slice(&other.offset[range.clone()]);
+        self.weights.extend_from_slice(&other.weights[range]);
+    }
+
+    /// Appends one source.
+    pub fn push(&mut self, coords: [f32; S], offset: f32, weight: f32) {
+        for k in 0..S {
+            self.coords[k].push(coords[k]);
+        }
+        self.offset.push(offset);
+        self.weights.push(weight);
+    }
+
+    /// The sums at up to `LANES` normalized points.
     #[inline(always)]
-    fn block<const TPS: bool, const LANES: usize, P: AsPoint<S>>(&self, points: &[P], out: &mut [f32]) {
+    fn block<const TPS: bool, const LANES: usize>(&self, points: &[[f32; S]]) -> [f64; LANES] {
         let mut p = [[0.0f32; LANES]; S];
         for l in 0..LANES {
-            let q = self.normalize(points[l.min(points.len() - 1)].coords());
+            let q = points[l.min(points.len() - 1)];
             for k in 0..S {
                 p[k][l] = q[k];
             }
@@ -104,43 +133,109 @@ impl<const S: usize> SliceEval<S> {
             }
             start = end;
         }
-        for (l, o) in out.iter_mut().enumerate() {
-            let mut v = total[l] + self.constant;
+        total
+    }
+
+    /// The sums `Σ_j weights[j] φ(…)` at normalized `points` into `out`
+    /// (sequential and vectorized; callers parallelize). Each point's sum
+    /// runs over the sources in order, so it does not depend on how the
+    /// points are split.
+    pub fn sums(&self, kernel: Kernel, points: &[[f32; S]], out: &mut [f64]) {
+        struct Op<'a, const S: usize> {
+            sources: &'a Sources<S>,
+            kernel: Kernel,
+            points: &'a [[f32; S]],
+            out: &'a mut [f64],
+        }
+        impl<const S: usize> WithSimd for Op<'_, S> {
+            type Output = ();
+            #[inline(always)]
+            fn with_simd<Sm: Simd>(self, _simd: Sm) {
+                fn lanes<const S: usize, const TPS: bool, const LANES: usize>(
+                    sources: &Sources<S>,
+                    points: &[[f32; S]],
+                    out: &mut [f64],
+                ) {
+                    for (pts, out) in points.chunks(LANES).zip(out.chunks_mut(LANES)) {
+                        let total = sources.block::<TPS, LANES>(pts);
+                        out.copy_from_slice(&total[..out.len()]);
+                    }
+                }
+                match self.kernel {
+                    Kernel::ThinPlate => lanes::<S, true, LANES_TPS>(self.sources, self.points, self.out),
+                    Kernel::Cubic => lanes::<S, false, LANES_CUBIC>(self.sources, self.points, self.out),
+                }
+            }
+        }
+        assert_eq!(points.len(), out.len(), "sums: points and out differ in length");
+        if self.weights.is_empty() {
+            out.fill(0.0);
+            return;
+        }
+        Arch::new().dispatch(Op { sources: self, kernel, points, out });
+    }
+}
+
+/// The reduced sum of an `S`-dimensional slice.
+#[derive(Debug, Clone)]
+pub(crate) struct SliceEval<const S: usize> {
+    pub kernel: Kernel,
+    /// The centres, with the fixed coordinates folded into the offsets.
+    pub sources: Sources<S>,
+    /// Polynomial constant (including the fixed coordinates' part).
+    pub constant: f64,
+    /// Polynomial linear part in normalized coordinates.
+    pub linear: [f64; S],
+    /// World → normalized: `(p − shift) · scale`.
+    pub shift: [f64; S],
+    pub scale: f64,
+    /// How [`SliceEval::values`] evaluates.
+    pub evaluation: Evaluation,
+    /// The source tree, built at the first treecode evaluation.
+    pub tree: OnceLock<Treecode<S>>,
+}
+
+impl<const S: usize> SliceEval<S> {
+    fn normalize(&self, p: [f32; S]) -> [f32; S] {
+        std::array::from_fn(|k| ((f64::from(p[k]) - self.shift[k]) * self.scale) as f32)
+    }
+
+    /// Adds the polynomial to the kernel sums at normalized `points`.
+    fn finish(&self, points: &[[f32; S]], sums: &[f64], out: &mut [f32]) {
+        for ((o, p), s) in out.iter_mut().zip(points).zip(sums) {
+            let mut v = s + self.constant;
             for k in 0..S {
-                v += self.linear[k] * f64::from(p[k][l]);
+                v += self.linear[k] * f64::from(p[k]);
             }
             *o = v as f32;
         }
     }
 
-    /// Values at `points` into `out` (sequential; callers parallelize).
+    /// Direct values at `points` into `out` (sequential; callers parallelize).
     fn run<P: AsPoint<S>>(&self, points: &[P], out: &mut [f32]) {
-        struct Op<'a, const S: usize, P> {
-            eval: &'a SliceEval<S>,
-            points: &'a [P],
-            out: &'a mut [f32],
-        }
-        impl<const S: usize, P: AsPoint<S>> WithSimd for Op<'_, S, P> {
-            type Output = ();
-            #[inline(always)]
-            fn with_simd<Sm: Simd>(self, _simd: Sm) {
-                let tps = self.eval.kernel == Kernel::ThinPlate;
-                if tps {
-                    for (pts, out) in self.points.chunks(LANES_TPS).zip(self.out.chunks_mut(LANES_TPS)) {
-                        self.eval.block::<true, LANES_TPS, P>(pts, out);
-                    }
-                } else {
-                    for (pts, out) in self.points.chunks(LANES_CUBIC).zip(self.out.chunks_mut(LANES_CUBIC)) {
-                        self.eval.block::<false, LANES_CUBIC, P>(pts, out);
-                    }
-                }
-            }
-        }
-        Arch::new().dispatch(Op { eval: self, points, out });
+        let normalized: Vec<[f32; S]> = points.iter().map(|p| self.normalize(p.coords())).collect();
+        let mut sums = vec![0.0f64; points.len()];
+        self.sources.sums(self.kernel, &normalized, &mut sums);
+        self.finish(&normalized, &sums, out);
     }
 
-    /// Values at `points` into `out`, parallel over blocks of points.
+    /// Values at `points` into `out`: direct (parallel over blocks of
+    /// points) or by the treecode, per [`SliceEval::evaluation`].
     pub(crate) fn values<P: AsPoint<S>>(&self, points: &[P], out: &mut [f32]) {
+        assert_eq!(points.len(), out.len(), "values: points and out differ in length");
+        if self.evaluation == Evaluation::Treecode {
+            let tree = self.tree.get_or_init(|| Treecode::new(&self.sources, self.kernel));
+            let normalized: Vec<[f32; S]> = points.iter().map(|p| self.normalize(p.coords())).collect();
+            let mut sums = vec![0.0f64; points.len()];
+            tree.sums(&normalized, &mut sums);
+            self.finish(&normalized, &sums, out);
+        } else {
+            self.values_direct(points, out);
+        }
+    }
+
+    /// Direct values at `points` into `out`, parallel over blocks of points.
+    pub(crate) fn values_direct<P: AsPoint<S>>(&self, points: &[P], out: &mut [f32]) {
         assert_eq!(points.len(), out.len(), "values: points and out differ in length");
         points.par_chunks(TASK).zip(out.par_chunks_mut(TASK)).for_each(|(p, o)| self.run(p, o));
     }
@@ -155,10 +250,11 @@ impl<const S: usize> SliceEval<S> {
     fn gradient(&self, p: [f32; S]) -> [f32; S] {
         let q = self.normalize(p).map(f64::from);
         let mut g = self.linear;
-        for j in 0..self.weights.len() {
-            let diff: [f64; S] = std::array::from_fn(|k| q[k] - f64::from(self.coords[k][j]));
-            let r2 = f64::from(self.offset[j]) + diff.iter().map(|x| x * x).sum::<f64>();
-            let s = f64::from(self.weights[j]) * self.kernel.gradient_factor_r2(r2);
+        let src = &self.sources;
+        for j in 0..src.len() {
+            let diff: [f64; S] = std::array::from_fn(|k| q[k] - f64::from(src.coords[k][j]));
+            let r2 = f64::from(src.offset[j]) + diff.iter().map(|x| x * x).sum::<f64>();
+            let s = f64::from(src.weights[j]) * self.kernel.gradient_factor_r2(r2);
             for k in 0..S {
                 g[k] += s * diff[k];
             }
@@ -187,6 +283,11 @@ impl<const S: usize> SliceEval<S> {
 /// to about `1e-4` of the unit constraint value (tested); near the surface,
 /// where `|∇f| ≈ 1/offset`, that is a positional error of about `1e-6` world units. Rayon splits the points
 /// into blocks; the result does not depend on the thread count.
+///
+/// [`Slice3::with_evaluation`] with [`Evaluation::Treecode`] evaluates
+/// batches through the [`treecode`](crate::treecode) instead: far clusters
+/// of centres are replaced by Chebyshev proxies, within the bound stated
+/// there.
 #[derive(Debug, Clone)]
 pub struct Slice3 {
     eval: SliceEval<3>,
@@ -198,6 +299,33 @@ impl Slice3 {
         Self { eval, bounds: None }
     }
 
+    /// A slice made directly from centres in world coordinates `centres`,
+    /// per-centre squared offsets `offsets` (the squared distance in the
+    /// fixed coordinates) and weights, with no polynomial part: for
+    /// benchmarks and tests of evaluation at sizes the fit cannot reach
+    /// quickly. Not a fitted function.
+    ///
+    /// # Panics
+    /// If the three slices differ in length.
+    #[doc(hidden)]
+    pub fn from_sources(kernel: Kernel, centres: &[[f32; 3]], offsets: &[f32], weights: &[f32]) -> Self {
+        assert!(centres.len() == offsets.len() && centres.len() == weights.len(), "lengths differ");
+        let mut sources = Sources::default();
+        for ((c, o), w) in centres.iter().zip(offsets).zip(weights) {
+            sources.push(*c, *o, *w);
+        }
+        Self::new(SliceEval {
+            kernel,
+            sources,
+            constant: 0.0,
+            linear: [0.0; 3],
+            shift: [0.0; 3],
+            scale: 1.0,
+            evaluation: Evaluation::Direct,
+            tree: OnceLock::new(),
+        })
+    }
+
     /// This slice reporting `bounds` from [`Field3::bounds`] (e.g. a box
     /// known to contain the surface).
     pub fn with_bounds(mut self, bounds: Aabb) -> Self {
@@ -207,7 +335,14 @@ impl Slice3 {
 
     /// Number of centres summed per evaluation.
     pub fn centres(&self) -> usize {
-        self.eval.weights.len()
+        self.eval.sources.len()
+    }
+
+    /// This slice evaluating batches by `evaluation` (default
+    /// [`Evaluation::Direct`], the reference).
+    pub fn with_evaluation(mut self, evaluation: Evaluation) -> Self {
+        self.eval.evaluation = evaluation;
+        self
     }
 }
 
@@ -240,6 +375,13 @@ pub struct Slice2 {
 impl Slice2 {
     pub(crate) fn new(eval: SliceEval<2>) -> Self {
         Self { eval }
+    }
+
+    /// This slice evaluating batches by `evaluation` (default
+    /// [`Evaluation::Direct`], the reference).
+    pub fn with_evaluation(mut self, evaluation: Evaluation) -> Self {
+        self.eval.evaluation = evaluation;
+        self
     }
 
     /// The value at `p`.
