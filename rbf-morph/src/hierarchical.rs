@@ -54,7 +54,7 @@ pub(crate) const ACA_TOLERANCE: f64 = 1e-12;
 /// GMRES stops when `‖g − B y‖₂ ≤ TOLERANCE ‖g‖₂`.
 pub(crate) const TOLERANCE: f64 = 1e-11;
 /// GMRES restart length.
-const RESTART: usize = 100;
+const RESTART: usize = 50;
 /// GMRES iterations before giving up.
 const MAX_ITERATIONS: usize = 300;
 
