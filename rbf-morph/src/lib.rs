@@ -85,8 +85,8 @@
 //!   | 32000 | `r² log r` | 14 | 8.5 s | 864 MB |
 //!   | 100000 | `r² log r` | 25 | 57 s | 3.5 GB |
 //!   | 8000 | `r³` | 22 | 1.7 s | 176 MB |
-//!   | 16000 | `r³` | 40–156 | 7.5–19.6 s | 377 MB |
-//!   | 32000 | `r³` | not converged in 300 (restart 50) | | |
+//!   | 16000 | `r³` | 156 | 20 s | 377 MB |
+//!   | 32000 | `r³` | not converged in 300 iterations | | |
 //!
 //!   The issue-21 targets at 100000 constraints (60 s, 2 GB, both kernels)
 //!   are **not met**: most of the memory is the low-rank far blocks at
