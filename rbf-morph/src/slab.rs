@@ -332,7 +332,7 @@ pub(crate) mod tests {
 
     /// [`sphere_torus`] from polygonizations at `resolution`³ (enough
     /// vertices for larger `total`).
-    pub(crate) fn sphere_torus_at(total: usize, resolution: usize) -> Vec<crate::Constraint<4>> {
+    pub(crate) fn sphere_torus_at(total: usize, resolution: u32) -> Vec<crate::Constraint<4>> {
         let s = SurfaceSettings {
             offset: NormalOffset::Absolute(0.01),
             subsample: Subsample::FarthestPoint(total / 4),
