@@ -28,7 +28,7 @@ use std::ops::Range;
 /// Most points in a leaf cluster.
 pub(crate) const LEAF: usize = 48;
 /// The admissibility parameter η.
-const ETA: f64 = 1.5;
+const ETA: f64 = 3.0;
 /// Product accumulators of [`HMatrix::matvec`]: a fixed count, so that the
 /// summation order does not depend on the number of threads.
 const PARTS: usize = 16;
@@ -156,7 +156,7 @@ impl Block {
                 let diagonal = rows == cols;
                 for (r, row) in a.chunks_exact(w).enumerate() {
                     let i = rows.start + r;
-                    y[i] += row.iter().zip(xc).map(|(a, x)| a * x).sum::<f64>();
+                    y[i] += dot(row, xc);
                     if !diagonal {
                         let xi = x[i];
                         y[cols.clone()].iter_mut().zip(row).for_each(|(y, a)| *y += a * xi);
@@ -165,8 +165,8 @@ impl Block {
             }
             Block::LowRank { rows, cols, u, v } => {
                 for (uk, vk) in u.chunks_exact(rows.len()).zip(v.chunks_exact(cols.len())) {
-                    let a: f64 = vk.iter().zip(&x[cols.clone()]).map(|(v, x)| v * x).sum();
-                    let b: f64 = uk.iter().zip(&x[rows.clone()]).map(|(u, x)| u * x).sum();
+                    let a = dot(vk, &x[cols.clone()]);
+                    let b = dot(uk, &x[rows.clone()]);
                     y[rows.clone()].iter_mut().zip(uk).for_each(|(y, u)| *y += a * u);
                     y[cols.clone()].iter_mut().zip(vk).for_each(|(y, v)| *y += b * v);
                 }
@@ -314,8 +314,8 @@ fn kernel_row(tree: &ClusterTree, kernel: Kernel, x: &[f64], cols: Range<usize>,
 
 /// Adaptive cross approximation with partial pivoting of the block
 /// `Φ[rows, cols]` to the relative Frobenius tolerance `eps`: `(U, V)` term
-/// by term, or `None` when the rank would exceed a third of the smaller
-/// side (a dense block is then cheaper).
+/// by term, or `None` when its storage would reach the dense block's
+/// (rank `k` with `k (m + n) ≥ m n`).
 fn aca(
     tree: &ClusterTree,
     kernel: Kernel,
@@ -324,7 +324,7 @@ fn aca(
     eps: f64,
 ) -> Option<(Vec<f64>, Vec<f64>)> {
     let (m, n) = (rows.len(), cols.len());
-    let max_rank = m.min(n) / 3;
+    let max_rank = m * n / (m + n);
     let (mut u, mut v) = (Vec::<f64>::new(), Vec::<f64>::new());
     let mut used = vec![false; m];
     let mut norm2 = 0.0f64;
@@ -385,9 +385,20 @@ fn aca(
     }
 }
 
-/// The dot product, summed in order.
+/// The dot product, in eight interleaved partial sums added in a fixed
+/// order (so that it vectorizes and still does not depend on anything but
+/// its inputs).
 pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
+    let n = a.len().min(b.len());
+    let (a, b) = (&a[..n], &b[..n]);
+    let mut lanes = [0.0f64; 8];
+    let (ca, cb) = (a.chunks_exact(8), b.chunks_exact(8));
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (x, y) in ca.zip(cb) {
+        lanes.iter_mut().zip(x.iter().zip(y)).for_each(|(lane, (x, y))| *lane += x * y);
+    }
+    let tail: f64 = ra.iter().zip(rb).map(|(x, y)| x * y).sum();
+    lanes.iter().sum::<f64>() + tail
 }
 
 #[cfg(test)]

@@ -325,14 +325,20 @@ pub(crate) mod tests {
     use isomorph_common::{Aabb, Shape};
 
     /// The reference case's constraints (sphere at t = 0, torus at t = 1)
-    /// with `total` constraints.
+    /// with `total` constraints, from 32³ polygonizations.
     pub(crate) fn sphere_torus(total: usize) -> Vec<crate::Constraint<4>> {
+        sphere_torus_at(total, 32)
+    }
+
+    /// [`sphere_torus`] from polygonizations at `resolution`³ (enough
+    /// vertices for larger `total`).
+    pub(crate) fn sphere_torus_at(total: usize, resolution: u32) -> Vec<crate::Constraint<4>> {
         let s = SurfaceSettings {
             offset: NormalOffset::Absolute(0.01),
             subsample: Subsample::FarthestPoint(total / 4),
         };
-        let a = field_constraints(&Shape::sphere(0.3), &Aabb::cube(0.5), 32, &s).unwrap();
-        let b = field_constraints(&Shape::torus(0.3, 0.12), &Aabb::cube(0.5), 32, &s).unwrap();
+        let a = field_constraints(&Shape::sphere(0.3), &Aabb::cube(0.5), resolution, &s).unwrap();
+        let b = field_constraints(&Shape::torus(0.3, 0.12), &Aabb::cube(0.5), resolution, &s).unwrap();
         let mut all = lift::<3, 4>(&a, &[0.0]);
         all.extend(lift::<3, 4>(&b, &[1.0]));
         all
