@@ -82,6 +82,7 @@ mod contract;
 mod dense;
 mod error;
 mod evolution;
+mod overlap;
 mod placement;
 mod solver;
 mod sparse_field;
@@ -89,12 +90,13 @@ mod speed;
 mod stencil;
 
 pub use band::BandFrame;
-pub use contract::{Align, LevelSetSettings};
+pub use contract::{Align, LevelSetSettings, SPARSE_FROM, Storage};
 pub use dense::DenseSolver;
 pub use error::LevelSetError;
 pub use evolution::{
-    EvolveSettings, FrameSchedule, LevelSetMorph, Overlap, SolverKind, check_overlap, evolve,
+    EvolveSettings, FrameSchedule, LevelSetMorph, SolverKind, SparseInputs, evolve, evolve_sparse,
 };
+pub use overlap::{Overlap, check_overlap, check_overlap_sparse};
 pub use placement::{Placement, Warp};
 pub use solver::{Curvature, Solver, StepParams, StepStats};
 pub use sparse_field::SparseFieldSolver;
