@@ -256,6 +256,10 @@ pub fn evolve_sparse(
     })
 }
 
+/// Iterations between two releases of the storage the band has left
+/// ([`Solver::release`]; a pass over the allocated bricks).
+const RELEASE_EVERY: usize = 16;
+
 /// An evolution ready to run.
 struct Start<'a> {
     solver: Box<dyn Solver + 'a>,
@@ -282,9 +286,13 @@ fn run(
     let mut converged = false;
     let (mut best, mut best_at, mut stalled) = (f32::INFINITY, 0, false);
     let params = StepParams { max_time_step: settings.max_time_step, curvature: settings.curvature };
+    let mut released = 0;
     for iteration in 1..=settings.max_iterations {
         control.check()?;
         let s = solver.step(speed, &params);
+        if iteration % RELEASE_EVERY == 0 {
+            released += solver.release();
+        }
         time += f64::from(s.dt);
         stats.push(s);
         control.progress("evolution", Some(iteration as f32 / settings.max_iterations as f32), || {
@@ -339,6 +347,7 @@ fn run(
         .with_detail("final_rms_change_voxels", f64::from(last.rms_change))
         .with_detail("final_surface_nodes", last.surface_nodes)
         .with_detail("kept_frames", frames.len())
+        .with_detail("released_bricks", released)
         .with_detail("placement", placement.kind())
         .with_detail("target_parts", overlap.parts)
         .with_detail("unreached_share", f64::from(overlap.unreached_share()))

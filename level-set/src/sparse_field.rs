@@ -706,6 +706,10 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> Solver for SparseFieldSolver<U, S> {
     /// sign is in `L−1`, `L0` or `L+1` (positive nodes are in `L0` or
     /// above, negative ones in `L0` or below, and face neighbours' layers
     /// differ by at most one).
+    fn release(&mut self) -> usize {
+        self.u.release_uniform() + self.status.release_uniform()
+    }
+
     fn capture(&self, iteration: usize, time: f64) -> BandFrame {
         let near = [&self.layers[slot(-1)][..], &self.layers[slot(0)], &self.layers[slot(1)]];
         BandFrame::capture_near(&self.u, &self.lattice, near, iteration, time)
