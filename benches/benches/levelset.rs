@@ -10,7 +10,8 @@
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use isomorph_cli::methods::{Method, Settings, build, load_input};
-use isomorph_common::{Aabb, Bytes, Control, Field3, Grid3, Morph, Shape, Solid, lattice_for_box};
+use isomorph_common::sdf::{MeshSdf, SdfSettings, VolumeMode};
+use isomorph_common::{Aabb, Bricks, Bytes, Control, Field3, Grid3, Morph, Shape, Solid, lattice_for_box};
 use isomorph_io::export::{ExportSettings, export_sequence};
 use isomorph_levelset::{
     DenseSolver, EvolveSettings, FrameSchedule, LevelSetMorph, LevelSetSettings, Placement, Response, Solver,
@@ -252,5 +253,53 @@ fn cli(c: &mut Criterion) {
     let _ = std::fs::remove_dir_all(&out);
 }
 
-criterion_group!(benches, morph, step, memory, cli);
+/// The source distance volume of a mesh three ways, at 256³ and 512³ over
+/// the mesh's box padded by 10 % per side: exact at every node
+/// (`far_field/MESH/exact/N`), exact within the band and closest-point fast
+/// marching beyond (`narrow_band/N`), and exact within the band with only
+/// the side elsewhere (`sign_only/N`, `Bricks::sample_band`, what sparse
+/// storage uses). The band is the sparse field's (`band_width`, 4 voxels);
+/// within it all three give the exact distance (the first two bitwise, the
+/// third up to the rounding of the batch queries), so they differ in time
+/// and memory only. The mesh is `data/bunny.ply`, or the file named by
+/// `ISOMORPH_BENCH_MESH` (e.g. the dragon, which must not be committed).
+fn far_field(c: &mut Criterion) {
+    let mut group = c.benchmark_group("far_field");
+    group.sample_size(10);
+    let path = std::env::var("ISOMORPH_BENCH_MESH")
+        .unwrap_or_else(|_| format!("{}/../data/bunny.ply", env!("CARGO_MANIFEST_DIR")));
+    let name =
+        std::path::Path::new(&path).file_stem().map_or("mesh".into(), |s| s.to_string_lossy().into_owned());
+    let mut mesh = None;
+    let mut load = || {
+        let m = isomorph_io::mesh::read_mesh(&path).expect("the bench mesh");
+        let sdf = MeshSdf::new(&m).unwrap();
+        (m.bounds().padded(0.1), sdf, m)
+    };
+    for n in [256u32, 512] {
+        group.bench_function(BenchmarkId::new(format!("{name}/exact"), n), |b| {
+            let (bounds, sdf, _) = mesh.get_or_insert_with(&mut load);
+            b.iter(|| black_box(sdf.sample_grid(bounds, n).unwrap().len()))
+        });
+        group.bench_function(BenchmarkId::new(format!("{name}/narrow_band"), n), |b| {
+            let (bounds, _, m) = mesh.get_or_insert_with(&mut load);
+            let h = lattice_for_box(bounds, n).unwrap().2;
+            let volume = VolumeMode::NarrowBand { width: SparseFieldSolver::band_width(h) };
+            let banded = MeshSdf::with_settings(m, SdfSettings::default().with_volume(volume)).unwrap();
+            b.iter(|| black_box(banded.sample_grid(bounds, n).unwrap().len()))
+        });
+        group.bench_function(BenchmarkId::new(format!("{name}/sign_only"), n), |b| {
+            let (bounds, sdf, _) = mesh.get_or_insert_with(&mut load);
+            let (dims, origin, h) = lattice_for_box(bounds, n).unwrap();
+            b.iter(|| {
+                let band =
+                    Bricks::sample_band(&*sdf, dims, origin, h, SparseFieldSolver::band_width(h)).unwrap();
+                black_box(band.allocated())
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, morph, step, memory, cli, far_field);
 criterion_main!(benches);

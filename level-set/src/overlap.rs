@@ -280,8 +280,8 @@ pub fn check_overlap_sparse(
         let part = &mut parts[p];
         *part = (part.0 + nodes, part.1 || overlaps, part.2.min(lo), part.3.max(hi));
     };
-    for brick in 0..bricks {
-        match class[brick] {
+    for (brick, &kind) in class.iter().enumerate() {
+        match kind {
             APART => {}
             WITHIN => {
                 let (first, end) = extent(brick);
