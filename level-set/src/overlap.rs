@@ -145,7 +145,7 @@ const WITHIN: u32 = u32::MAX - 1;
 /// map's norm with one).
 ///
 /// Each brick is judged by the target at its centre: wholly inside, wholly
-/// more than [`JOIN_VOXELS`] outside, or evaluated at every node (the
+/// more than a voxel outside, or evaluated at every node (the
 /// bricks near the target's surface). The parts are then the connected
 /// components of inside bricks and near nodes, found by union–find; the
 /// result equals [`check_overlap`] of the dense grids (up to the order of
