@@ -10,11 +10,12 @@
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use isomorph_cli::methods::{Method, Settings, build, load_input};
-use isomorph_common::{Aabb, Bytes, Control, Field3, Grid3, Morph, Shape, lattice_for_box};
+use isomorph_common::sdf::{MeshSdf, SdfSettings, VolumeMode};
+use isomorph_common::{Aabb, Bricks, Bytes, Control, Field3, Grid3, Morph, Shape, Solid, lattice_for_box};
 use isomorph_io::export::{ExportSettings, export_sequence};
 use isomorph_levelset::{
-    BandFrame, DenseSolver, EvolveSettings, FrameSchedule, LevelSetMorph, Placement, Response, Solver,
-    SolverKind, SparseFieldSolver, SpeedGrid, StepParams, evolve,
+    DenseSolver, EvolveSettings, FrameSchedule, LevelSetMorph, LevelSetSettings, Placement, Response, Solver,
+    SolverKind, SparseFieldSolver, SpeedGrid, StepParams, Storage, evolve,
 };
 use std::hint::black_box;
 use std::sync::Arc;
@@ -100,6 +101,12 @@ fn morph(c: &mut Criterion) {
             });
         }
     }
+    // 512³ through `LevelSetMorph::new` with sparse storage (no dense grid;
+    // the whole pipeline: band source, overlap, evolution; one kept frame in
+    // a thousand). Run with `--sample-size 10` at least; one run takes minutes.
+    group.bench_function(BenchmarkId::new("sparse", 512), |b| {
+        b.iter(|| black_box(sparse_morph(512, 1000).stats().len()))
+    });
     group.finish();
 }
 
@@ -147,57 +154,61 @@ fn step(c: &mut Criterion) {
     group.finish();
 }
 
-/// Peak memory of the whole reference morph at `n³` on the lean state
-/// (`lean_case`), run once to convergence (the evolution's default
-/// thresholds) keeping one frame in ten as `evolve` does by default: prints
-/// the process's peak resident set (`VmHWM` of `/proc/self/status`, reset
-/// through `/proc/self/clear_refs` before the run, so it holds this run
-/// alone plus the process's own baseline), the solver's and the speed's
-/// heap bytes, the kept frames' bytes, the iterations and the wall time of
-/// that one run. Criterion then times the capture of one kept frame.
+/// Peak memory of the whole reference morph at `n³` through
+/// `LevelSetMorph::new` with sparse storage (what the command line and
+/// Python run from 256 up), run once to convergence keeping one frame in
+/// ten (`keep_every: 10`; the library's default keeps every iteration):
+/// prints the process's peak resident set (`VmHWM` of `/proc/self/status`,
+/// reset through `/proc/self/clear_refs` before the run, so it holds this
+/// run alone plus the process's own baseline), the report's stored and
+/// peak bytes, the iterations, the stage times and the wall time of that
+/// one run. The lattice is the reference's (padding chosen so the box's
+/// long edges are [-0.5, 0.5]). Criterion then times polygonizing the last
+/// frame (plane by plane, no dense grid).
 fn memory(c: &mut Criterion) {
     let mut group = c.benchmark_group("memory/sphere_torus");
     group.sample_size(10);
-    let settings = EvolveSettings::default();
     for n in [512u32, 1024] {
         let mut state = None;
         group.bench_function(BenchmarkId::from_parameter(n), |b| {
-            let (solver, _) = state.get_or_insert_with(|| {
+            let morph = state.get_or_insert_with(|| {
                 let _ = std::fs::write("/proc/self/clear_refs", "5");
                 let start = Instant::now();
-                let (mut solver, speed) = lean_case(n);
-                let built = start.elapsed();
-                let params = StepParams::default();
-                let (mut frames, mut iterations) = (Vec::new(), 0);
-                for i in 1..=settings.max_iterations {
-                    let s = solver.step(&speed, &params);
-                    iterations = i;
-                    if i % 10 == 0 {
-                        frames.push(solver.capture(i, 0.0));
-                    }
-                    if s.rms_distance <= settings.rms_distance || s.rms_change <= settings.rms_change {
-                        break;
-                    }
-                }
-                let frame_bytes: usize = frames.iter().map(BandFrame::stored_bytes).sum();
+                let morph = sparse_morph(n, 10);
+                let report = morph.report();
                 println!(
-                    "memory/sphere_torus/{n}: peak RSS {} (VmHWM), solver state {}, speed bricks {}, \
-                     {} kept frames {}; {iterations} iterations, {:.1} s (of which {:.1} s building the \
-                     band source and checking the lazy speed)",
+                    "memory/sphere_torus/{n}: peak RSS {} (VmHWM); report: {} kept frames {}, peak {}; \
+                     {} iterations (converged: {}), {:.1} s; stages {:?}",
                     Bytes(peak_rss()),
-                    Bytes(solver.heap_bytes()),
-                    Bytes(speed.heap_bytes()),
-                    frames.len(),
-                    Bytes(frame_bytes),
+                    morph.len(),
+                    Bytes(report.stored_bytes),
+                    Bytes(report.peak_bytes.unwrap_or(0)),
+                    morph.stats().len(),
+                    morph.converged(),
                     start.elapsed().as_secs_f64(),
-                    built.as_secs_f64(),
+                    report.stages,
                 );
-                (solver, speed)
+                morph
             });
-            b.iter(|| black_box(solver.capture(0, 0.0).band_len()))
+            b.iter(|| black_box(morph.frame_mesh(1.0, 0).unwrap().triangles.len()))
         });
     }
     group.finish();
+}
+
+/// The reference morph at `n³` through `LevelSetMorph::new` with sparse
+/// storage, keeping a frame every `keep_every` iterations.
+fn sparse_morph(n: u32, keep_every: usize) -> LevelSetMorph {
+    let settings = LevelSetSettings {
+        resolution: n,
+        // The union of the shapes' boxes is 0.84 across: 0.08 per side makes it [-0.5, 0.5].
+        padding: 0.08 / 0.84,
+        storage: Storage::Sparse,
+        keep_every,
+        ..LevelSetSettings::default()
+    };
+    let (source, target) = (Solid::shape(Shape::sphere(0.3)), Solid::shape(Shape::torus(0.3, 0.12)));
+    LevelSetMorph::new(&source, &target, &settings, &Control::new()).unwrap()
 }
 
 /// The process's peak resident set (`VmHWM`, bytes; 0 where
@@ -242,5 +253,53 @@ fn cli(c: &mut Criterion) {
     let _ = std::fs::remove_dir_all(&out);
 }
 
-criterion_group!(benches, morph, step, memory, cli);
+/// The source distance volume of a mesh three ways, at 256³ and 512³ over
+/// the mesh's box padded by 10 % per side: exact at every node
+/// (`far_field/MESH/exact/N`), exact within the band and closest-point fast
+/// marching beyond (`narrow_band/N`), and exact within the band with only
+/// the side elsewhere (`sign_only/N`, `Bricks::sample_band`, what sparse
+/// storage uses). The band is the sparse field's (`band_width`, 4 voxels);
+/// within it all three give the exact distance (the first two bitwise, the
+/// third up to the rounding of the batch queries), so they differ in time
+/// and memory only. The mesh is `data/bunny.ply`, or the file named by
+/// `ISOMORPH_BENCH_MESH` (e.g. the dragon, which must not be committed).
+fn far_field(c: &mut Criterion) {
+    let mut group = c.benchmark_group("far_field");
+    group.sample_size(10);
+    let path = std::env::var("ISOMORPH_BENCH_MESH")
+        .unwrap_or_else(|_| format!("{}/../data/bunny.ply", env!("CARGO_MANIFEST_DIR")));
+    let name =
+        std::path::Path::new(&path).file_stem().map_or("mesh".into(), |s| s.to_string_lossy().into_owned());
+    let mut mesh = None;
+    let mut load = || {
+        let m = isomorph_io::mesh::read_mesh(&path).expect("the bench mesh");
+        let sdf = MeshSdf::new(&m).unwrap();
+        (m.bounds().padded(0.1), sdf, m)
+    };
+    for n in [256u32, 512] {
+        group.bench_function(BenchmarkId::new(format!("{name}/exact"), n), |b| {
+            let (bounds, sdf, _) = mesh.get_or_insert_with(&mut load);
+            b.iter(|| black_box(sdf.sample_grid(bounds, n).unwrap().len()))
+        });
+        group.bench_function(BenchmarkId::new(format!("{name}/narrow_band"), n), |b| {
+            let (bounds, _, m) = mesh.get_or_insert_with(&mut load);
+            let h = lattice_for_box(bounds, n).unwrap().2;
+            let volume = VolumeMode::NarrowBand { width: SparseFieldSolver::band_width(h) };
+            let banded = MeshSdf::with_settings(m, SdfSettings::default().with_volume(volume)).unwrap();
+            b.iter(|| black_box(banded.sample_grid(bounds, n).unwrap().len()))
+        });
+        group.bench_function(BenchmarkId::new(format!("{name}/sign_only"), n), |b| {
+            let (bounds, sdf, _) = mesh.get_or_insert_with(&mut load);
+            let (dims, origin, h) = lattice_for_box(bounds, n).unwrap();
+            b.iter(|| {
+                let band =
+                    Bricks::sample_band(&*sdf, dims, origin, h, SparseFieldSolver::band_width(h)).unwrap();
+                black_box(band.allocated())
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, morph, step, memory, cli, far_field);
 criterion_main!(benches);

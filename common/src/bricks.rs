@@ -265,6 +265,34 @@ impl<T: Copy + PartialEq> Bricks<T> {
         self.owners.iter().filter_map(|o| o.map(|b| b as usize))
     }
 
+    /// Releases every allocated brick whose values all equal one of the
+    /// two background values (which it then reads: no value changes), e.g.
+    /// the bricks a moving level-set band has left; their storage is kept
+    /// for the next allocation. Returns how many were released. Work ∝ the
+    /// allocated bricks.
+    pub fn release_uniform(&mut self) -> usize
+    where
+        T: Send + Sync,
+    {
+        let background = self.background;
+        let uniform: Vec<(usize, bool)> = self
+            .data
+            .par_chunks(BRICK_NODES)
+            .zip(self.owners.par_iter())
+            .filter_map(|(values, owner)| {
+                let brick = owner.map(|b| b as usize)?;
+                let first = values[0];
+                let side =
+                    [false, true].into_iter().find(|&inside| first == background[usize::from(inside)])?;
+                values.iter().all(|&v| v == first).then_some((brick, side))
+            })
+            .collect();
+        for &(brick, inside) in &uniform {
+            self.release(brick, inside);
+        }
+        uniform.len()
+    }
+
     /// Releases allocated `brick`, which then reads the inside (`true`) or
     /// outside value; its storage is kept for the next allocation.
     pub fn release(&mut self, brick: usize, inside: bool) {
@@ -412,6 +440,11 @@ pub trait NodeStore<T>: IndexMut<usize, Output = T> + Clone + Debug + Send + Syn
     {
         self[n]
     }
+
+    /// Drops what reads as a background value anyway (a sparse store's
+    /// uniform bricks, [`Bricks::release_uniform`]; nothing for a dense
+    /// one); every node keeps its value. Returns the bricks released.
+    fn release_uniform(&mut self) -> usize;
 }
 
 impl<T: Copy + Debug + Send + Sync> NodeStore<T> for Vec<T> {
@@ -432,6 +465,10 @@ impl<T: Copy + Debug + Send + Sync> NodeStore<T> for Vec<T> {
 
     fn heap_bytes(&self) -> usize {
         self.capacity() * size_of::<T>()
+    }
+
+    fn release_uniform(&mut self) -> usize {
+        0
     }
 }
 
@@ -495,6 +532,10 @@ impl<T: Copy + PartialEq + Debug + Send + Sync> NodeStore<T> for Bricks<T> {
 
     fn heap_bytes(&self) -> usize {
         Bricks::heap_bytes(self)
+    }
+
+    fn release_uniform(&mut self) -> usize {
+        Bricks::release_uniform(self)
     }
 }
 
@@ -610,6 +651,26 @@ mod tests {
             assert!(d.abs() > band || got == d, "node {n}: {got} vs {d}");
         }
         assert!(sparse.allocated() * 3 < sparse.brick_count(), "{} bricks", sparse.allocated());
+    }
+
+    /// Only bricks holding one background value everywhere are released,
+    /// and every node reads as before.
+    #[test]
+    fn uniform_bricks_are_released_without_changing_a_value() {
+        let mut g = Bricks::new(UVec3::new(20, 16, 9), -2i8, 2).unwrap();
+        let (a, b, c) =
+            (g.linear(UVec3::new(1, 1, 1)), g.linear(UVec3::new(9, 1, 1)), g.linear(UVec3::new(17, 9, 1)));
+        g[a] = 0; // stays: a value of its own
+        g[b] = 2; // released as inside: all of it reads 2 only if the rest does too
+        g[c] = -2; // released as outside
+        let brick_b = g.brick_of(b);
+        g.fill_brick(brick_b, &[2; 512]);
+        let before: Vec<i8> = (0..g.len()).map(|n| g[n]).collect();
+        assert_eq!(g.release_uniform(), 2);
+        assert_eq!(g.allocated(), 1);
+        assert_eq!(g.background_of(brick_b), Some(true));
+        assert_eq!(g.background_of(g.brick_of(c)), Some(false));
+        assert!((0..g.len()).all(|n| g[n] == before[n]));
     }
 
     #[test]

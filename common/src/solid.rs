@@ -311,6 +311,21 @@ impl Solid {
         }
     }
 
+    /// The exact signed distance (positive inside, world units) as a field
+    /// evaluated point by point, for the solids that know it without a
+    /// volume (as [`Solid::exact_distance`]): it changes by at most the
+    /// distance moved, so a narrow band of it can be sampled brick by brick
+    /// ([`crate::Bricks::sample_band`]). Its values equal those of
+    /// [`Solid::distance_volume`] at the lattice's nodes up to rounding.
+    /// `None` for the other kinds.
+    pub fn exact_field(&self) -> Option<&dyn Field3> {
+        match &*self.0 {
+            Repr::Mesh { sdf, .. } => Some(sdf.as_ref()),
+            Repr::Shape(shape) if shape.is_exact_distance() => Some(shape),
+            _ => None,
+        }
+    }
+
     /// True when [`Solid::exact_distance`] answers (for finite points).
     pub fn has_exact_distance(&self) -> bool {
         match &*self.0 {

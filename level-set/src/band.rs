@@ -114,17 +114,28 @@ impl BandFrame {
     /// exact, other nodes `±1.5` with their stored sign.
     pub(crate) fn rebuild(&self, len: usize) -> Vec<f32> {
         let mut u = vec![0.0f32; len];
-        let mut inside = self.first_inside;
-        let mut start = 0usize;
-        for end in self.flips.iter().map(|&f| f as usize).chain(std::iter::once(len)) {
-            u[start..end].fill(if inside { FAR } else { -FAR });
-            inside = !inside;
-            start = end;
-        }
-        for &(n, v) in &self.band {
-            u[n as usize] = v;
-        }
+        self.fill(0, &mut u);
         u
+    }
+
+    /// Writes the rebuilt embedding of nodes `start .. start + out.len()`
+    /// into `out` (as [`Self::rebuild`], for a part of the grid: a plane for
+    /// marching cubes without the whole grid; `O(out.len() + log(surface))`).
+    pub(crate) fn fill(&self, start: usize, out: &mut [f32]) {
+        let end = start + out.len();
+        // The flips before `start` set the side of its first node.
+        let first = self.flips.partition_point(|&f| (f as usize) <= start);
+        let mut inside = self.first_inside ^ (first % 2 == 1);
+        let mut from = start;
+        for to in self.flips[first..].iter().map(|&f| f as usize).take_while(|&f| f < end).chain([end]) {
+            out[from - start..to - start].fill(if inside { FAR } else { -FAR });
+            inside = !inside;
+            from = to;
+        }
+        let band = self.band.partition_point(|e| (e.0 as usize) < start);
+        for &(n, v) in self.band[band..].iter().take_while(|e| (e.0 as usize) < end) {
+            out[n as usize - start] = v;
+        }
     }
 
     /// Number of band nodes stored.

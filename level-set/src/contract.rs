@@ -5,11 +5,12 @@
 use crate::{
     Curvature, EvolveSettings, FrameSchedule, LevelSetError, LevelSetMorph, Placement, Response, Warp,
 };
-use crate::{SolverKind, SpeedGrid, evolve};
+use crate::{SolverKind, SparseFieldSolver, SparseInputs, SpeedGrid, SpeedSampler, evolve, evolve_sparse};
 use isomorph_common::alignment::{AlignMode, align};
 use isomorph_common::glam::{Affine3A, Vec3};
 use isomorph_common::{
-    Aabb, AffinePath, Control, Morph, MorphError, Solid, Stages, check, lattice_for_box, validate_inputs,
+    Aabb, AffinePath, Bricks, Control, Morph, MorphError, Solid, Stages, check, lattice_for_box,
+    validate_inputs,
 };
 use std::fmt;
 use std::sync::Arc;
@@ -56,6 +57,31 @@ impl PartialEq for Align {
     }
 }
 
+/// How [`LevelSetMorph::new`] stores the distance volumes and the
+/// evolution's state.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+pub enum Storage {
+    /// [`Storage::Sparse`] from [`SPARSE_FROM`] nodes along the longest edge
+    /// up, [`Storage::Dense`] below.
+    #[default]
+    Auto,
+    /// Dense distance volumes (a value per node) for the source and the
+    /// speed, then [`evolve`].
+    Dense,
+    /// No dense grid ([`evolve_sparse`]): the source's distance in a narrow
+    /// band of bricks and its side elsewhere, the speed computed per brick
+    /// where the surface goes, the overlap judged near the target's
+    /// surface. Memory ∝ the surfaces, not the volume; the same frames as
+    /// [`Storage::Dense`]. Needs inputs whose signed distance is known
+    /// pointwise ([`Solid::exact_field`]: meshes, spheres, boxes, tori,
+    /// cylinders), the sparse-field solver and no [`Align::Warp`]; with
+    /// others the morph stores densely (the report's `storage` says which).
+    Sparse,
+}
+
+/// Resolution from which [`Storage::Auto`] stores sparsely.
+pub const SPARSE_FROM: u32 = 256;
+
 /// Settings of [`LevelSetMorph::new`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct LevelSetSettings {
@@ -83,6 +109,8 @@ pub struct LevelSetSettings {
     /// up to it the morph runs and its report warns, above it the morph is
     /// refused with [`MorphError::NoOverlap`] (default 0.05).
     pub max_unreached_share: f32,
+    /// Dense or sparse volumes (default [`Storage::Auto`]).
+    pub storage: Storage,
 }
 
 impl Default for LevelSetSettings {
@@ -96,6 +124,7 @@ impl Default for LevelSetSettings {
             max_iterations: 20_000,
             keep_every: 1,
             max_unreached_share: 0.05,
+            storage: Storage::Auto,
         }
     }
 }
@@ -171,7 +200,33 @@ impl LevelSetMorph {
             ))
             .into());
         }
+        let placement = if map == Affine3A::IDENTITY {
+            Placement::Identity
+        } else {
+            AffinePath::from_identity(&map).map_err(MorphError::from)?.into()
+        };
         control.progress("distance volumes", Some(0.0), String::new);
+        if let (Some(field), Some(_), true) = (source.exact_field(), target.exact_field(), settings.sparse())
+        {
+            let (dims, origin, spacing) = lattice_for_box(&bounds, res)?;
+            let band = SparseFieldSolver::band_width(spacing);
+            let band = control.install(|| Bricks::sample_band(field, dims, origin, spacing, band))?;
+            let target = target.clone();
+            let inv_h = 1.0 / spacing;
+            let sampler: SpeedSampler = if map == Affine3A::IDENTITY {
+                Arc::new(move |x| target.exact_field().map_or(f32::NAN, |f| f.value(x)) * inv_h)
+            } else {
+                Arc::new(move |x| {
+                    target.exact_field().map_or(f32::NAN, |f| f.value(map.transform_point3(x))) * inv_h
+                })
+            };
+            let inputs =
+                SparseInputs { source: band, origin, spacing, target: sampler, lipschitz: norm_bound(&map) };
+            stages.lap("distance volumes");
+            let mut morph = evolve_sparse(&inputs, placement, &evolve_settings(settings, &bounds), control)?;
+            finish_report(&mut morph, settings, stages, warnings, "sparse");
+            return Ok(morph);
+        }
         let embedding = source.distance_volume(&bounds, res, control)?;
         control.progress("distance volumes", Some(0.5), String::new);
         let speed = if map == Affine3A::IDENTITY {
@@ -184,13 +239,8 @@ impl LevelSetMorph {
             })?
         };
         stages.lap("distance volumes");
-        let placement = if map == Affine3A::IDENTITY {
-            Placement::Identity
-        } else {
-            AffinePath::from_identity(&map).map_err(MorphError::from)?.into()
-        };
         let mut morph = evolve(&embedding, &speed, placement, &evolve_settings(settings, &bounds), control)?;
-        finish_report(&mut morph, settings, stages, warnings);
+        finish_report(&mut morph, settings, stages, warnings, "dense");
         Ok(morph)
     }
 
@@ -217,9 +267,33 @@ impl LevelSetMorph {
         stages.lap("distance volumes");
         let placement = Placement::Warp(Arc::clone(warp));
         let mut morph = evolve(&embedding, &speed, placement, &evolve_settings(settings, &bounds), control)?;
-        finish_report(&mut morph, settings, stages, warnings);
+        finish_report(&mut morph, settings, stages, warnings, "dense");
         Ok(morph)
     }
+}
+
+impl LevelSetSettings {
+    /// Whether [`Self::storage`] asks for sparse storage at this resolution
+    /// with this solver (the inputs decide the rest).
+    fn sparse(&self) -> bool {
+        let wanted = match self.storage {
+            Storage::Auto => self.resolution >= SPARSE_FROM,
+            Storage::Dense => false,
+            Storage::Sparse => true,
+        };
+        wanted && self.solver == SolverKind::SparseField
+    }
+}
+
+/// An upper bound on the norm of `map`'s linear part (how far a point
+/// moves per unit moved before the map): the square root of the infinity
+/// norm of `AᵀA`, which bounds its largest eigenvalue; exact for diagonal
+/// maps.
+fn norm_bound(map: &Affine3A) -> f32 {
+    let a = isomorph_common::glam::Mat3::from(map.matrix3);
+    let ata = a.transpose() * a;
+    let rows = [ata.row(0), ata.row(1), ata.row(2)];
+    rows.iter().map(|r| r.abs().element_sum()).fold(0.0, f32::max).sqrt()
 }
 
 /// The evolution's settings from the morph's, on the box `bounds`.
@@ -239,15 +313,18 @@ fn evolve_settings(settings: &LevelSetSettings, bounds: &Aabb) -> EvolveSettings
 }
 
 /// Puts the pipeline's stages (before the evolution's own), the input
-/// warnings and whether the shapes were aligned into `morph`'s report.
+/// warnings, the storage (`"dense"` or `"sparse"`) and whether the shapes
+/// were aligned into `morph`'s report.
 fn finish_report(
     morph: &mut LevelSetMorph,
     settings: &LevelSetSettings,
     stages: Stages,
     warnings: Vec<String>,
+    storage: &'static str,
 ) {
     let evolution = std::mem::take(&mut morph.report_mut().stages);
-    let mut report = morph.report().clone().with_stages(stages).with_warnings(warnings);
+    let mut report =
+        morph.report().clone().with_stages(stages).with_warnings(warnings).with_detail("storage", storage);
     report.stages.extend(evolution);
     match settings.align {
         Align::Auto | Align::Map(_) => report = report.with_detail("aligned", true),

@@ -3,15 +3,20 @@
 
 use crate::band::BandFrame;
 use crate::solver::{Curvature, Solver, StepParams, StepStats};
-use crate::stencil::Lattice;
-use crate::{DenseSolver, LevelSetError, Placement, SparseFieldSolver, SpeedGrid};
+use crate::{
+    DenseSolver, LevelSetError, Overlap, Placement, SparseFieldSolver, SpeedGrid, SpeedSampler,
+    check_overlap, check_overlap_sparse,
+};
 use isomorph_common::glam::{Affine3A, UVec3, Vec3};
-use isomorph_common::marching_cubes::marching_cubes;
-use isomorph_common::{Aabb, Grid3, TriMesh};
+use isomorph_common::marching_cubes::marching_cubes_planes;
+use isomorph_common::{Aabb, Bricks, Grid3, TriMesh};
 use isomorph_common::{
-    Control, Frame, MissedPart, Morph, MorphError, MorphReport, Outcome, Residual, Stages, check, check_time,
+    Control, Frame, Morph, MorphError, MorphReport, Outcome, Residual, Stages, check, check_time,
 };
 use rayon::prelude::*;
+use std::borrow::Cow;
+use std::fmt;
+use std::sync::Arc;
 
 /// Which solver integrates the level-set equation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
@@ -122,114 +127,6 @@ pub struct LevelSetMorph {
     report: MorphReport,
 }
 
-/// Target nodes within this distance (voxels) outside the target join its
-/// parts: a thin feature sampled between nodes, or two parts less than about
-/// two voxels apart, stays one part (Breen & Whitaker §4 is about the
-/// continuous target, not the pieces its sampling falls into).
-const JOIN_VOXELS: f32 = 1.0;
-
-/// How the source overlaps the target's parts ([`check_overlap`]).
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct Overlap {
-    /// Connected parts of the target: its inside nodes, joined through nodes
-    /// less than a voxel outside it.
-    pub parts: usize,
-    /// The parts whose inside the source's inside does not overlap, largest
-    /// first: the evolution never reaches them.
-    pub missed: Vec<MissedPart>,
-}
-
-impl Overlap {
-    /// Share of the target's inside nodes in parts the source misses, in
-    /// `[0, 1]`.
-    pub fn unreached_share(&self) -> f32 {
-        // A fold from +0 (an empty f32 sum is −0).
-        self.missed.iter().fold(0.0, |sum, p| sum + p.share)
-    }
-
-    /// A sentence for the report when some part is missed.
-    pub fn warning(&self) -> Option<String> {
-        let largest = self.missed.first()?;
-        Some(format!(
-            "{} of {} target part(s) do not overlap the source and are not reached ({:.2} % of the \
-             target's inside; the largest, {:.2} %, spans {:.3?} .. {:.3?}): the morph ends without them",
-            self.missed.len(),
-            self.parts,
-            100.0 * self.unreached_share(),
-            100.0 * largest.share,
-            largest.min.to_array(),
-            largest.max.to_array(),
-        ))
-    }
-}
-
-/// Whether the source's inside overlaps every connected part of the
-/// target's inside (Breen & Whitaker §4: a target part that the source does
-/// not touch is never reached). Parts are judged on the target, not on its
-/// sampling: inside nodes joined through nodes less than a voxel outside the
-/// target are one part, so a thin feature whose nodes fall outside it does
-/// not split the target. Missed parts are accepted while their share of the
-/// target's inside nodes is at most `max_unreached_share`.
-///
-/// # Errors
-/// [`MorphError::NoOverlap`] with every missed part's size, share of the
-/// target's inside and box (world units), largest first, when their total
-/// share is over `max_unreached_share`.
-pub fn check_overlap(
-    source: &Grid3<f32>,
-    speed: &SpeedGrid,
-    max_unreached_share: f32,
-) -> Result<Overlap, LevelSetError> {
-    let lattice = Lattice::new(source.dims());
-    let u = source.data();
-    let reader = speed.reader();
-    let v = |n: usize| reader.node(n);
-    let joined = |m: usize| v(m) > -JOIN_VOXELS;
-    let mut seen = vec![false; u.len()];
-    let (mut parts, mut inside) = (0, 0usize);
-    let mut missed = Vec::new();
-    let mut stack = Vec::new();
-    for start in 0..u.len() {
-        if seen[start] || v(start) <= 0.0 {
-            continue;
-        }
-        parts += 1;
-        let (mut overlaps, mut nodes) = (false, 0usize);
-        let (mut lo, mut hi) = (UVec3::MAX, UVec3::ZERO);
-        seen[start] = true;
-        stack.push(start);
-        while let Some(n) = stack.pop() {
-            if v(n) > 0.0 {
-                overlaps |= u[n] > 0.0;
-                nodes += 1;
-                let c = source.node_of(n);
-                (lo, hi) = (lo.min(c), hi.max(c));
-            }
-            for m in lattice.neighbours(n).into_iter().flatten() {
-                if !seen[m] && joined(m) {
-                    seen[m] = true;
-                    stack.push(m);
-                }
-            }
-        }
-        inside += nodes;
-        if !overlaps {
-            let (min, max) = (source.position(lo.x, lo.y, lo.z), source.position(hi.x, hi.y, hi.z));
-            missed.push(MissedPart { nodes, share: 0.0, min, max });
-        }
-    }
-    for part in &mut missed {
-        part.share = part.nodes as f32 / inside as f32;
-    }
-    missed.sort_by_key(|p| std::cmp::Reverse(p.nodes));
-    let overlap = Overlap { parts, missed };
-    if overlap.unreached_share() > max_unreached_share {
-        let Overlap { parts: total, missed } = overlap;
-        return Err(MorphError::NoOverlap { missed, total, allowed: max_unreached_share }.into());
-    }
-    Ok(overlap)
-}
-
 /// Evolves the source surface (a signed distance grid, world units,
 /// positive inside) under the target `speed` until it matches the target
 /// (RMS distance or RMS change below the settings' thresholds) or the
@@ -264,7 +161,7 @@ fn evolve_on_pool(
     settings: &EvolveSettings,
     control: &Control,
 ) -> Result<LevelSetMorph, LevelSetError> {
-    let mut stages = Stages::start();
+    let stages = Stages::start();
     check_settings(settings)?;
     if !speed.on_lattice_of(source) {
         let dims = (source.dims(), speed.dims());
@@ -272,20 +169,130 @@ fn evolve_on_pool(
             format!("the speed's lattice ({} nodes) is not the source's ({} nodes)", dims.1, dims.0);
         return Err(isomorph_common::GridError::Mismatch(message).into());
     }
-    let mut solver: Box<dyn Solver> = match settings.solver {
+    let solver: Box<dyn Solver> = match settings.solver {
         SolverKind::SparseField => Box::new(SparseFieldSolver::new(source)?),
         SolverKind::Dense => Box::new(DenseSolver::new(source)?),
     };
     let overlap = check_overlap(source, speed, settings.max_unreached_share)?;
+    let lattice = (source.dims(), source.origin(), source.spacing());
+    let start = Start { solver, speed, overlap, lattice, source_bytes: source.len() * size_of::<f32>() };
+    run(start, placement, settings, control, stages)
+}
+
+/// The inputs of [`evolve_sparse`]: the source and the target without a
+/// dense grid.
+#[derive(Clone)]
+pub struct SparseInputs {
+    /// The source's signed distance (world units, positive inside) in a
+    /// narrow band of bricks at least [`SparseFieldSolver::band_width`]
+    /// wide, its side elsewhere ([`Bricks::sample_band`]); its dims are the
+    /// evolution lattice's.
+    pub source: Bricks<f32>,
+    /// World position of node `(0, 0, 0)`.
+    pub origin: Vec3,
+    /// World units per voxel.
+    pub spacing: f32,
+    /// The speed at a world point (voxel units: the target's signed
+    /// distance there, seen through the map `T`, over `spacing`).
+    pub target: SpeedSampler,
+    /// A bound on how fast `target` changes, in voxels per voxel moved: 1
+    /// for an exact distance, the norm of `T`'s linear part with a map.
+    pub lipschitz: f32,
+}
+
+impl fmt::Debug for SparseInputs {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("SparseInputs")
+            .field("dims", &self.source.dims())
+            .field("origin", &self.origin)
+            .field("spacing", &self.spacing)
+            .field("lipschitz", &self.lipschitz)
+            .finish_non_exhaustive()
+    }
+}
+
+/// [`evolve`] with memory proportional to the surfaces: the sparse field
+/// built from the source's narrow band ([`SparseFieldSolver::from_band`]),
+/// the overlap judged near the target's surface only
+/// ([`check_overlap_sparse`]), the speed computed per brick where the
+/// surface goes ([`SpeedGrid::lazy_unchecked`]). Same results as [`evolve`]
+/// of the dense samples of the same fields.
+///
+/// # Errors
+/// As [`evolve`]; [`MorphError::BadSetting`] for the dense solver, which
+/// needs a dense source.
+pub fn evolve_sparse(
+    inputs: &SparseInputs,
+    placement: Placement,
+    settings: &EvolveSettings,
+    control: &Control,
+) -> Result<LevelSetMorph, LevelSetError> {
+    control.install(|| {
+        let stages = Stages::start();
+        check_settings(settings)?;
+        if settings.solver == SolverKind::Dense {
+            return Err(
+                MorphError::bad_setting("solver", "Dense", "the sparse field for a sparse source").into()
+            );
+        }
+        let SparseInputs { source, origin, spacing, target, lipschitz } = inputs;
+        let solver = Box::new(SparseFieldSolver::from_band(source, *spacing)?);
+        let lattice = (*origin, *spacing);
+        let overlap =
+            check_overlap_sparse(source, lattice, target, *lipschitz, settings.max_unreached_share)?;
+        // A bound on the speed from the lattice's centre (only the dense solver reads it).
+        let dims = source.dims();
+        let half = 0.5 * (dims - UVec3::ONE).as_vec3();
+        let bound = target(*origin + *spacing * half).abs() + lipschitz * half.length();
+        let speed = SpeedGrid::lazy_unchecked(dims, *origin, *spacing, Arc::clone(target), bound)?;
+        let start = Start {
+            solver,
+            speed: &speed,
+            overlap,
+            lattice: (dims, *origin, *spacing),
+            source_bytes: source.heap_bytes(),
+        };
+        run(start, placement, settings, control, stages)
+    })
+}
+
+/// Iterations between two releases of the storage the band has left
+/// ([`Solver::release`]; a pass over the allocated bricks).
+const RELEASE_EVERY: usize = 16;
+
+/// An evolution ready to run.
+struct Start<'a> {
+    solver: Box<dyn Solver + 'a>,
+    speed: &'a SpeedGrid,
+    overlap: Overlap,
+    /// Nodes per axis, world position of node `(0, 0, 0)`, spacing.
+    lattice: (UVec3, Vec3, f32),
+    /// Heap bytes of the source's storage.
+    source_bytes: usize,
+}
+
+/// Runs `start` to convergence, keeping frames as `settings` schedule.
+fn run(
+    start: Start<'_>,
+    placement: Placement,
+    settings: &EvolveSettings,
+    control: &Control,
+    mut stages: Stages,
+) -> Result<LevelSetMorph, LevelSetError> {
+    let Start { mut solver, speed, overlap, lattice: (dims, origin, spacing), source_bytes } = start;
     let mut frames = vec![solver.capture(0, 0.0)];
     let mut stats = Vec::new();
     let (mut time, mut last_kept_time) = (0.0f64, 0.0f64);
     let mut converged = false;
     let (mut best, mut best_at, mut stalled) = (f32::INFINITY, 0, false);
     let params = StepParams { max_time_step: settings.max_time_step, curvature: settings.curvature };
+    let mut released = 0;
     for iteration in 1..=settings.max_iterations {
         control.check()?;
         let s = solver.step(speed, &params);
+        if iteration % RELEASE_EVERY == 0 {
+            released += solver.release();
+        }
         time += f64::from(s.dt);
         stats.push(s);
         control.progress("evolution", Some(iteration as f32 / settings.max_iterations as f32), || {
@@ -324,7 +331,7 @@ fn evolve_on_pool(
     let stored: usize = frames.iter().map(BandFrame::stored_bytes).sum();
     // The solver's state at the end (bricks are kept once allocated), the
     // speed's stored values and the source grid.
-    let working = solver.heap_bytes() + speed.heap_bytes() + source.len() * size_of::<f32>();
+    let working = solver.heap_bytes() + speed.heap_bytes() + source_bytes;
     let report = MorphReport::new("level-set", outcome)
         .with_iterations(stats.len())
         .with_residual(Residual {
@@ -335,28 +342,19 @@ fn evolve_on_pool(
         .with_stages(stages)
         .with_memory(stored, Some(stored + working))
         .with_detail("solver", format!("{:?}", settings.solver))
-        .with_detail("nodes", source.len())
+        .with_detail("nodes", dims.as_u64vec3().element_product() as usize)
         .with_detail("evolution_time", time)
         .with_detail("final_rms_change_voxels", f64::from(last.rms_change))
         .with_detail("final_surface_nodes", last.surface_nodes)
         .with_detail("kept_frames", frames.len())
+        .with_detail("released_bricks", released)
         .with_detail("placement", placement.kind())
         .with_detail("target_parts", overlap.parts)
         .with_detail("unreached_share", f64::from(overlap.unreached_share()))
         .with_warnings(overlap.warning());
-    let field = source.bounds();
+    let field = Aabb::new(origin, origin + (dims - UVec3::ONE).as_vec3() * spacing);
     let world = placed_box(&field, &placement);
-    Ok(LevelSetMorph {
-        frames,
-        dims: source.dims(),
-        origin: source.origin(),
-        spacing: source.spacing(),
-        placement,
-        stats,
-        converged,
-        world,
-        report,
-    })
+    Ok(LevelSetMorph { frames, dims, origin, spacing, placement, stats, converged, world, report })
 }
 
 /// A world box containing `field` placed by `T(·, α)` for every `α`: for
@@ -514,7 +512,16 @@ impl Morph for LevelSetMorph {
     /// the resolution is the evolution's), placed by `T(x, n/(N − 1))`.
     fn frame_mesh(&self, t: f32, _res: u32) -> Result<TriMesh, LevelSetError> {
         let n = self.index(check_time(t)?);
-        let mut mesh = marching_cubes(&self.frame_grid(n)?, 0.0);
+        // Rebuilt plane by plane: the same mesh as marching cubes of
+        // `frame_grid(n)`, without the dense grid.
+        let (frame, h) = (&self.frames[n], self.spacing);
+        let plane_len = (self.dims.x * self.dims.y) as usize;
+        let mut mesh = marching_cubes_planes(self.dims, self.origin, h, 0.0, |k| {
+            let mut values = vec![0.0; plane_len];
+            frame.fill(k * plane_len, &mut values);
+            values.iter_mut().for_each(|v| *v *= h);
+            Cow::Owned(values)
+        });
         self.placement.apply(&mut mesh, self.alpha(n));
         Ok(mesh)
     }

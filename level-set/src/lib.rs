@@ -21,14 +21,22 @@
 //!
 //! [`evolve`] runs either to convergence and keeps frames in memory
 //! proportional to the surface ([`BandFrame`]); the result is a
-//! [`LevelSetMorph`], an [`isomorph_common::Morph`].
+//! [`LevelSetMorph`], an [`isomorph_common::Morph`], whose frames are
+//! polygonized plane by plane (no dense grid).
+//!
+//! [`LevelSetMorph::new`] stores sparsely from [`SPARSE_FROM`] nodes up
+//! ([`Storage`]): the source's distance in a narrow band of bricks and its
+//! side elsewhere, the speed per brick where the surface goes, the overlap
+//! judged near the target's surface ([`check_overlap_sparse`]), bricks the
+//! band has left released ([`evolve_sparse`]); the kept frames are the
+//! dense storage's.
 //!
 //! Units: grids are world units; solver values and speeds are in voxels.
 //!
 //! # Paper sections → modules
 //! | paper | where |
 //! |---|---|
-//! | §3 the goal-driven motion along `γ_B N`; §4 steady state and overlap | [`evolve`], [`SpeedGrid`], [`Response`], [`check_overlap`] |
+//! | §3 the goal-driven motion along `γ_B N`; §4 steady state and overlap | [`evolve`], [`evolve_sparse`], [`SpeedGrid`], [`Response`], [`check_overlap`], [`check_overlap_sparse`] |
 //! | §5.1–5.2.1 the level-set equation, up-wind differences and the time-step bound | [`DenseSolver`], [`StepParams`] |
 //! | §5.2.2 Whitaker's sparse field: active layer, ±1 and ±2 layers, status changes | [`SparseFieldSolver`] |
 //! | §6.1 scan conversion of CSG models into signed distances | `isomorph_common::scan_conversion`, through [`isomorph_common::Solid`] |
@@ -82,6 +90,7 @@ mod contract;
 mod dense;
 mod error;
 mod evolution;
+mod overlap;
 mod placement;
 mod solver;
 mod sparse_field;
@@ -89,12 +98,13 @@ mod speed;
 mod stencil;
 
 pub use band::BandFrame;
-pub use contract::{Align, LevelSetSettings};
+pub use contract::{Align, LevelSetSettings, SPARSE_FROM, Storage};
 pub use dense::DenseSolver;
 pub use error::LevelSetError;
 pub use evolution::{
-    EvolveSettings, FrameSchedule, LevelSetMorph, Overlap, SolverKind, check_overlap, evolve,
+    EvolveSettings, FrameSchedule, LevelSetMorph, SolverKind, SparseInputs, evolve, evolve_sparse,
 };
+pub use overlap::{Overlap, check_overlap, check_overlap_sparse};
 pub use placement::{Placement, Warp};
 pub use solver::{Curvature, Solver, StepParams, StepStats};
 pub use sparse_field::SparseFieldSolver;

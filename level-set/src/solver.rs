@@ -104,4 +104,12 @@ pub trait Solver: Send {
     /// and evolution `time` reached (`O(surface)` work for the sparse
     /// field).
     fn capture(&self, iteration: usize, time: f64) -> BandFrame;
+
+    /// Frees the storage of the regions the band has left, where the state
+    /// reads as the far inside or outside anyway (no value changes; the
+    /// sparse field's bricks, nothing for dense state). Returns the bricks
+    /// released.
+    fn release(&mut self) -> usize {
+        0
+    }
 }

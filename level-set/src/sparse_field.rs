@@ -174,8 +174,28 @@ impl SparseFieldSolver {
         if dims.min_element() < 3 {
             return Err(GridError::TooSmall { dims, min: 3 }.into());
         }
-        // The layers lie within LAYERS + 1 voxels of the surface; one more for rounding.
-        let band = Bricks::sample_band(field, dims, origin, spacing, (f32::from(LAYERS) + 2.0) * spacing)?;
+        let band = Bricks::sample_band(field, dims, origin, spacing, Self::band_width(spacing))?;
+        Self::from_band(&band, spacing)
+    }
+
+    /// Half-width (world units) of the narrow band [`Self::from_band`]
+    /// needs on a lattice of `spacing`: the layers lie within `LAYERS + 1`
+    /// voxels of the surface, plus one voxel for rounding.
+    pub fn band_width(spacing: f32) -> f32 {
+        (f32::from(LAYERS) + 2.0) * spacing
+    }
+
+    /// [`Self::from_field`] from the field's narrow band already sampled
+    /// (world units, [`Bricks::sample_band`] with at least
+    /// [`Self::band_width`]), so the caller can keep it.
+    ///
+    /// # Errors
+    /// As [`Self::from_field`].
+    pub fn from_band(band: &Bricks<f32>, spacing: f32) -> Result<Self, LevelSetError> {
+        let dims = band.dims();
+        if dims.min_element() < 3 {
+            return Err(GridError::TooSmall { dims, min: 3 }.into());
+        }
         let side = BRICK as usize;
         for brick in band.allocated_bricks() {
             let first = band.brick_origin(brick);
@@ -706,6 +726,10 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> Solver for SparseFieldSolver<U, S> {
     /// sign is in `L−1`, `L0` or `L+1` (positive nodes are in `L0` or
     /// above, negative ones in `L0` or below, and face neighbours' layers
     /// differ by at most one).
+    fn release(&mut self) -> usize {
+        self.u.release_uniform() + self.status.release_uniform()
+    }
+
     fn capture(&self, iteration: usize, time: f64) -> BandFrame {
         let near = [&self.layers[slot(-1)][..], &self.layers[slot(0)], &self.layers[slot(1)]];
         BandFrame::capture_near(&Stored(&self.u), &self.lattice, near, iteration, time)

@@ -160,10 +160,7 @@ impl SpeedGrid {
         spacing: f32,
         sampler: SpeedSampler,
     ) -> Result<Self, LevelSetError> {
-        let bricks = Bricks::new(dims, 0.0f32, 0.0)?;
-        if dims.min_element() < 3 {
-            return Err(isomorph_common::GridError::TooSmall { dims, min: 3 }.into());
-        }
+        let unchecked = Self::lazy_unchecked(dims, origin, spacing, Arc::clone(&sampler), 0.0)?;
         let lat = Lattice::new(dims);
         let at = |n: usize| {
             let [i, j, k] = lat.coords(n);
@@ -191,6 +188,29 @@ impl SpeedGrid {
         }
         if !any_inside {
             return Err(LevelSetError::NoSurface("target"));
+        }
+        Ok(Self { max_abs, ..unchecked })
+    }
+
+    /// [`SpeedGrid::lazy`] without its pass over every node: nothing is
+    /// evaluated here, so the caller checks the target (finite values, an
+    /// inside; [`check_overlap_sparse`](crate::check_overlap_sparse) does
+    /// both near the target's surface) and gives `max_abs`, a bound on the
+    /// largest speed magnitude (voxel units; only the dense solver reads it).
+    ///
+    /// # Errors
+    /// [`MorphError::Grid`](isomorph_common::MorphError::Grid) for a lattice
+    /// under 3 nodes per axis or over 2³² nodes.
+    pub fn lazy_unchecked(
+        dims: UVec3,
+        origin: Vec3,
+        spacing: f32,
+        sampler: SpeedSampler,
+        max_abs: f32,
+    ) -> Result<Self, LevelSetError> {
+        let bricks = Bricks::new(dims, 0.0f32, 0.0)?;
+        if dims.min_element() < 3 {
+            return Err(isomorph_common::GridError::TooSmall { dims, min: 3 }.into());
         }
         let values = Speeds::Lazy { dims, origin, spacing, bricks: RwLock::new(bricks), sampler };
         Ok(Self { values, max_abs })

@@ -63,8 +63,9 @@ pub use sparse::{SparseSettings, SparseStats, level_set_mesh, polygonize_near_su
 
 use crate::marching_squares::crossing_parameter;
 use crate::{Aabb, Field3, Grid3, GridError, TriMesh};
-use glam::Vec3;
+use glam::{UVec3, Vec3};
 use rayon::prelude::*;
+use std::borrow::Cow;
 use table::CASES;
 
 /// Cell layers per parallel slab (fixed so the output does not depend on the
@@ -78,12 +79,35 @@ const SLAB_LAYERS: usize = 8;
 /// A grid with fewer than two nodes along an axis has no cells and yields an
 /// empty mesh. Normals are not computed (see [`TriMesh::compute_normals`]).
 pub fn marching_cubes(grid: &Grid3<f32>, iso: f32) -> TriMesh {
-    let dims = grid.dims();
+    let plane_len = (grid.dims().x * grid.dims().y) as usize;
+    let data = grid.data();
+    marching_cubes_planes(grid.dims(), grid.origin(), grid.spacing(), iso, |k| {
+        Cow::Borrowed(&data[k * plane_len..(k + 1) * plane_len])
+    })
+}
+
+/// [`marching_cubes`] of the grid of `dims` nodes at `origin` with
+/// `spacing` whose node plane `k` (the `dims.x · dims.y` values of
+/// `z = k`, x-fastest) is `plane(k)`: the same mesh as [`marching_cubes`]
+/// of the whole grid, while only a few planes per worker thread exist at a
+/// time (memory ∝ a plane, not the volume; for grids stored sparsely, e.g.
+/// a level set's band, rebuilt plane by plane).
+///
+/// # Panics
+/// If a plane does not hold `dims.x · dims.y` values.
+pub fn marching_cubes_planes<'a>(
+    dims: UVec3,
+    origin: Vec3,
+    spacing: f32,
+    iso: f32,
+    plane: impl Fn(usize) -> Cow<'a, [f32]> + Sync,
+) -> TriMesh {
     if dims.min_element() < 2 {
         return TriMesh::default();
     }
     let layers = dims.z as usize - 1;
     let cases = &*CASES;
+    let lattice = (origin, spacing);
     let slabs: Vec<SlabMesh> = (0..layers.div_ceil(SLAB_LAYERS))
         .into_par_iter()
         .map_init(
@@ -91,7 +115,7 @@ pub fn marching_cubes(grid: &Grid3<f32>, iso: f32) -> TriMesh {
             |scratch, s| {
                 let k0 = s * SLAB_LAYERS;
                 let k1 = (k0 + SLAB_LAYERS).min(layers);
-                scratch.run(grid, iso, cases, k0, k1, k1 == layers)
+                scratch.run(&plane, lattice, iso, cases, k0, k1, k1 == layers)
             },
         )
         .collect();
@@ -186,9 +210,11 @@ impl Scratch {
     /// Polygonizes cell layers `k0..k1`. Vertices are numbered in a fixed
     /// order: plane `k0`, then per layer its z-edges and the next plane, so
     /// the vertices of plane `k1` are the first ones of the next slab.
-    fn run(
+    #[allow(clippy::too_many_arguments)]
+    fn run<'a>(
         &mut self,
-        grid: &Grid3<f32>,
+        plane: &(impl Fn(usize) -> Cow<'a, [f32]> + Sync),
+        lattice: (Vec3, f32),
         iso: f32,
         cases: &[table::Case; 256],
         k0: usize,
@@ -197,17 +223,24 @@ impl Scratch {
     ) -> SlabMesh {
         let mut out = SlabMesh { positions: Vec::new(), triangles: Vec::new(), own: 0 };
         let plane_len = self.nx * self.ny;
-        let plane = |k: usize| &grid.data()[k * plane_len..(k + 1) * plane_len];
-        self.compute_signs(plane(k0), iso, k0 & 1);
-        self.emit_plane_vertices(grid, plane(k0), iso, k0, &mut out.positions);
+        let get = |k: usize| {
+            let values = plane(k);
+            assert_eq!(values.len(), plane_len, "marching_cubes_planes: plane {k} has the wrong length");
+            values
+        };
+        let mut below = get(k0);
+        self.compute_signs(&below, iso, k0 & 1);
+        self.emit_plane_vertices(lattice, &below, iso, k0, &mut out.positions);
         for k in k0..k1 {
-            self.compute_signs(plane(k + 1), iso, (k + 1) & 1);
-            self.emit_z_vertices(grid, plane(k), plane(k + 1), iso, k, &mut out.positions);
+            let above = get(k + 1);
+            self.compute_signs(&above, iso, (k + 1) & 1);
+            self.emit_z_vertices(lattice, &below, &above, iso, k, &mut out.positions);
             if k + 1 == k1 && !last {
                 out.own = out.positions.len() as u32;
             }
-            self.emit_plane_vertices(grid, plane(k + 1), iso, k + 1, &mut out.positions);
+            self.emit_plane_vertices(lattice, &above, iso, k + 1, &mut out.positions);
             self.emit_triangles(cases, k, &mut out.triangles);
+            below = above;
         }
         if last {
             out.own = out.positions.len() as u32;
@@ -233,14 +266,13 @@ impl Scratch {
     /// Creates the vertices of the crossed x- and y-edges of plane `k`.
     fn emit_plane_vertices(
         &mut self,
-        grid: &Grid3<f32>,
+        (origin, h): (Vec3, f32),
         values: &[f32],
         iso: f32,
         k: usize,
         positions: &mut Vec<Vec3>,
     ) {
         let (nx, ny, words) = (self.nx, self.ny, self.words);
-        let (origin, h) = (grid.origin(), grid.spacing());
         let signs = &self.signs[k & 1];
         let (x_vertex, y_vertex) = (&mut self.x_vertex[k & 1], &mut self.y_vertex[k & 1]);
         for j in 0..ny {
@@ -278,7 +310,7 @@ impl Scratch {
     /// Creates the vertices of the crossed z-edges between planes `k` and `k + 1`.
     fn emit_z_vertices(
         &mut self,
-        grid: &Grid3<f32>,
+        (origin, h): (Vec3, f32),
         below: &[f32],
         above: &[f32],
         iso: f32,
@@ -286,7 +318,6 @@ impl Scratch {
         positions: &mut Vec<Vec3>,
     ) {
         let (nx, words) = (self.nx, self.words);
-        let (origin, h) = (grid.origin(), grid.spacing());
         let (lo, hi) = (&self.signs[k & 1], &self.signs[(k + 1) & 1]);
         for j in 0..self.ny {
             let base = origin + h * Vec3::new(0.0, j as f32, k as f32);
