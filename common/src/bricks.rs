@@ -443,8 +443,11 @@ pub trait NodeStore<T>: IndexMut<usize, Output = T> + Clone + Debug + Send + Syn
 
     /// Drops what reads as a background value anyway (a sparse store's
     /// uniform bricks, [`Bricks::release_uniform`]; nothing for a dense
-    /// one); every node keeps its value. Returns the bricks released.
-    fn release_uniform(&mut self) -> usize;
+    /// one, the default); every node keeps its value. Returns the bricks
+    /// released.
+    fn release_uniform(&mut self) -> usize {
+        0
+    }
 }
 
 impl<T: Copy + Debug + Send + Sync> NodeStore<T> for Vec<T> {
@@ -465,10 +468,6 @@ impl<T: Copy + Debug + Send + Sync> NodeStore<T> for Vec<T> {
 
     fn heap_bytes(&self) -> usize {
         self.capacity() * size_of::<T>()
-    }
-
-    fn release_uniform(&mut self) -> usize {
-        0
     }
 }
 
