@@ -145,6 +145,14 @@ pub struct MethodArgs {
     /// given).
     #[arg(long, help_heading = "T-spline (Yang & Jüttler)")]
     pub refine_target: Option<f64>,
+    /// Adapt the T-mesh to the target before the evolution: fit the
+    /// target on it, split the cells (up to --depth) where that fit misses
+    /// the target by more than this (units of the [−1, 1]³ domain) and
+    /// refit, at most --refine-rounds times; gives thin target parts (a
+    /// handle thinner than a cell) the coefficients to grow into (off when
+    /// not given).
+    #[arg(long, help_heading = "T-spline (Yang & Jüttler)")]
+    pub adapt_target: Option<f64>,
     /// How level-set frames become triangle meshes: marching cubes at
     /// --resolution, or the paper's marching triangulation (Hartmann 1998;
     /// near-equilateral triangles of --mesh-edge, seeded from a lattice of
@@ -155,6 +163,16 @@ pub struct MethodArgs {
     /// [−1, 1]³ domain, 1e-4 to 1).
     #[arg(long, help_heading = "T-spline (Yang & Jüttler)", default_value_t = 0.02)]
     pub mesh_edge: f64,
+    /// Where each evolution step's zero-set samples come from (paper
+    /// §3.3): the vertices of marching cubes on the finest cells (fast), or
+    /// the paper's uniformly spaced points of a marching triangulation
+    /// (Hartmann 1998) with edges of --sample-edge finest cells.
+    #[arg(long, help_heading = "T-spline (Yang & Jüttler)", value_enum, default_value_t = SamplerArg::MarchingCubes)]
+    pub sampler: SamplerArg,
+    /// Spacing of the marching-triangulation samples, in finest T-mesh
+    /// cells (0.05 to 4; with --sampler marching-triangulation).
+    #[arg(long, help_heading = "T-spline (Yang & Jüttler)", default_value_t = 0.5)]
+    pub sample_edge: f64,
 
     /// The animator's links, speed curves and trajectories (a RON or JSON
     /// morph spec); the built-in spec of a built-in pair, or automatic
@@ -215,8 +233,11 @@ const OWNERS: &[(&str, &[Method])] = &[
     ("refine", &[Method::Tspline]),
     ("refine_rounds", &[Method::Tspline]),
     ("refine_target", &[Method::Tspline]),
+    ("adapt_target", &[Method::Tspline]),
     ("mesher", &[Method::Tspline]),
     ("mesh_edge", &[Method::Tspline]),
+    ("sampler", &[Method::Tspline]),
+    ("sample_edge", &[Method::Tspline]),
     ("links", &[Method::Blobtree]),
     ("via", &[Method::Blobtree]),
     ("via_mode", &[Method::Blobtree]),
@@ -332,10 +353,20 @@ impl MethodArgs {
         t.target_refinement = self
             .refine_target
             .map(|tolerance| isomorph_tspline::Refinement { tolerance, max_rounds: self.refine_rounds });
+        t.target_adaptation = self
+            .adapt_target
+            .map(|tolerance| isomorph_tspline::Refinement { tolerance, max_rounds: self.refine_rounds });
         t.mesher = match self.mesher {
             MesherArg::MarchingCubes => isomorph_tspline::Mesher::MarchingCubes,
             MesherArg::MarchingTriangulation => {
                 isomorph_tspline::Mesher::MarchingTriangulation { edge: self.mesh_edge }
+            }
+        };
+
+        t.evolve.sampler = match self.sampler {
+            SamplerArg::MarchingCubes => isomorph_tspline::Sampler::MarchingCubes,
+            SamplerArg::MarchingTriangulation => {
+                isomorph_tspline::Sampler::MarchingTriangulation { edge_cells: self.sample_edge }
             }
         };
 
@@ -474,6 +505,15 @@ pub enum MesherArg {
     /// Marching cubes at --resolution.
     MarchingCubes,
     /// Hartmann's marching triangulation with --mesh-edge (the paper's).
+    MarchingTriangulation,
+}
+
+/// Where the T-spline evolution's zero-set samples come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SamplerArg {
+    /// Marching-cubes vertices on the finest cells.
+    MarchingCubes,
+    /// Hartmann's marching triangulation with --sample-edge (the paper's).
     MarchingTriangulation,
 }
 

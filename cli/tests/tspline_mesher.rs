@@ -1,8 +1,10 @@
 //! The T-spline method's output options from the command line: `--mesher
 //! marching-cubes|marching-triangulation --mesh-edge L` (the report names
 //! the mesher; marching triangulation gives the near-equilateral triangles
-//! the README documents) and `--refine-target TOL` (the final refinement of
-//! the target's approximation, paper §3.2, appended as the last level set).
+//! the README documents), `--refine-target TOL` (the final refinement of
+//! the target's approximation, paper §3.2, appended as the last level set),
+//! and `--sampler marching-cubes|marching-triangulation --sample-edge C` (the
+//! evolution's zero-set samples, §3.3).
 
 mod common;
 
@@ -84,5 +86,35 @@ fn refine_target_appends_a_finer_fit_of_the_target() {
     // The sequence still ends exactly on the target.
     let e = &report["endpoints"]["target"];
     assert!(e["hausdorff_voxels"].as_f64().unwrap() < 0.1, "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn the_sampler_option_reaches_the_evolution() {
+    let dir = scratch("tspline-sampler");
+    let coarse = ["--no-projection-frames"];
+    let cubes = run(&dir.join("cubes"), &coarse);
+    let details = &cubes["morph"]["details"];
+    assert_eq!(details["sampler"], "marching cubes", "the default: {details}");
+    let mc_samples = details["first_step_samples"].as_u64().unwrap();
+
+    let args = [&coarse[..], &["--sampler", "marching-triangulation", "--sample-edge", "0.5"]].concat();
+    let tri = run(&dir.join("triangulation"), &args);
+    let details = &tri["morph"]["details"];
+    assert_eq!(details["sampler"], "marching triangulation, edge 0.5 finest cells", "{details}");
+    // Uniform points half a finest cell apart are fewer than the marching
+    // cubes' vertices at 3 nodes per finest cell.
+    let mt_samples = details["first_step_samples"].as_u64().unwrap();
+    assert!(mt_samples > 0 && mt_samples < mc_samples, "{mt_samples} vs {mc_samples}");
+    assert_eq!(tri["morph"]["outcome"], "converged", "{}", tri["morph"]);
+
+    // A bad spacing names its range; the options belong to the T-spline method.
+    let o =
+        morph("tspline", "sphere", "torus", &["--sampler", "marching-triangulation", "--sample-edge", "9"]);
+    let err = common::stderr(&o);
+    assert!(!o.status.success() && err.contains("0.05..=4"), "{err}");
+    let o = morph("level-set", "sphere", "torus", &["--sampler", "marching-triangulation"]);
+    let err = common::stderr(&o);
+    assert!(!o.status.success() && err.contains("--sampler (tspline)"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -30,7 +30,7 @@ use isomorph_io::inputs::LoadOptions;
 use isomorph_io::mesh::MeshFormat;
 use isomorph_levelset::{Align, SolverKind};
 use isomorph_rbf::Kernel;
-use isomorph_tspline::{Refinement, Speed, TsplineSettings};
+use isomorph_tspline::{Refinement, Sampler, Speed, TsplineSettings};
 use isomorph_warp::WarpSpec;
 use numpy::{
     PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods,
@@ -343,6 +343,10 @@ fn input_from(py: Python<'_>, obj: &Bound<'_, PyAny>, side: &str) -> PyResult<In
 
 // ---------------------------------------------------------------- settings
 
+/// Spacing of the T-spline evolution's marching-triangulation samples
+/// (`sampler="marching-triangulation"`), in finest T-mesh cells.
+const DEFAULT_SAMPLE_EDGE: f64 = 0.5;
+
 /// Every keyword setting and the methods it belongs to.
 const SETTINGS: &[(&str, &[Method])] = &[
     ("resolution", &Method::ALL),
@@ -368,6 +372,8 @@ const SETTINGS: &[(&str, &[Method])] = &[
     ("refine", &[Method::Tspline]),
     ("refine_rounds", &[Method::Tspline]),
     ("projection_frames", &[Method::Tspline]),
+    ("sampler", &[Method::Tspline]),
+    ("sample_edge", &[Method::Tspline]),
     ("links", &[Method::Blobtree]),
 ];
 
@@ -443,6 +449,8 @@ fn apply_settings(
     let Some(kwargs) = kwargs else { return Ok(s) };
     let mut refine = None;
     let mut refine_rounds = 3usize;
+    let mut triangulation_samples = false;
+    let mut sample_edge = DEFAULT_SAMPLE_EDGE;
     for (key, value) in kwargs.iter() {
         let name: String = key.extract()?;
         let Some((_, owners)) = SETTINGS.iter().find(|(n, _)| *n == name) else {
@@ -567,6 +575,11 @@ fn apply_settings(
                 s.tspline.projection_frames =
                     v.extract().map_err(|_| setting_error(py, &name, "expected True or False"))?
             }
+            "sampler" => {
+                triangulation_samples =
+                    choice(&name, v, &["marching-cubes", "marching-triangulation"])? == "marching-triangulation"
+            }
+            "sample_edge" => sample_edge = number(&name, v, "a number", (0.05f64, 4.0))?,
             "links" => {
                 let path: PathBuf =
                     v.extract().map_err(|_| setting_error(py, &name, "expected a file path"))?;
@@ -578,6 +591,9 @@ fn apply_settings(
         }
     }
     s.tspline.fit.refinement = refine.map(|tolerance| Refinement { tolerance, max_rounds: refine_rounds });
+    if triangulation_samples {
+        s.tspline.evolve.sampler = Sampler::MarchingTriangulation { edge_cells: sample_edge };
+    }
     Ok(s)
 }
 
@@ -626,6 +642,8 @@ fn default_of<'py>(py: Python<'py>, name: &str, s: &Settings, method: Method) ->
         "projection_frames" => {
             pyo3::types::PyBool::new(py, s.tspline.projection_frames).to_owned().into_any()
         }
+        "sampler" => "marching-cubes".into_pyobject(py)?.into_any(),
+        "sample_edge" => DEFAULT_SAMPLE_EDGE.into_pyobject(py)?.into_any(),
         "links" => py.None().into_bound(py),
         _ => py.None().into_bound(py),
     })

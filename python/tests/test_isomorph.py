@@ -153,6 +153,19 @@ def test_defaults_are_the_rust_defaults():
     assert {"points", "separation", "kernel"} <= set(isomorph.defaults("rbf"))
     assert "control_spacing" in isomorph.defaults("warp")
     assert "depth" in isomorph.defaults("tspline")
+    assert isomorph.defaults("tspline")["sampler"] == "marching-cubes"
+
+
+def test_tspline_sampler_reaches_the_evolution():
+    m = isomorph.morph(
+        "sphere", "torus", method="tspline", sampler="marching-triangulation", sample_edge=0.5, max_steps=2
+    )
+    assert m.report["details"]["sampler"] == "marching triangulation, edge 0.5 finest cells"
+    assert m.report["details"]["first_step_samples"] > 0
+    with pytest.raises(ValueError, match="sample_edge"):
+        isomorph.morph("sphere", "torus", method="tspline", sample_edge=9)
+    with pytest.raises(ValueError, match="sampler"):
+        isomorph.morph("sphere", "torus", method="tspline", sampler="random")
 
 
 def test_unknown_setting_is_a_value_error_naming_it():

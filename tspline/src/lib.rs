@@ -16,8 +16,8 @@
 //! | §3.1 T-spline level sets, eq. 1–2 | [`TSpline`] (`tspline.rs`), blending functions and their rational derivatives (`basis.rs`, `bspline.rs`) |
 //! | §3.2 T-mesh by octree subdivision (`n_T`, depth ≤ 6) | [`TMesh`], [`TMeshSettings`] (`tmesh.rs`; knots by Sederberg's ray casting, note §3.3) |
 //! | §3.2 initial fit, eq. 3–4 | [`fit`], [`FitSettings`], [`FitReport`] (`fit.rs`, sparse normal equations in `lsq.rs`, faer sparse Cholesky) |
-//! | §3.2 final refinement | of the source fit: [`FitSettings::refinement`], [`Refinement`], [`FitReport::rounds`], [`TMesh::refined`]; of the target after the evolution (§3.2, last paragraph): [`TsplineSettings::target_refinement`], [`TsplineMorph::refined_target`] |
-//! | §3.3 evolution, eq. 5–9, speed eq. 8 | [`evolve`], [`EvolveSettings`], [`Speed`], [`Evolution`] (`evolution.rs`; zero-set samples by marching cubes + Newton projection in `sampling.rs`) |
+//! | §3.2 final refinement | of the source fit: [`FitSettings::refinement`], [`Refinement`], [`FitReport::rounds`], [`TMesh::refined`]; of the target after the evolution (§3.2, last paragraph): [`TsplineSettings::target_refinement`], [`TsplineMorph::refined_target`]; the T-mesh adapted to the target as well ("generated adaptively from the geometry of both objects"): [`TsplineSettings::target_adaptation`] |
+//! | §3.3 evolution, eq. 5–9, speed eq. 8 | [`evolve`], [`EvolveSettings`], [`Speed`], [`Evolution`] (`evolution.rs`; zero-set samples by marching cubes or the paper's marching triangulation, then Newton projection, [`Sampler`] in `sampling.rs`) |
 //! | §4.2 alignment | [`TsplineSettings::align`], [`Align`]: moments (`isomorph_common::alignment`) or a user's map; the T-mesh is built on the aligned shapes |
 //! | §4.3 projection frames, eq. 10 | [`morph`] (`morph.rs`) |
 //! | §1, §4.4 marching triangulation (Hartmann 1998, ref. \[10\]) of the frames | [`TsplineSettings::mesher`], [`Mesher`] over [`isomorph_common::marching_triangulation`] |

@@ -96,6 +96,17 @@ pub struct TsplineSettings {
     /// (on its own, finer T-mesh); the target's projection frames start
     /// from it. `None` (default) ends on the evolution's last level set.
     pub target_refinement: Option<Refinement>,
+    /// Adapt the T-mesh to the target's geometry as the final refinement
+    /// adapts it to the source's (§3.2: the T-mesh follows *both* aligned
+    /// objects): before the source is fitted, the target's signed distance
+    /// is fitted on the T-mesh and the leaves holding target samples that
+    /// its zero set misses by more than the tolerance are split (up to
+    /// [`TMeshSettings::max_depth`]) and the fit repeated. Thin target parts
+    /// that the sample-count rule of the octree leaves coarse (a handle
+    /// thinner than a cell: few samples per cell) then get the coefficients
+    /// the evolution needs to grow them. `None` (default) keeps the
+    /// octree as built.
+    pub target_adaptation: Option<Refinement>,
     /// The mesher of [`Morph::frame_mesh`] for level sets.
     pub mesher: Mesher,
 }
@@ -119,6 +130,7 @@ impl Default for TsplineSettings {
             projection_frames: true,
             surface_resolution: 64,
             target_refinement: None,
+            target_adaptation: None,
             mesher: Mesher::MarchingCubes,
         }
     }
@@ -141,7 +153,7 @@ impl TsplineSettings {
         if let Mesher::MarchingTriangulation { edge } = self.mesher {
             check_range("mesher edge", edge, 1e-4, 1.0, "(0, 1] domain units")?;
         }
-        if let Some(r) = self.target_refinement {
+        for r in [self.target_refinement, self.target_adaptation].into_iter().flatten() {
             FitSettings { refinement: Some(r), ..self.fit.clone() }.validate()?;
         }
         self.tmesh.validate()?;
@@ -461,7 +473,19 @@ fn morph_on_pool(
     let all: Vec<DVec3> = samples_a.iter().chain(&samples_b).copied().collect();
     control.check()?;
     control.progress("fit", None, || format!("{} surface samples", all.len()));
-    let mesh = Arc::new(TMesh::build(&all, &settings.tmesh)?);
+    let mut mesh = Arc::new(TMesh::build(&all, &settings.tmesh)?);
+    let adaptation = match settings.target_adaptation {
+        Some(r) => {
+            control.progress("target adaptation", None, String::new);
+            let fit_settings = FitSettings { refinement: Some(r), ..settings.fit.clone() };
+            let (adapted, report) = fit(mesh, db, &samples_b, &fit_settings)?;
+            mesh = adapted.mesh().clone();
+            stages.lap("target adaptation");
+            control.check()?;
+            Some(report)
+        }
+        None => None,
+    };
     let (initial, fit_report) = fit(mesh, da, &samples_a, &settings.fit)?;
     stages.lap("fit");
     control.check()?;
@@ -506,6 +530,13 @@ fn morph_on_pool(
     }
     stages.lap("projection frames");
     let mut report = report(&evolution, &fit_report, &frames, stages, settings);
+    if let Some(fit) = &adaptation {
+        let first = fit.rounds.first().map_or(f64::NAN, |r| r.max_surface_error);
+        report = report
+            .with_detail("target_adaptation_rounds", fit.rounds.len().saturating_sub(1))
+            .with_detail("target_adaptation_max_surface_error_before", first)
+            .with_detail("target_adaptation_max_surface_error", fit.max_surface_error);
+    }
     if let Some((_, fit)) = &refined_target {
         report = report
             .with_detail("target_refinement_coefficients", fit.coefficients)
@@ -584,7 +615,9 @@ fn report(
         .with_detail("fit_max_surface_error", fit.max_surface_error)
         .with_detail("level_sets", evolution.frames.len())
         .with_detail("frames", frames.len())
-        .with_detail("mesher", settings.mesher.describe());
+        .with_detail("mesher", settings.mesher.describe())
+        .with_detail("sampler", settings.evolve.sampler.describe())
+        .with_detail("first_step_samples", evolution.steps.first().map_or(0, |s| s.samples));
     let steps = evolution.steps.len();
     let warning = match evolution.outcome {
         Stop::Vanished => Some("the zero set vanished during the evolution".to_string()),

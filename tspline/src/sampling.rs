@@ -38,6 +38,19 @@ pub enum Sampler {
     },
 }
 
+impl Sampler {
+    /// The sampler as the morph's report names it (e.g. `marching
+    /// triangulation, edge 0.5 finest cells`).
+    pub fn describe(&self) -> String {
+        match self {
+            Sampler::MarchingCubes => "marching cubes".to_string(),
+            Sampler::MarchingTriangulation { edge_cells } => {
+                format!("marching triangulation, edge {edge_cells} finest cells")
+            }
+        }
+    }
+}
+
 /// A point on the zero set with the function's derivatives there.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Sample {
