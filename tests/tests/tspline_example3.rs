@@ -26,7 +26,7 @@ fn example3_settings() -> TsplineSettings {
 }
 
 #[test]
-#[ignore = "about 90 s of CPU (3–6 min on the shared 2-core machine): run with --ignored; figures in docs/EXPERIMENTS.md"]
+#[ignore = "about 90 s of CPU (6–8 min wall on the loaded shared 2-core machine): run with --ignored; figures in docs/EXPERIMENTS.md"]
 fn apple_becomes_the_utah_teapot() {
     let options = LoadOptions::default();
     let apple = load_solid("apple", &options).unwrap();
