@@ -530,10 +530,10 @@ fn transform_error(origin: &Origin, source: isomorph_common::TransformError) -> 
 /// `topologies`: for each leaf in depth-first order, a generic topology
 /// known to hold for its skeletons ([`MinkowskiPath::reseated`]), else
 /// `None` (built).
-fn build<'p>(
+fn build(
     pair: &Pair,
     coplanar: bool,
-    topologies: &mut dyn Iterator<Item = Option<&'p MinkowskiPath>>,
+    topologies: &mut dyn Iterator<Item = Option<&MinkowskiPath>>,
 ) -> Result<GNode, BlobMorphError> {
     let origin = pair.origin().clone();
     let mut build = |p: &Pair| build(p, coplanar, topologies);
@@ -1305,14 +1305,15 @@ impl BlobMorph {
                         .filter(|l| (l.level, l.pair) == (level, pair))
                         .flat_map(|l| l.links.iter().cloned())
                         .collect();
-                    let spec = MorphSpec { links, ..MorphSpec::default() };
-                    let generic = GenericTree::new(&w[0], &w[1], &spec)
-                        .map_err(|e| BlobMorphError::Level { level, pair, source: Box::new(e) })?;
-                    let spec = MorphSpec { links: links_of(generic.pair()), ..MorphSpec::default() };
-                    // Built again with the links every frame replays, so
-                    // that its leaves come in the frames' order.
-                    let generic = GenericTree::new(&w[0], &w[1], &spec)
-                        .map_err(|e| BlobMorphError::Level { level, pair, source: Box::new(e) })?;
+                    let wrap = |e| BlobMorphError::Level { level, pair, source: Box::new(e) };
+                    let corr = Correspondence { links, ..Correspondence::default() };
+                    let (a, b) = (&w[0], &w[1]);
+                    let matched =
+                        decompose(a.root(), a.threshold(), b.root(), b.threshold(), &corr).map_err(wrap)?;
+                    // The tree is built with the links every frame replays,
+                    // so that its leaves come in the frames' order.
+                    let spec = MorphSpec { links: links_of(&matched), ..MorphSpec::default() };
+                    let generic = GenericTree::new(a, b, &spec).map_err(wrap)?;
                     next.push(generic.at_fixed(0.5)?);
                     specs.push(LevelPair { spec, generic });
                 }
@@ -1542,7 +1543,9 @@ impl Morph for BlobMorph {
         Ok(Frame { field, iso: 0.0, transform: Affine3A::IDENTITY })
     }
 
-    /// A box holding the support of every frame (see [`BlobMorph::support`]), padded by 5 %.
+    /// A box holding the support of every frame `C(t)`, `t ∈ [0, 1]`, by construction
+    /// (interval bounds of every parameter over 32 intervals of `t` per segment, not
+    /// samples), padded by 5 %.
     fn field_bounds(&self) -> Aabb {
         self.bounds
     }
@@ -1621,6 +1624,11 @@ mod tests {
                 prop_assert!(mid.value(p).is_finite());
             }
         }
+
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 32, ..ProptestConfig::default() })]
 
         /// The bounds of a Bézier morph through three random trees (every
         /// node kind, bends interpolated from rate 0 included) hold the

@@ -30,6 +30,14 @@ const BEND_CELL: f32 = 0.02;
 /// Most cells a bend's band is cut into (beyond, it is bounded whole).
 const BEND_MAX_CELLS: i64 = 512;
 
+/// The critical points `x > 0` (and 0) of [`sinc`] below [`ARGUMENT_LIMIT`]
+/// (the roots of `tan x = x`).
+const SINC_CRITICAL: [f32; 5] = [0.0, 4.493_409_5, 7.725_251_6, 10.904_122, 14.066_194];
+
+/// The critical points `x > 0` of [`versinc`] below [`ARGUMENT_LIMIT`]
+/// (`tan(x/2) = x` and `x = 2πn`).
+const VERSINC_CRITICAL: [f32; 4] = [2.331_122_4, 6.283_185_5, 9.208_434, 12.566_371];
+
 /// Where the critical points listed for [`sinc`] and [`versinc`] end:
 /// beyond `|x| = ARGUMENT_LIMIT` only their global ranges are used.
 const ARGUMENT_LIMIT: f32 = 15.0;
@@ -484,16 +492,9 @@ pub(crate) fn bend_image(k: Interval, y0: Interval, lo: Interval, hi: Interval, 
             let theta = k.mul(d);
             let (sin, cos) = (theta.sin_range(0.0), theta.sin_range(0.5 * PI));
             let far = theta.abs_max() > ARGUMENT_LIMIT;
-            let sc = if far {
-                Interval::new(-0.2173, 1.0)
-            } else {
-                theta.range_of(sinc, &[0.0, 4.493_409_5, 7.725_251_6, 10.904_122, 14.066_194])
-            };
-            let vc = if far {
-                Interval::new(-0.7247, 0.7247)
-            } else {
-                theta.range_of(versinc, &[2.331_122_4, 6.283_185_5, 9.208_434, 12.566_371])
-            };
+            let sc = if far { Interval::new(-0.2173, 1.0) } else { theta.range_of(sinc, &SINC_CRITICAL) };
+            let vc =
+                if far { Interval::new(-0.7247, 0.7247) } else { theta.range_of(versinc, &VERSINC_CRITICAL) };
             let y = y0.add(cos.mul(e)).sub(sin.mul(z)).add(d.mul(sc));
             let zz = cos.mul(z).add(sin.mul(e)).add(d.mul(vc));
             out = out
@@ -567,21 +568,12 @@ mod tests {
     /// functions and reach their extremes (critical points listed right).
     #[test]
     fn function_ranges_are_exact() {
-        let fs: [(fn(f32) -> f32, Box<dyn Fn(Interval) -> Interval>); 4] = [
-            (f32::sin, Box::new(|x: Interval| x.sin_range(0.0))),
-            (f32::cos, Box::new(|x: Interval| x.sin_range(0.5 * PI))),
-            (
-                sinc,
-                Box::new(|x: Interval| {
-                    x.range_of(sinc, &[0.0, 4.493_409_5, 7.725_251_6, 10.904_122, 14.066_194])
-                }),
-            ),
-            (
-                versinc,
-                Box::new(|x: Interval| {
-                    x.range_of(versinc, &[2.331_122_4, 6.283_185_5, 9.208_434, 12.566_371])
-                }),
-            ),
+        type Case = (fn(f32) -> f32, fn(Interval) -> Interval);
+        let fs: [Case; 4] = [
+            (f32::sin, |x| x.sin_range(0.0)),
+            (f32::cos, |x| x.sin_range(0.5 * PI)),
+            (sinc, |x| x.range_of(sinc, &SINC_CRITICAL)),
+            (versinc, |x| x.range_of(versinc, &VERSINC_CRITICAL)),
         ];
         for (f, range) in &fs {
             for (a, w) in [(-14.5, 29.0), (-3.0, 1.0), (0.3, 4.5), (-7.0, 5.0), (2.0, 0.01), (-0.01, 0.02)] {
