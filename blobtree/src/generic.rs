@@ -1818,11 +1818,9 @@ mod tests {
         assert!(m.level_shapes(2, 0.5).unwrap().len() == 1 && m.level_shapes(3, 0.5).is_err());
     }
 
-    /// The built-in rook → queen → bear Bézier morph: the swept bounds hold
-    /// the frames' supports (in every fourth bounding interval, at its start
-    /// and middle) and are not much larger than the frames' supports are.
-    #[test]
-    fn bezier_bounds_of_scenes_hold_the_frames() {
+    /// The Bézier-like rook → queen → bear of the demo (the queen with its
+    /// built-in links).
+    fn rook_queen_bear() -> BlobMorph {
         let keys = [
             KeyShape {
                 shape: crate::scenes::queen(),
@@ -1830,7 +1828,15 @@ mod tests {
             },
             KeyShape { shape: crate::scenes::bear(), spec: MorphSpec::default() },
         ];
-        let m = BlobMorph::bezier(&crate::scenes::rook(), &keys).unwrap();
+        BlobMorph::bezier(&crate::scenes::rook(), &keys).unwrap()
+    }
+
+    /// The built-in rook → queen → bear Bézier morph: the swept bounds hold
+    /// the frames' supports (in every fourth bounding interval, at its start
+    /// and middle) and are not much larger than the frames' supports are.
+    #[test]
+    fn bezier_bounds_of_scenes_hold_the_frames() {
+        let m = rook_queen_bear();
         let steps = BOUND_INTERVALS * m.segments.len();
         let mut seen = Aabb::EMPTY;
         for i in (0..steps).step_by(4) {
@@ -1854,14 +1860,7 @@ mod tests {
     /// generic topologies made at `t = ½` are the frames built from scratch.
     #[test]
     fn reused_topologies_give_the_same_frames() {
-        let keys = [
-            KeyShape {
-                shape: crate::scenes::queen(),
-                spec: crate::scenes::demo_spec("rook", "queen").unwrap(),
-            },
-            KeyShape { shape: crate::scenes::bear(), spec: MorphSpec::default() },
-        ];
-        let m = BlobMorph::bezier(&crate::scenes::rook(), &keys).unwrap();
+        let m = rook_queen_bear();
         let b = m.world_bounds();
         let reused: Vec<f32> = (1..20).map(|k| k as f32 / 20.0).filter(|&t| m.reuses_topologies(t)).collect();
         assert!(reused.len() >= 3, "{reused:?}");

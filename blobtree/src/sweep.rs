@@ -62,6 +62,7 @@ impl Interval {
         Self { lo: v, hi: v }
     }
 
+    /// The middle of the interval.
     pub fn mid(self) -> f32 {
         0.5 * (self.lo + self.hi)
     }
