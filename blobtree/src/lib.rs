@@ -254,6 +254,7 @@ mod node;
 mod scene;
 pub mod scenes;
 mod skeleton;
+mod sweep;
 mod tree;
 mod warp;
 

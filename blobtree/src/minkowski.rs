@@ -61,6 +61,21 @@ impl MinkowskiPath {
         Self { a: a.clone(), b: b.clone(), pairs, generic }
     }
 
+    /// This generic topology on other ends `a`, `b` with the same vertex
+    /// counts, whose vertices correspond to this path's ends' one by one
+    /// and whose normal cones overlap as theirs do (positive combinations
+    /// of the same skeletons, vertex by vertex); `None` if the counts differ.
+    pub(crate) fn reseated(&self, a: &Polytope, b: &Polytope) -> Option<Self> {
+        let same =
+            a.vertices().len() == self.a.vertices().len() && b.vertices().len() == self.b.vertices().len();
+        same.then(|| Self {
+            a: a.clone(),
+            b: b.clone(),
+            pairs: self.pairs.clone(),
+            generic: self.generic.clone(),
+        })
+    }
+
     /// The parent-vertex pairs `(i, j)` of the generic vertices.
     pub fn pairs(&self) -> &[(usize, usize)] {
         &self.pairs

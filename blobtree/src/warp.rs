@@ -232,10 +232,14 @@ impl Warp {
                     }
                 }
                 let r = rad2.sqrt() * (1.0 + 1e-5) + 1e-6;
-                Aabb::new(
+                let disc = Aabb::new(
                     Vec3::new(child.min.x, centre - r, axis_z - r),
                     Vec3::new(child.max.x, centre + r, axis_z + r),
-                )
+                );
+                // The disc grows like 1/rate as the bend straightens; the
+                // swept bound has no such blow-up. Both hold the image.
+                let p = crate::sweep::Interval::point;
+                disc.intersection(&crate::sweep::bend_image(p(rate), p(centre), p(min), p(max), child))
             }
             Warp::Affine(m) => child.transformed(&m),
         }
