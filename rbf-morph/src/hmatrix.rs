@@ -14,11 +14,19 @@
 //! shape transformation) there are `O(n)` blocks of bounded rank, so storage
 //! and a product `Φx` cost `O(n log n)`.
 //!
-//! Error bound: each admissible block `Φ[s, t]` is replaced by `U Vᵀ` with
-//! `‖Φ[s, t] − U Vᵀ‖_F ≤ ε ‖U Vᵀ‖_F` as estimated by ACA's stopping rule
-//! (the norm of the last cross against the running norm of the
-//! approximation); dense blocks are exact. Summed over blocks,
-//! `‖Φ − Φ_H‖_F ≲ ε ‖Φ‖_F`, so a product is accurate to about
+//! Storage: the terms of each low-rank block are kept in f64, f32 or
+//! 16-bit integers (with a scale per term), each term in the most compact
+//! form whose rounding error fits the block's tolerance (see [`aca`]):
+//! most of ACA's terms are many orders of magnitude below the block's
+//! norm and need few digits.
+//!
+//! Error bound: each admissible `m × n` block `Φ[s, t]` is replaced by
+//! `U Vᵀ` with `‖Φ[s, t] − U Vᵀ‖_F ≤ ε max(‖Φ[s, t]‖_F, ρ √(m n))` as
+//! estimated by ACA's stopping rule (the norm of the last cross against the
+//! running norm of the approximation), `ρ` the root mean square entry of
+//! `Φ`; storing the terms in reduced precision adds at most as much again.
+//! Dense blocks are exact. Summed over blocks,
+//! `‖Φ − Φ_H‖_F ≲ 2 √2 ε ‖Φ‖_F`, so a product is accurate to about
 //! `ε ‖Φ‖_F ‖x‖₂` (tested against the dense product).
 
 use crate::kernel::Kernel;
@@ -135,16 +143,45 @@ fn split(
 enum Block {
     /// Dense, row-major `rows × cols`.
     Dense { rows: Range<usize>, cols: Range<usize>, a: Vec<f64> },
-    /// `U Vᵀ`, `U` stored term by term (`rank × rows`), `V` likewise.
-    LowRank { rows: Range<usize>, cols: Range<usize>, u: Vec<f64>, v: Vec<f64> },
+    /// `U Vᵀ` (see [`LowRank`]; boxed: most blocks are dense, and the
+    /// enum is as large as its largest variant).
+    LowRank { rows: Range<usize>, cols: Range<usize>, f: Box<LowRank> },
+}
+
+/// The factors of a low-rank block `U Vᵀ`, term by term (`U` is
+/// `rank × rows`, `V` likewise): the leading terms in f64, then smaller
+/// ones in f32, the smallest as 16-bit integers times a scale per term —
+/// each as compact as its share of the block's tolerance allows (see
+/// [`aca`]).
+struct LowRank {
+    u: Vec<f64>,
+    v: Vec<f64>,
+    u32: Vec<f32>,
+    v32: Vec<f32>,
+    u16: Vec<i16>,
+    v16: Vec<i16>,
+    /// The scale of each 16-bit term: `u_k v_kᵀ ≈ scale_k q_u q_vᵀ`.
+    scale16: Vec<f64>,
+}
+
+impl LowRank {
+    /// Stored factor entries (all precisions).
+    fn len(&self) -> usize {
+        self.u.len() + self.v.len() + self.u32.len() + self.v32.len() + self.u16.len() + self.v16.len()
+    }
 }
 
 impl Block {
-    /// Stored f64 values.
-    fn len(&self) -> usize {
+    /// Bytes stored.
+    #[cfg(test)]
+    fn bytes(&self) -> usize {
         match self {
-            Block::Dense { a, .. } => a.len(),
-            Block::LowRank { u, v, .. } => u.len() + v.len(),
+            Block::Dense { a, .. } => a.len() * size_of::<f64>(),
+            Block::LowRank { f, .. } => {
+                (f.u.len() + f.v.len() + f.scale16.len()) * size_of::<f64>()
+                    + (f.u32.len() + f.v32.len()) * size_of::<f32>()
+                    + (f.u16.len() + f.v16.len()) * size_of::<i16>()
+            }
         }
     }
 
@@ -163,20 +200,41 @@ impl Block {
                     }
                 }
             }
-            Block::LowRank { rows, cols, u, v } => {
-                for (uk, vk) in u.chunks_exact(rows.len()).zip(v.chunks_exact(cols.len())) {
-                    let a = dot(vk, &x[cols.clone()]);
-                    let b = dot(uk, &x[rows.clone()]);
-                    y[rows.clone()].iter_mut().zip(uk).for_each(|(y, u)| *y += a * u);
-                    y[cols.clone()].iter_mut().zip(vk).for_each(|(y, v)| *y += b * v);
-                }
+            Block::LowRank { rows, cols, f } => {
+                let one = std::iter::repeat(1.0);
+                apply_terms(&f.u, &f.v, one.clone(), rows, cols, x, y);
+                apply_terms(&f.u32, &f.v32, one, rows, cols, x, y);
+                apply_terms(&f.u16, &f.v16, f.scale16.iter().copied(), rows, cols, x, y);
             }
         }
     }
 
     /// Multiply–adds of [`Block::apply`] (for balancing the work).
     fn cost(&self) -> usize {
-        self.len() * 2
+        match self {
+            Block::Dense { a, .. } => a.len() * 2,
+            Block::LowRank { f, .. } => f.len() * 2,
+        }
+    }
+}
+
+/// `y[rows] += U S Vᵀ x[cols]` and `y[cols] += V S Uᵀ x[rows]` for the
+/// terms `U`, `V` stored in any precision, `S` the diagonal of `scales`
+/// (accumulated in f64).
+fn apply_terms<T: Copy + Into<f64>>(
+    u: &[T],
+    v: &[T],
+    scales: impl Iterator<Item = f64>,
+    rows: &Range<usize>,
+    cols: &Range<usize>,
+    x: &[f64],
+    y: &mut [f64],
+) {
+    for ((uk, vk), s) in u.chunks_exact(rows.len()).zip(v.chunks_exact(cols.len())).zip(scales) {
+        let a = s * dot(vk, &x[cols.clone()]);
+        let b = s * dot(uk, &x[rows.clone()]);
+        y[rows.clone()].iter_mut().zip(uk).for_each(|(y, &u)| *y += a * u.into());
+        y[cols.clone()].iter_mut().zip(vk).for_each(|(y, &v)| *y += b * v.into());
     }
 }
 
@@ -195,14 +253,15 @@ impl HMatrix {
     pub fn new(tree: &ClusterTree, kernel: Kernel, smoothing: f64, eps: f64) -> Self {
         let mut pairs = Vec::new();
         block_pairs(tree, 0, 0, &mut pairs);
+        let rms = rms_entry(tree, kernel);
         let blocks: Vec<Block> = pairs
             .into_par_iter()
             .map(|(s, t, admissible)| {
                 let (rows, cols) = (tree.nodes[s].range.clone(), tree.nodes[t].range.clone());
                 let low_rank =
-                    if admissible { aca(tree, kernel, rows.clone(), cols.clone(), eps) } else { None };
+                    if admissible { aca(tree, kernel, rows.clone(), cols.clone(), eps, rms) } else { None };
                 match low_rank {
-                    Some((u, v)) => Block::LowRank { rows, cols, u, v },
+                    Some(f) => Block::LowRank { rows, cols, f: Box::new(f) },
                     None => {
                         let mut a = dense_block(tree, kernel, rows.clone(), cols.clone());
                         if rows == cols {
@@ -232,7 +291,7 @@ impl HMatrix {
     /// Bytes stored in the blocks.
     #[cfg(test)]
     pub fn bytes(&self) -> usize {
-        self.blocks.iter().map(Block::len).sum::<usize>() * size_of::<f64>()
+        self.blocks.iter().map(Block::bytes).sum::<usize>()
     }
 
     /// `y ← (Φ + λI) x` (tree order). Parallel over a fixed set of block
@@ -312,18 +371,130 @@ fn kernel_row(tree: &ClusterTree, kernel: Kernel, x: &[f64], cols: Range<usize>,
     kernel.eval_r2_in_place(out);
 }
 
+/// ACA's factors grow by this many terms at a time.
+const GROW: usize = 8;
+
+/// Pairs sampled by [`rms_entry`].
+const SAMPLES: usize = 1 << 16;
+
+/// The root mean square of the entries of `Φ`, estimated from [`SAMPLES`]
+/// fixed (deterministic) pairs of distinct points: `rms · n ≈ ‖Φ‖_F`.
+fn rms_entry(tree: &ClusterTree, kernel: Kernel) -> f64 {
+    let n = tree.order.len();
+    if n < 2 {
+        return 0.0;
+    }
+    let mut r2: Vec<f64> = (0..SAMPLES)
+        .map(|s| {
+            let i = s.wrapping_mul(7919) % n;
+            let j = (i + 1 + s.wrapping_mul(104_729) % (n - 1)) % n;
+            tree.point(i).iter().zip(tree.point(j)).map(|(a, b)| (a - b) * (a - b)).sum()
+        })
+        .collect();
+    kernel.eval_r2_in_place(&mut r2);
+    (dot(&r2, &r2) / SAMPLES as f64).sqrt()
+}
+
 /// Adaptive cross approximation with partial pivoting of the block
-/// `Φ[rows, cols]` to the relative Frobenius tolerance `eps`: `(U, V)` term
-/// by term, or `None` when its storage would reach the dense block's
-/// (rank `k` with `k (m + n) ≥ m n`).
+/// `Φ[rows, cols]` (`m × n`) to the Frobenius tolerance
+/// `eps · max(‖Φ[rows, cols]‖_F, rms √(m n))`, `rms` the root mean square
+/// entry of the whole `Φ`: blocks whose entries are small against the
+/// matrix's (near admissible pairs of the growing kernels) get the share
+/// of the global error budget `ε ‖Φ‖_F` their size allows rather than a
+/// relative tolerance of their own. Returns the factors, or `None` when
+/// their storage would reach the dense block's (rank `k` with
+/// `k (m + n) ≥ m n`).
+///
+/// The terms are then stored as compactly as the tolerance allows: from
+/// the last (smallest) one backwards, as 16-bit integers times a scale
+/// while the sum of their exact rounding errors stays within half the
+/// tolerance, then in f32 while the total stays within the tolerance
+/// (rounding both factors of a term to f32, unit roundoff `2⁻²⁴`, changes
+/// it by at most `(2 · 2⁻²⁴ + 2⁻⁴⁸) ‖u_k‖ ‖v_k‖ ≤ 2⁻²³ ‖u_k‖ ‖v_k‖` in the
+/// Frobenius norm), the rest in f64. So a block's error stays within twice
+/// its tolerance. ACA's terms shrink roughly geometrically to `ε` of the
+/// block's norm, and most of them are far below it.
 fn aca(
     tree: &ClusterTree,
     kernel: Kernel,
     rows: Range<usize>,
     cols: Range<usize>,
     eps: f64,
-) -> Option<(Vec<f64>, Vec<f64>)> {
+    rms: f64,
+) -> Option<LowRank> {
     let (m, n) = (rows.len(), cols.len());
+    let floor2 = rms * rms * (m * n) as f64;
+    let (u, v, terms, norm2) = aca_terms(tree, kernel, rows, cols, eps * eps * floor2, eps)?;
+    let budget = eps * norm2.max(floor2).sqrt();
+    let mut spent = 0.0;
+    let mut j16 = terms.len();
+    let mut quantized = Vec::new();
+    while j16 > 0 {
+        let k = j16 - 1;
+        let (uk, vk) = (&u[k * m..(k + 1) * m], &v[k * n..(k + 1) * n]);
+        let ((qu, su, eu), (qv, sv, ev)) = (quantize(uk), quantize(vk));
+        // ‖s q_u q_vᵀ − u vᵀ‖_F ≤ e_u ‖v‖ + ‖u‖ e_v + e_u e_v.
+        let error = eu * dot(vk, vk).sqrt() + dot(uk, uk).sqrt() * ev + eu * ev;
+        if spent + error > 0.5 * budget {
+            break;
+        }
+        spent += error;
+        quantized.push((qu, qv, su * sv));
+        j16 = k;
+    }
+    let mut j32 = j16;
+    while j32 > 0 && spent + f64::from(f32::EPSILON) * terms[j32 - 1] <= budget {
+        spent += f64::from(f32::EPSILON) * terms[j32 - 1];
+        j32 -= 1;
+    }
+    quantized.reverse();
+    let to_f32 = |a: &[f64]| a.iter().map(|&x| x as f32).collect();
+    let (u32, v32) = (to_f32(&u[j32 * m..j16 * m]), to_f32(&v[j32 * n..j16 * n]));
+    let head = |mut a: Vec<f64>, len: usize| {
+        a.truncate(len);
+        a.shrink_to_fit();
+        a
+    };
+    Some(LowRank {
+        u32,
+        v32,
+        u16: quantized.iter().flat_map(|q| q.0.iter().copied()).collect(),
+        v16: quantized.iter().flat_map(|q| q.1.iter().copied()).collect(),
+        scale16: quantized.iter().map(|q| q.2).collect(),
+        u: head(u, j32 * m),
+        v: head(v, j32 * n),
+    })
+}
+
+/// `x` as 16-bit integers `q` and a scale `s` (`x ≈ s q`, the largest
+/// entry at ±32767), with the exact error `‖s q − x‖₂`.
+fn quantize(x: &[f64]) -> (Vec<i16>, f64, f64) {
+    let largest = x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    if largest == 0.0 {
+        return (vec![0; x.len()], 0.0, 0.0);
+    }
+    let s = largest / f64::from(i16::MAX);
+    let q: Vec<i16> = x.iter().map(|&v| (v / s).round() as i16).collect();
+    let error = q.iter().zip(x).map(|(&q, &v)| (s * f64::from(q) - v).powi(2)).sum::<f64>().sqrt();
+    (q, s, error)
+}
+
+/// The terms of [`aca`] in f64: `(U, V, ‖u_k‖ ‖v_k‖, ‖U Vᵀ‖_F²)`.
+type AcaTerms = (Vec<f64>, Vec<f64>, Vec<f64>, f64);
+
+/// The terms of [`aca`] in f64 ([`AcaTerms`]), stopping
+/// when the last term's squared norm is below `eps² ‖U Vᵀ‖_F²` or
+/// `floor2`.
+fn aca_terms(
+    tree: &ClusterTree,
+    kernel: Kernel,
+    rows: Range<usize>,
+    cols: Range<usize>,
+    floor2: f64,
+    eps: f64,
+) -> Option<AcaTerms> {
+    let (m, n) = (rows.len(), cols.len());
+    let mut terms = Vec::new();
     let max_rank = m * n / (m + n);
     let (mut u, mut v) = (Vec::<f64>::new(), Vec::<f64>::new());
     let mut used = vec![false; m];
@@ -351,7 +522,7 @@ fn aca(
                     i = next;
                     continue;
                 }
-                None => return Some((u, v)),
+                None => return Some((u, v, terms, norm2)),
             }
         }
         if rank >= max_rank {
@@ -368,11 +539,18 @@ fn aca(
         let cross: f64 =
             (0..rank).map(|k| dot(&u[k * m..(k + 1) * m], &col) * dot(&v[k * n..(k + 1) * n], &row)).sum();
         norm2 += nu * nv + 2.0 * cross;
+        // Grow by a few terms at a time, not by doubling: the factors of
+        // the largest blocks are tens of MB.
+        if u.capacity() < u.len() + m {
+            u.reserve_exact(GROW * m);
+            v.reserve_exact(GROW * n);
+        }
         u.extend_from_slice(&col);
         v.extend_from_slice(&row);
         rank += 1;
-        if nu * nv <= eps * eps * norm2 {
-            return Some((u, v));
+        terms.push((nu * nv).sqrt());
+        if nu * nv <= (eps * eps * norm2).max(floor2) {
+            return Some((u, v, terms, norm2));
         }
         let next = (0..m).filter(|&r| !used[r]).fold(None, |b: Option<(usize, f64)>, r| match b {
             Some((_, best)) if col[r].abs() <= best => b,
@@ -380,7 +558,7 @@ fn aca(
         });
         match next {
             Some((r, _)) => i = r,
-            None => return Some((u, v)),
+            None => return Some((u, v, terms, norm2)),
         }
     }
 }
@@ -388,16 +566,16 @@ fn aca(
 /// The dot product, in eight interleaved partial sums added in a fixed
 /// order (so that it vectorizes and still does not depend on anything but
 /// its inputs).
-pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
+pub(crate) fn dot<T: Copy + Into<f64>>(a: &[T], b: &[f64]) -> f64 {
     let n = a.len().min(b.len());
     let (a, b) = (&a[..n], &b[..n]);
     let mut lanes = [0.0f64; 8];
     let (ca, cb) = (a.chunks_exact(8), b.chunks_exact(8));
     let (ra, rb) = (ca.remainder(), cb.remainder());
     for (x, y) in ca.zip(cb) {
-        lanes.iter_mut().zip(x.iter().zip(y)).for_each(|(lane, (x, y))| *lane += x * y);
+        lanes.iter_mut().zip(x.iter().zip(y)).for_each(|(lane, (&x, y))| *lane += x.into() * y);
     }
-    let tail: f64 = ra.iter().zip(rb).map(|(x, y)| x * y).sum();
+    let tail: f64 = ra.iter().zip(rb).map(|(&x, y)| x.into() * y).sum();
     lanes.iter().sum::<f64>() + tail
 }
 
@@ -442,6 +620,20 @@ mod tests {
     }
 
     #[test]
+    fn quantize_reports_its_exact_error() {
+        let x: Vec<f64> = (0..200).map(|i| ((i * 37) % 101) as f64 / 7.0 - 5.0).collect();
+        let (q, s, error) = quantize(&x);
+        let exact = q.iter().zip(&x).map(|(&q, &x)| (s * f64::from(q) - x).powi(2)).sum::<f64>().sqrt();
+        assert_eq!(error, exact);
+        // Half a step per entry at most, and not exact.
+        let largest = x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        assert!(q.iter().any(|&q| q.unsigned_abs() == i16::MAX as u16));
+        assert!(error <= 0.5 * s * (x.len() as f64).sqrt() && error > 0.0, "{error:e}");
+        assert!(s <= largest / 32000.0);
+        assert_eq!(quantize(&[0.0; 4]), (vec![0; 4], 0.0, 0.0));
+    }
+
+    #[test]
     fn product_matches_the_dense_matrix_within_the_tolerance() {
         let n = 1500;
         let p = two_spheres(n);
@@ -450,6 +642,9 @@ mod tests {
             for eps in [1e-4, 1e-9] {
                 let h = HMatrix::new(&tree, kernel, 0.0, eps);
                 assert!(h.blocks.iter().any(|b| matches!(b, Block::LowRank { .. })), "nothing compressed");
+                // The smallest terms are stored in reduced precision.
+                let reduced = |b: &Block| matches!(b, Block::LowRank { f, .. } if !f.u32.is_empty() || !f.u16.is_empty());
+                assert!(h.blocks.iter().any(reduced), "{kernel:?} ε {eps:e}: all terms in f64");
                 assert!(h.bytes() < n * n * 8 / 2, "{} bytes", h.bytes());
                 let x: Vec<f64> = (0..n).map(|i| ((i * 7919) % 101) as f64 / 50.0 - 1.0).collect();
                 let mut y = vec![0.0; n];
