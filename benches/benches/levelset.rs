@@ -157,7 +157,8 @@ fn step(c: &mut Criterion) {
 /// Peak memory of the whole reference morph at `n³` through
 /// `LevelSetMorph::new` with sparse storage (what the command line and
 /// Python run from 256 up), run once to convergence keeping one frame in
-/// ten (`keep_every: 10`; the library's default keeps every iteration):
+/// ten (`FrameSchedule::EveryIterations(10)`; the library's default keeps
+/// [`FRAME_BUDGET`](isomorph_levelset::FRAME_BUDGET) to 66 frames):
 /// prints the process's peak resident set (`VmHWM` of `/proc/self/status`,
 /// reset through `/proc/self/clear_refs` before the run, so it holds this
 /// run alone plus the process's own baseline), the report's stored and
@@ -204,7 +205,7 @@ fn sparse_morph(n: u32, keep_every: usize) -> LevelSetMorph {
         // The union of the shapes' boxes is 0.84 across: 0.08 per side makes it [-0.5, 0.5].
         padding: 0.08 / 0.84,
         storage: Storage::Sparse,
-        keep_every,
+        frames: FrameSchedule::EveryIterations(keep_every),
         ..LevelSetSettings::default()
     };
     let (source, target) = (Solid::shape(Shape::sphere(0.3)), Solid::shape(Shape::torus(0.3, 0.12)));

@@ -98,7 +98,7 @@ mod speed;
 mod stencil;
 
 pub use band::BandFrame;
-pub use contract::{Align, LevelSetSettings, SPARSE_FROM, Storage};
+pub use contract::{Align, FRAME_BUDGET, LevelSetSettings, SPARSE_FROM, Storage};
 pub use dense::DenseSolver;
 pub use error::LevelSetError;
 pub use evolution::{
