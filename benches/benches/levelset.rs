@@ -224,7 +224,8 @@ fn peak_rss() -> usize {
 /// torus --res 128 --frames 8` through the library, as the command runs it
 /// (the same library calls, not the binary): the inputs' reference surfaces
 /// for the endpoint distances ([`ExportSettings::with_inputs`]), both distance
-/// volumes, the evolution keeping a frame per iteration, and the 8 frames
+/// volumes, the evolution keeping frames within the default budget
+/// ([`FRAME_BUDGET`](isomorph_levelset::FRAME_BUDGET)), and the 8 frames
 /// polygonized, measured and written with the contact sheet and report.
 fn cli(c: &mut Criterion) {
     let mut group = c.benchmark_group("cli/sphere_torus");
