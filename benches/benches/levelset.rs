@@ -157,7 +157,8 @@ fn step(c: &mut Criterion) {
 /// Peak memory of the whole reference morph at `n³` through
 /// `LevelSetMorph::new` with sparse storage (what the command line and
 /// Python run from 256 up), run once to convergence keeping one frame in
-/// ten (`keep_every: 10`; the library's default keeps every iteration):
+/// ten (`FrameSchedule::EveryIterations(10)`; the library's default keeps
+/// [`FRAME_BUDGET`](isomorph_levelset::FRAME_BUDGET) to 66 frames):
 /// prints the process's peak resident set (`VmHWM` of `/proc/self/status`,
 /// reset through `/proc/self/clear_refs` before the run, so it holds this
 /// run alone plus the process's own baseline), the report's stored and
@@ -204,7 +205,7 @@ fn sparse_morph(n: u32, keep_every: usize) -> LevelSetMorph {
         // The union of the shapes' boxes is 0.84 across: 0.08 per side makes it [-0.5, 0.5].
         padding: 0.08 / 0.84,
         storage: Storage::Sparse,
-        keep_every,
+        frames: FrameSchedule::EveryIterations(keep_every),
         ..LevelSetSettings::default()
     };
     let (source, target) = (Solid::shape(Shape::sphere(0.3)), Solid::shape(Shape::torus(0.3, 0.12)));
@@ -223,7 +224,8 @@ fn peak_rss() -> usize {
 /// torus --res 128 --frames 8` through the library, as the command runs it
 /// (the same library calls, not the binary): the inputs' reference surfaces
 /// for the endpoint distances ([`ExportSettings::with_inputs`]), both distance
-/// volumes, the evolution keeping a frame per iteration, and the 8 frames
+/// volumes, the evolution keeping frames within the default budget
+/// ([`FRAME_BUDGET`](isomorph_levelset::FRAME_BUDGET)), and the 8 frames
 /// polygonized, measured and written with the contact sheet and report.
 fn cli(c: &mut Criterion) {
     let mut group = c.benchmark_group("cli/sphere_torus");

@@ -110,17 +110,10 @@ impl BandFrame {
         Self { band, flips, first_inside, iteration, time }
     }
 
-    /// Rebuilds the embedding (voxel units) of `len` nodes: band values
-    /// exact, other nodes `±1.5` with their stored sign.
-    pub(crate) fn rebuild(&self, len: usize) -> Vec<f32> {
-        let mut u = vec![0.0f32; len];
-        self.fill(0, &mut u);
-        u
-    }
-
-    /// Writes the rebuilt embedding of nodes `start .. start + out.len()`
-    /// into `out` (as [`Self::rebuild`], for a part of the grid: a plane for
-    /// marching cubes without the whole grid; `O(out.len() + log(surface))`).
+    /// Writes the rebuilt embedding (voxel units) of nodes `start .. start +
+    /// out.len()` into `out`: band values exact, other nodes `±1.5` with
+    /// their stored sign (a part of the grid, e.g. a plane for marching
+    /// cubes without the whole grid; `O(out.len() + log(surface))`).
     pub(crate) fn fill(&self, start: usize, out: &mut [f32]) {
         let end = start + out.len();
         // The flips before `start` set the side of its first node.
@@ -183,7 +176,8 @@ mod tests {
             })
             .collect();
         let frame = BandFrame::capture(&u, &lattice, 3, 0.5);
-        let back = frame.rebuild(u.len());
+        let mut back = vec![0.0; u.len()];
+        frame.fill(0, &mut back);
         assert!(frame.band_len() > 20 && frame.band_len() < u.len() / 2);
         for n in 0..u.len() {
             assert_eq!(back[n] > 0.0, u[n] > 0.0, "sign of node {n}");

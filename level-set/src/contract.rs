@@ -82,6 +82,11 @@ pub enum Storage {
 /// Resolution from which [`Storage::Auto`] stores sparsely.
 pub const SPARSE_FROM: u32 = 256;
 
+/// The default budget of kept frames ([`FrameSchedule::Budget`]): between
+/// 33 and 66 frames once the evolution is longer than 65 iterations, so the
+/// frames of any morph time lie at most `I/32` iterations from a kept one.
+pub const FRAME_BUDGET: usize = 32;
+
 /// Settings of [`LevelSetMorph::new`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct LevelSetSettings {
@@ -101,9 +106,11 @@ pub struct LevelSetSettings {
     pub curvature: Option<f32>,
     /// Iteration cap (default 20 000).
     pub max_iterations: usize,
-    /// Keep a frame every this many iterations (default 1: every iteration,
-    /// each costs memory ∝ the surface).
-    pub keep_every: usize,
+    /// Which iterations' frames are kept (each costs memory ∝ the surface);
+    /// `frame(t)` interpolates between them ([`LevelSetMorph`]). Default
+    /// [`FrameSchedule::Budget`] of [`FRAME_BUDGET`]: at most
+    /// `2 × FRAME_BUDGET + 2` frames whatever the iteration count.
+    pub frames: FrameSchedule,
     /// Largest share of the target's inside (0–1) that may lie in parts the
     /// (aligned) source does not overlap, which the evolution never reaches:
     /// up to it the morph runs and its report warns, above it the morph is
@@ -122,7 +129,7 @@ impl Default for LevelSetSettings {
             solver: SolverKind::SparseField,
             curvature: None,
             max_iterations: 20_000,
-            keep_every: 1,
+            frames: FrameSchedule::Budget(FRAME_BUDGET),
             max_unreached_share: 0.05,
             storage: Storage::Auto,
         }
@@ -138,7 +145,7 @@ impl LevelSetSettings {
         check::count("resolution", u64::from(self.resolution), 8, 1024)?;
         check::range("padding", f64::from(self.padding), 0.0, 2.0)?;
         check::count("max_iterations", self.max_iterations as u64, 1, 10_000_000)?;
-        check::count("keep_every", self.keep_every as u64, 1, 10_000_000)?;
+        self.frames.validate()?;
         check::range("max_unreached_share", f64::from(self.max_unreached_share), 0.0, 1.0)?;
         if let Some(w) = self.curvature {
             check::range("curvature", f64::from(w), 0.0, 100.0)?;
@@ -306,7 +313,7 @@ fn evolve_settings(settings: &LevelSetSettings, bounds: &Aabb) -> EvolveSettings
         curvature: settings
             .curvature
             .map(|weight| Curvature { weight, length: 0.5 * bounds.size().max_element() }),
-        frames: FrameSchedule::EveryIterations(settings.keep_every),
+        frames: settings.frames,
         max_unreached_share: settings.max_unreached_share,
         ..EvolveSettings::default()
     }

@@ -28,13 +28,34 @@ pub enum SolverKind {
     Dense,
 }
 
-/// When frames of the evolution are kept.
+/// When frames of the evolution are kept (the first and the last always
+/// are).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum FrameSchedule {
     /// After every `k`-th iteration.
     EveryIterations(usize),
     /// Whenever the evolution time has advanced by this much (eq. 17's `t`).
     EveryTime(f64),
+    /// Evenly in iterations within a memory budget, however many iterations
+    /// the evolution takes: every `stride`-th iteration, the stride starting
+    /// at 1 and doubling (every other kept frame dropped) whenever more than
+    /// `2 × budget + 1` frames are kept. At most `2 × budget + 2` frames are
+    /// kept; at least `budget + 1` once the stride has grown.
+    Budget(usize),
+}
+
+impl FrameSchedule {
+    /// Checks the interval, time or budget.
+    ///
+    /// # Errors
+    /// [`MorphError::BadSetting`] named `frames`.
+    pub fn validate(&self) -> Result<(), MorphError> {
+        match *self {
+            FrameSchedule::EveryIterations(k) => check::count("frames", k as u64, 1, u64::MAX),
+            FrameSchedule::EveryTime(t) => check::positive("frames", t),
+            FrameSchedule::Budget(b) => check::count("frames", b as u64, 1, u64::MAX),
+        }
+    }
 }
 
 /// Settings of [`evolve`].
@@ -111,8 +132,13 @@ impl Default for EvolveSettings {
 }
 
 /// A finished level-set evolution: the kept frames and how it went. As a
-/// [`Morph`], `frame(t)` is the kept frame nearest to `t·(N − 1)`, placed
-/// by the interpolated transform `T(x, n/(N − 1))` (Breen eq. 25–26; see
+/// [`Morph`], `frame(t)` is the embedding after iteration `i = round(t·I)`
+/// of the `I` iterations run: the kept frame of that iteration when there
+/// is one (always for `t = 0` and `t = 1`), otherwise the values of the
+/// two kept frames bracketing `i` interpolated linearly in iterations
+/// (each frame's band values, `±1.5` voxels elsewhere; the interpolated
+/// zero set lies between the two frames' surfaces). It is placed by the
+/// interpolated transform `T(x, i/I)` (Breen eq. 25–26; see
 /// [`Placement`]).
 #[derive(Debug, Clone)]
 pub struct LevelSetMorph {
@@ -287,6 +313,8 @@ fn run(
     let (mut best, mut best_at, mut stalled) = (f32::INFINITY, 0, false);
     let params = StepParams { max_time_step: settings.max_time_step, curvature: settings.curvature };
     let mut released = 0;
+    // Iterations between kept frames under a budget.
+    let mut stride = 1;
     for iteration in 1..=settings.max_iterations {
         control.check()?;
         let s = solver.step(speed, &params);
@@ -309,10 +337,19 @@ fn run(
         let due = match settings.frames {
             FrameSchedule::EveryIterations(k) => iteration % k == 0,
             FrameSchedule::EveryTime(dt) => time - last_kept_time >= dt,
+            FrameSchedule::Budget(_) => iteration % stride == 0,
         };
-        if due || done || iteration == settings.max_iterations {
+        let last = done || iteration == settings.max_iterations;
+        if due || last {
             frames.push(solver.capture(iteration, time));
             last_kept_time = time;
+        }
+        if let FrameSchedule::Budget(budget) = settings.frames
+            && !last
+            && frames.len() > 2 * budget + 1
+        {
+            stride *= 2;
+            frames.retain(|f| f.iteration % stride == 0);
         }
         if done {
             break;
@@ -407,10 +444,7 @@ fn check_settings(s: &EvolveSettings) -> Result<(), MorphError> {
         check::range("curvature.weight", f64::from(c.weight), 0.0, f64::from(f32::MAX))?;
         check::positive("curvature.length", f64::from(c.length))?;
     }
-    match s.frames {
-        FrameSchedule::EveryIterations(k) => check::count("frames", k as u64, 1, u64::MAX),
-        FrameSchedule::EveryTime(t) => check::positive("frames", t),
-    }
+    s.frames.validate()
 }
 
 impl LevelSetMorph {
@@ -455,20 +489,54 @@ impl LevelSetMorph {
     /// # Errors
     /// [`MorphError::Grid`](isomorph_common::MorphError::Grid) if the grid cannot be allocated.
     pub fn frame_grid(&self, n: usize) -> Result<Grid3<f32>, LevelSetError> {
-        let frame = &self.frames[n.min(self.frames.len() - 1)];
-        let h = self.spacing;
-        let data = frame.rebuild(self.dims.element_product() as usize).into_iter().map(|v| v * h).collect();
-        Ok(Grid3::from_vec(self.dims, self.origin, h, data)?)
+        let n = n.min(self.frames.len() - 1);
+        self.grid_at((n, n, 0.0))
     }
 
-    /// The kept frame index for morph time `t`.
-    fn index(&self, t: f32) -> usize {
-        (t * (self.frames.len() - 1) as f32).round() as usize
+    /// The embedding at the bracket `(a, b, w)` ([`Self::fill`]) as a grid.
+    fn grid_at(&self, bracket: (usize, usize, f32)) -> Result<Grid3<f32>, LevelSetError> {
+        let mut data = vec![0.0; self.dims.element_product() as usize];
+        self.fill(bracket, 0, &mut data);
+        Ok(Grid3::from_vec(self.dims, self.origin, self.spacing, data)?)
     }
 
-    /// The placement parameter `α = n/(N − 1)` of kept frame `n`.
-    fn alpha(&self, n: usize) -> f32 {
-        n as f32 / (self.frames.len() - 1).max(1) as f32
+    /// The iteration shown at morph time `t`, `round(t·I)`.
+    fn iteration_at(&self, t: f32) -> usize {
+        (t * self.last_iteration() as f32).round() as usize
+    }
+
+    /// Iterations run (the last kept frame's).
+    fn last_iteration(&self) -> usize {
+        self.frames.last().map_or(0, |f| f.iteration)
+    }
+
+    /// The kept frames `(a, b)` bracketing `iteration` and the weight of
+    /// `b`: `(n, n, 0)` when frame `n` is that iteration's.
+    fn bracket(&self, iteration: usize) -> (usize, usize, f32) {
+        let b = self.frames.partition_point(|f| f.iteration < iteration).min(self.frames.len() - 1);
+        let ib = self.frames[b].iteration;
+        if ib <= iteration || b == 0 {
+            return (b, b, 0.0);
+        }
+        let ia = self.frames[b - 1].iteration;
+        (b - 1, b, (iteration - ia) as f32 / (ib - ia) as f32)
+    }
+
+    /// The embedding (world units) of nodes `start .. start + out.len()` at
+    /// the bracket `(a, b, w)`: `(1 − w)` frame `a` plus `w` frame `b`.
+    fn fill(&self, (a, b, w): (usize, usize, f32), start: usize, out: &mut [f32]) {
+        self.frames[a].fill(start, out);
+        if w > 0.0 {
+            let mut later = vec![0.0; out.len()];
+            self.frames[b].fill(start, &mut later);
+            out.iter_mut().zip(&later).for_each(|(v, l)| *v = (1.0 - w) * *v + w * l);
+        }
+        out.iter_mut().for_each(|v| *v *= self.spacing);
+    }
+
+    /// The placement parameter `α = i/I` of iteration `i`.
+    fn alpha(&self, iteration: usize) -> f32 {
+        iteration as f32 / self.last_iteration().max(1) as f32
     }
 
     /// Breen's `T(x, α)` placing the kept frames.
@@ -491,8 +559,9 @@ impl Morph for LevelSetMorph {
     }
 
     fn frame(&self, t: f32) -> Result<Frame<Grid3<f32>>, LevelSetError> {
-        let n = self.index(check_time(t)?);
-        Ok(Frame { field: self.frame_grid(n)?, iso: 0.0, transform: self.placement.affine_at(self.alpha(n)) })
+        let i = self.iteration_at(check_time(t)?);
+        let field = self.grid_at(self.bracket(i))?;
+        Ok(Frame { field, iso: 0.0, transform: self.placement.affine_at(self.alpha(i)) })
     }
 
     /// The evolution lattice's box (source space).
@@ -508,27 +577,26 @@ impl Morph for LevelSetMorph {
         &self.report
     }
 
-    /// Marching cubes directly on the kept frame's lattice (`res` ignored:
-    /// the resolution is the evolution's), placed by `T(x, n/(N − 1))`.
+    /// Marching cubes directly on the frame's lattice (`res` ignored: the
+    /// resolution is the evolution's), placed by `T(x, i/I)`.
     fn frame_mesh(&self, t: f32, _res: u32) -> Result<TriMesh, LevelSetError> {
-        let n = self.index(check_time(t)?);
+        let i = self.iteration_at(check_time(t)?);
+        let bracket = self.bracket(i);
         // Rebuilt plane by plane: the same mesh as marching cubes of
-        // `frame_grid(n)`, without the dense grid.
-        let (frame, h) = (&self.frames[n], self.spacing);
+        // `frame(t)`'s grid, without the dense grid.
         let plane_len = (self.dims.x * self.dims.y) as usize;
-        let mut mesh = marching_cubes_planes(self.dims, self.origin, h, 0.0, |k| {
+        let mut mesh = marching_cubes_planes(self.dims, self.origin, self.spacing, 0.0, |k| {
             let mut values = vec![0.0; plane_len];
-            frame.fill(k * plane_len, &mut values);
-            values.iter_mut().for_each(|v| *v *= h);
+            self.fill(bracket, k * plane_len, &mut values);
             Cow::Owned(values)
         });
-        self.placement.apply(&mut mesh, self.alpha(n));
+        self.placement.apply(&mut mesh, self.alpha(i));
         Ok(mesh)
     }
 
-    /// `T(·, n/(N − 1))`'s affine part, without making the frame.
+    /// `T(·, i/I)`'s affine part, without making the frame.
     fn world_transform(&self, t: f32) -> Result<Affine3A, LevelSetError> {
-        Ok(self.placement.affine_at(self.alpha(self.index(check_time(t)?))))
+        Ok(self.placement.affine_at(self.alpha(self.iteration_at(check_time(t)?))))
     }
 
     /// Each point's field point `x` (`T(x, α) = p`, [`Placement::unplace`])
@@ -536,7 +604,7 @@ impl Morph for LevelSetMorph {
     /// (affine parts only) would read the inputs' colours where the frame
     /// lies, not where its surface came from.
     fn ends_of(&self, t: f32, points: &[Vec3]) -> Result<[Vec<Vec3>; 2], LevelSetError> {
-        let alpha = self.alpha(self.index(check_time(t)?));
+        let alpha = self.alpha(self.iteration_at(check_time(t)?));
         let Placement::Warp(warp) = &self.placement else {
             // An affine placement: two maps, computed once.
             let back = self.placement.affine_at(alpha).inverse();

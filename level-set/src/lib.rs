@@ -20,8 +20,12 @@
 //!   per brick where the band goes, so no dense grid is needed at all.
 //!
 //! [`evolve`] runs either to convergence and keeps frames in memory
-//! proportional to the surface ([`BandFrame`]); the result is a
-//! [`LevelSetMorph`], an [`isomorph_common::Morph`], whose frames are
+//! proportional to the surface ([`BandFrame`]), as many as its
+//! [`FrameSchedule`] says ([`LevelSetMorph::new`] keeps at most
+//! `2 × FRAME_BUDGET + 2`, [`FRAME_BUDGET`], whatever the iteration count);
+//! the result is a [`LevelSetMorph`], an [`isomorph_common::Morph`], whose
+//! frame at time `t` is that of iteration `round(t·I)`, interpolated
+//! between the two kept frames around it when it was not kept, and
 //! polygonized plane by plane (no dense grid).
 //!
 //! [`LevelSetMorph::new`] stores sparsely from [`SPARSE_FROM`] nodes up
@@ -98,7 +102,7 @@ mod speed;
 mod stencil;
 
 pub use band::BandFrame;
-pub use contract::{Align, LevelSetSettings, SPARSE_FROM, Storage};
+pub use contract::{Align, FRAME_BUDGET, LevelSetSettings, SPARSE_FROM, Storage};
 pub use dense::DenseSolver;
 pub use error::LevelSetError;
 pub use evolution::{

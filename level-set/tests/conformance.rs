@@ -6,7 +6,7 @@ use isomorph_common::conformance::{Expectations, check_morph};
 use isomorph_common::glam::{Affine3A, Vec3};
 use isomorph_common::marching_cubes::polygonize;
 use isomorph_common::{Aabb, CancelToken, Control, Field3, Morph, MorphError, Shape, Solid, models};
-use isomorph_levelset::{Align, LevelSetError, LevelSetMorph, LevelSetSettings};
+use isomorph_levelset::{Align, FrameSchedule, LevelSetError, LevelSetMorph, LevelSetSettings};
 
 fn reference(shape: &Shape) -> isomorph_common::TriMesh {
     polygonize(shape, &Aabb::cube(0.5), 128, 0.0).unwrap()
@@ -80,7 +80,7 @@ fn bad_settings_name_the_field_and_cancel_stops() {
     for (bad, name) in [
         (LevelSetSettings { resolution: 3, ..Default::default() }, "resolution = 3"),
         (LevelSetSettings { curvature: Some(-1.0), ..Default::default() }, "curvature"),
-        (LevelSetSettings { keep_every: 0, ..Default::default() }, "keep_every"),
+        (LevelSetSettings { frames: FrameSchedule::Budget(0), ..Default::default() }, "frames"),
     ] {
         let e = LevelSetMorph::new(&s, &t, &bad, &Control::new()).unwrap_err();
         assert!(e.to_string().contains(name), "{e}");

@@ -1,5 +1,7 @@
 //! End-to-end behaviour of the level-set morph on the paper's cases.
 
+use isomorph_common::marching_cubes::marching_cubes;
+use isomorph_common::mesh::distance::surface_distance;
 use isomorph_common::{Aabb, Field3, Grid3, Shape, TriMesh, models};
 use isomorph_common::{Control, DistanceBlend, Morph, MorphError};
 use isomorph_levelset::{
@@ -273,4 +275,52 @@ fn a_run_that_stops_improving_under_the_settled_distance_has_converged() {
     let stalled = run(0.0);
     assert!(!stalled.report().converged, "{:?}", stalled.report().outcome);
     assert_eq!(stalled.stats().len(), settled.stats().len() + 40);
+}
+
+/// Under a small frame budget (4: between 5 and 10 kept frames) the same
+/// evolution gives, at every morph time, the frame of the morph that kept
+/// every iteration: the same mesh where that iteration was kept (always at
+/// `t = 0` and `t = 1`), otherwise a surface interpolated between the two
+/// kept frames that bracket it, within the Hausdorff distance between those
+/// two frames (plus half a voxel for the sampled distances) of the true one.
+#[test]
+fn a_frame_budget_gives_the_every_iteration_frames() {
+    let res = 40;
+    let source = Grid3::sample_box(&Shape::sphere(0.3), &Aabb::cube(0.5), res).unwrap();
+    let speed = SpeedGrid::sample(&source, &Shape::torus(0.3, 0.12), |x| x, Response::Identity).unwrap();
+    let run = |frames| {
+        let settings = EvolveSettings { frames, ..EvolveSettings::default() };
+        evolve(&source, &speed, Placement::Identity, &settings, &Control::new()).unwrap()
+    };
+    let (all, budget) = (run(FrameSchedule::EveryIterations(1)), run(FrameSchedule::Budget(4)));
+    let iterations = all.stats().len();
+    assert_eq!(all.stats(), budget.stats(), "the kept frames changed the evolution");
+    assert_eq!(all.len(), iterations + 1);
+    assert!((5..=10).contains(&budget.len()), "{} kept frames of {iterations} iterations", budget.len());
+    assert!(budget.stored_bytes() * 4 < all.stored_bytes());
+    let h = source.spacing();
+    let kept = |n: usize| marching_cubes(&all.frame_grid(n).unwrap(), 0.0);
+    let mut interpolated = 0;
+    for k in 0..=20 {
+        let t = k as f32 / 20.0;
+        let i = (t * iterations as f32).round() as usize;
+        let (exact, got) = (all.frame_mesh(t, 0).unwrap(), budget.frame_mesh(t, 0).unwrap());
+        let frames = budget.frames();
+        let after = frames.partition_point(|f| f.iteration < i);
+        if frames[after].iteration == i {
+            assert_eq!(got.positions, exact.positions, "t = {t}: iteration {i} was kept");
+            continue;
+        }
+        interpolated += 1;
+        let (a, b) = (frames[after - 1].iteration, frames[after].iteration);
+        let apart = surface_distance(&kept(a), &kept(b), 4000).unwrap().hausdorff;
+        let off = surface_distance(&got, &exact, 4000).unwrap();
+        assert!(
+            off.hausdorff <= apart + 0.5 * h,
+            "t = {t} (iteration {i} between {a} and {b}): {} voxels off, the kept frames {} voxels apart",
+            off.hausdorff / h,
+            apart / h
+        );
+    }
+    assert!(interpolated > 5, "only {interpolated} interpolated frames");
 }

@@ -6,8 +6,8 @@ use isomorph_common::glam::{Quat, Vec3};
 use isomorph_common::marching_cubes::marching_cubes;
 use isomorph_common::{Aabb, Bricks, Control, Field3, Grid3, Morph, Shape, Solid, Value, lattice_for_box};
 use isomorph_levelset::{
-    Align, LevelSetMorph, LevelSetSettings, Response, SparseFieldSolver, SpeedGrid, SpeedSampler, Storage,
-    check_overlap, check_overlap_sparse,
+    Align, FrameSchedule, LevelSetMorph, LevelSetSettings, Response, SparseFieldSolver, SpeedGrid,
+    SpeedSampler, Storage, check_overlap, check_overlap_sparse,
 };
 use std::sync::Arc;
 
@@ -36,10 +36,11 @@ fn same_morph(source: &Solid, target: &Solid, settings: LevelSetSettings, tolera
         let worst = a.data().iter().zip(b.data()).map(|(x, y)| (x - y).abs()).fold(0.0, f32::max);
         assert!(worst <= tolerance, "frame {n}: values differ by {worst}");
     }
-    for t in [0.0, 0.5, 1.0] {
-        let n = ((sparse.len() - 1) as f32 * t).round() as usize;
-        let mut expected = marching_cubes(&sparse.frame_grid(n).unwrap(), 0.0);
-        sparse.placement().apply(&mut expected, n as f32 / (sparse.len() - 1) as f32);
+    // Kept or interpolated (t = 0.5, 0.37 fall between kept iterations).
+    for t in [0.0, 0.37, 0.5, 1.0] {
+        let frame = sparse.frame(t).unwrap();
+        let mut expected = marching_cubes(&frame.field, 0.0);
+        expected.transform(&frame.transform);
         let got = sparse.frame_mesh(t, 0).unwrap();
         assert_eq!(got.triangles, expected.triangles, "t = {t}");
         assert_eq!(got.positions, expected.positions, "t = {t}");
@@ -50,7 +51,8 @@ fn same_morph(source: &Solid, target: &Solid, settings: LevelSetSettings, tolera
 /// sides, so the two storages see bitwise the same values.
 #[test]
 fn sphere_into_torus_is_the_same_with_sparse_storage() {
-    let settings = LevelSetSettings { resolution: 48, keep_every: 5, ..Default::default() };
+    let settings =
+        LevelSetSettings { resolution: 48, frames: FrameSchedule::EveryIterations(5), ..Default::default() };
     let (source, target) = (Solid::shape(Shape::sphere(0.3)), Solid::shape(Shape::torus(0.3, 0.12)));
     same_morph(&source, &target, settings, 1e-6);
 }
@@ -66,8 +68,12 @@ fn aligned_meshes_are_the_same_with_sparse_storage() {
     };
     let source = mesh(&Shape::cuboid(Vec3::new(0.25, 0.18, 0.12)).rotated(Quat::from_rotation_z(0.4)));
     let target = mesh(&Shape::torus(0.28, 0.1).rotated(Quat::from_rotation_x(0.7)));
-    let settings =
-        LevelSetSettings { resolution: 40, keep_every: 5, align: Align::Auto, ..Default::default() };
+    let settings = LevelSetSettings {
+        resolution: 40,
+        frames: FrameSchedule::EveryIterations(5),
+        align: Align::Auto,
+        ..Default::default()
+    };
     same_morph(&source, &target, settings, 1e-6);
 }
 
