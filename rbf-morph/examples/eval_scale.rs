@@ -1,18 +1,22 @@
-//! Evaluation time of a large slice by the treecode and directly: `n`
+//! Evaluation time of a large slice on a lattice by the dual tree and
+//! directly: `n`
 //! centres on a sphere (t = 0) and a torus (t = 1), moment-free seeded
 //! weights (not a fit), the t = 0.5 slice on a `res³` lattice over
-//! [-0.5, 0.5]³ in one batch:
+//! [-0.5, 0.5]³ (`Field3::values_on_lattice`):
 //!
 //! `cargo run --release -p isomorph-rbf --example eval_scale -- 100000 128`
 //!
-//! Prints the treecode's time, and the direct time and largest difference
-//! on every 64th lattice point.
+//! Prints the dual tree's time, and the direct time and largest difference
+//! on every 61st lattice node.
 
 use isomorph_common::Field3;
-use isomorph_common::glam::Vec3;
+use isomorph_common::glam::{UVec3, Vec3};
 use isomorph_rbf::{Evaluation, Kernel, Slice3};
 use std::f32::consts::{PI, TAU};
 use std::time::Instant;
+
+/// Every how many lattice nodes the direct sum is taken for comparison.
+const STRIDE: usize = 61;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -48,25 +52,46 @@ fn main() {
     }
     let slice = Slice3::from_sources(kernel, &centres, &offsets, &weights);
     let h = 1.0 / (res - 1) as f32;
-    let points: Vec<Vec3> = (0..res * res * res)
-        .map(|i| Vec3::new((i % res) as f32, ((i / res) % res) as f32, (i / res / res) as f32) * h - 0.5)
-        .collect();
-    let mut fast = vec![0.0f32; points.len()];
-    let start = Instant::now();
-    slice.clone().with_evaluation(Evaluation::Treecode).values(&points, &mut fast);
-    let tree_s = start.elapsed().as_secs_f64();
-    let some: Vec<Vec3> = points.iter().step_by(64).copied().collect();
+    let dims = UVec3::splat(res as u32);
+    let mut fast = vec![0.0f32; res * res * res];
+    let (start, cpu) = (Instant::now(), user_seconds());
+    slice.clone().with_evaluation(Evaluation::Treecode).values_on_lattice(
+        dims,
+        Vec3::splat(-0.5),
+        h,
+        &mut fast,
+    );
+    let (tree_s, tree_cpu) = (start.elapsed().as_secs_f64(), user_seconds() - cpu);
+    // The same nodes as `values_by_rows` forms them.
+    let node = |i: usize| {
+        let yz = Vec3::splat(-0.5) + h * Vec3::new(0.0, ((i / res) % res) as f32, (i / res / res) as f32);
+        yz + Vec3::new(h * (i % res) as f32, 0.0, 0.0)
+    };
+    let some: Vec<Vec3> = (0..res * res * res).step_by(STRIDE).map(node).collect();
     let mut direct = vec![0.0f32; some.len()];
-    let start = Instant::now();
+    let (start, cpu) = (Instant::now(), user_seconds());
     slice.with_evaluation(Evaluation::Direct).values(&some, &mut direct);
-    let direct_s = start.elapsed().as_secs_f64();
-    let worst = fast.iter().step_by(64).zip(&direct).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
+    let (direct_s, direct_cpu) = (start.elapsed().as_secs_f64(), user_seconds() - cpu);
+    let worst = fast.iter().step_by(STRIDE).zip(&direct).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
     let range =
         direct.iter().fold(f32::MIN, |m, v| m.max(*v)) - direct.iter().fold(f32::MAX, |m, v| m.min(*v));
     println!(
-        "{} centres, {res}³ points: treecode {tree_s:.2} s; direct on every 64th point {direct_s:.2} s \
-         (×64 = {:.1} s); max |difference| {worst:.3e}, range {range:.3e}",
+        "{} centres, {res}³ lattice: dual tree {tree_s:.2} s ({tree_cpu:.2} s user CPU); direct on every {STRIDE}th node {direct_s:.2} s \
+         ({direct_cpu:.2} s user; ×{STRIDE} = {:.1} s, {:.1} s user); max |difference| {worst:.3e}, range {range:.3e}, {:.2e} of the range",
         centres.len(),
-        direct_s * 64.0
+        direct_s * STRIDE as f64,
+        direct_cpu * STRIDE as f64,
+        worst / range
     );
+}
+
+/// The process's user CPU time in seconds (Linux `/proc/self/stat`, 100
+/// ticks per second), or 0 where it cannot be read.
+fn user_seconds() -> f64 {
+    std::fs::read_to_string("/proc/self/stat")
+        .ok()
+        .and_then(|s| {
+            s.rsplit(')').next().and_then(|rest| rest.split_whitespace().nth(11)?.parse::<f64>().ok())
+        })
+        .map_or(0.0, |ticks| ticks / 100.0)
 }

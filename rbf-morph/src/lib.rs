@@ -162,6 +162,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod constraints;
+pub mod dual_tree;
 pub mod figures;
 
 mod error;
