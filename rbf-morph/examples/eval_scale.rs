@@ -1,10 +1,15 @@
 //! Evaluation time of a large slice on a lattice by the dual tree and
 //! directly: `n`
-//! centres on a sphere (t = 0) and a torus (t = 1), moment-free seeded
-//! weights (not a fit), the t = 0.5 slice on a `res³` lattice over
+//! centres on a sphere (t = 0) and a torus (t = 1), seeded ±1 weights
+//! (not a fit), a slice (default t = 0.5) on a `res³` lattice over
 //! [-0.5, 0.5]³ (`Field3::values_on_lattice`):
 //!
 //! `cargo run --release -p isomorph-rbf --example eval_scale -- 100000 128`
+//!
+//! The third argument is the kernel (`tps`, `r3`), the fourth the slice's
+//! `t` (default 0.5). With a fifth argument `sparse` (`… 100000 128 tps
+//! 0.5 sparse`), times the
+//! near-surface polygonizer on the treecode and directly instead.
 //!
 //! Prints the dual tree's time, and the direct time and largest difference
 //! on every 61st lattice node.
@@ -23,6 +28,7 @@ fn main() {
     let n: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(100_000);
     let res: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(128);
     let kernel = args.get(3).and_then(|s| Kernel::from_name(s)).unwrap_or_default();
+    let t: f32 = args.get(4).and_then(|s| s.parse().ok()).unwrap_or(0.5);
     let golden = PI * (3.0 - 5.0f32.sqrt());
     let (mut centres, mut offsets, mut weights) = (Vec::new(), Vec::new(), Vec::new());
     let mut state = 0x2545_f491_4f6c_dd1du64;
@@ -40,17 +46,21 @@ fn main() {
         let (u, v) = (TAU * i as f32 / per as f32, (golden * i as f32) % TAU);
         for (radius, w) in [(0.3f32, 1.0f32), (0.29, -1.0)] {
             centres.push([radius * r * c, radius * r * s, radius * z]);
-            offsets.push(0.25);
+            offsets.push(t * t);
             weights.push(w + 0.1 * random());
         }
         for (tube, w) in [(0.12f32, 1.0f32), (0.11, -1.0)] {
             let ring = 0.3 + tube * v.cos();
             centres.push([ring * u.cos(), ring * u.sin(), tube * v.sin()]);
-            offsets.push(0.25);
+            offsets.push((1.0 - t) * (1.0 - t));
             weights.push(w + 0.1 * random());
         }
     }
     let slice = Slice3::from_sources(kernel, &centres, &offsets, &weights);
+    if args.get(5).is_some_and(|a| a == "sparse") {
+        near_surface(&slice, res as u32);
+        return;
+    }
     let h = 1.0 / (res - 1) as f32;
     let dims = UVec3::splat(res as u32);
     let mut fast = vec![0.0f32; res * res * res];
@@ -94,4 +104,32 @@ fn user_seconds() -> f64 {
             s.rsplit(')').next().and_then(|rest| rest.split_whitespace().nth(11)?.parse::<f64>().ok())
         })
         .map_or(0.0, |ticks| ticks / 100.0)
+}
+
+/// Times the near-surface polygonizer of `slice` at `res` by the treecode
+/// and directly, and prints both meshes' sizes and nodes evaluated. The
+/// weights are not a fit, so the level is the median of the slice on an
+/// 8³ lattice rather than 0.
+fn near_surface(slice: &Slice3, res: u32) {
+    use isomorph_common::Aabb;
+    use isomorph_common::marching_cubes::{SparseSettings, polygonize_near_surface};
+    let mut coarse = vec![0.0f32; 512];
+    slice.values_on_lattice(UVec3::splat(8), Vec3::splat(-0.5), 1.0 / 7.0, &mut coarse);
+    coarse.sort_by(f32::total_cmp);
+    let iso = coarse[256];
+    for evaluation in [Evaluation::Treecode, Evaluation::Direct] {
+        let field = slice.clone().with_evaluation(evaluation);
+        let (start, cpu) = (Instant::now(), user_seconds());
+        let (mesh, stats) =
+            polygonize_near_surface(&field, &Aabb::cube(0.5), res, iso, &SparseSettings::default()).unwrap();
+        println!(
+            "{evaluation:?}: {:.2} s ({:.2} s user CPU), {} of {} nodes evaluated, {} vertices, {} triangles",
+            start.elapsed().as_secs_f64(),
+            user_seconds() - cpu,
+            stats.evaluated,
+            stats.nodes,
+            mesh.positions.len(),
+            mesh.triangles.len()
+        );
+    }
 }

@@ -2,7 +2,7 @@
 
 use crate::dual_tree::Lattice;
 use crate::kernel::{Kernel, eval_r2_f32};
-use crate::treecode::{AUTO_MIN_CENTRES, AUTO_MIN_NODES, Evaluation, Treecode};
+use crate::treecode::{AUTO_MIN_CENTRES, AUTO_MIN_NODES, AUTO_MIN_POINTS, Evaluation, Treecode};
 use glam::{UVec3, Vec2, Vec3};
 use isomorph_common::{Aabb, Field3, Grid2, GridError};
 use pulp::{Arch, Simd, WithSimd};
@@ -221,10 +221,17 @@ impl<const S: usize> SliceEval<S> {
     }
 
     /// Values at `points` into `out`: direct (parallel over blocks of
-    /// points) or by the treecode, per [`SliceEval::evaluation`].
+    /// points) or by the treecode, per [`SliceEval::evaluation`] (`Auto`:
+    /// the treecode for batches of at least [`AUTO_MIN_POINTS`] points with
+    /// at least [`AUTO_MIN_CENTRES`] centres).
     pub(crate) fn values<P: AsPoint<S>>(&self, points: &[P], out: &mut [f32]) {
         assert_eq!(points.len(), out.len(), "values: points and out differ in length");
-        if self.evaluation == Evaluation::Treecode {
+        let by_tree = match self.evaluation {
+            Evaluation::Direct => false,
+            Evaluation::Treecode => true,
+            Evaluation::Auto => self.sources.len() >= AUTO_MIN_CENTRES && points.len() >= AUTO_MIN_POINTS,
+        };
+        if by_tree {
             let tree = self.tree();
             let normalized: Vec<[f32; S]> = points.iter().map(|p| self.normalize(p.coords())).collect();
             let mut sums = vec![0.0f64; points.len()];
@@ -331,7 +338,10 @@ impl SliceEval<3> {
 /// [`Slice3::with_evaluation`] with [`Evaluation::Treecode`] evaluates
 /// batches through the [`treecode`](crate::treecode) instead: far clusters
 /// of centres are replaced by Chebyshev proxies, within the bound stated
-/// there.
+/// there. Whole lattices ([`Field3::values_on_lattice`], e.g.
+/// `Grid3::fill_from`) go through the [`dual_tree`](crate::dual_tree) with
+/// `Treecode`, and with the default [`Evaluation::Auto`] from
+/// [`AUTO_MIN_CENTRES`](crate::treecode::AUTO_MIN_CENTRES) centres.
 #[derive(Debug, Clone)]
 pub struct Slice3 {
     eval: SliceEval<3>,

@@ -49,12 +49,13 @@ use rayon::prelude::*;
 /// evaluates batches of points and lattices.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
 pub enum Evaluation {
-    /// The direct sum for scattered points; on a lattice of a 3D slice
+    /// With at least [`AUTO_MIN_CENTRES`] centres, the fast paths where they
+    /// were measured faster: this treecode for batches of at least
+    /// [`AUTO_MIN_POINTS`] scattered points (e.g. the near-surface
+    /// polygonizer's), the [`dual_tree`](crate::dual_tree) on lattices of at
+    /// least [`AUTO_MIN_NODES`] nodes of a 3D slice
     /// ([`Field3::values_on_lattice`](isomorph_common::Field3::values_on_lattice),
-    /// e.g. `Grid3::fill_from`) the [`dual_tree`](crate::dual_tree) when the
-    /// slice has at least [`AUTO_MIN_CENTRES`] centres and the lattice at
-    /// least [`AUTO_MIN_NODES`] nodes, where it was measured faster. The
-    /// default.
+    /// e.g. `Grid3::fill_from`); the direct sum otherwise. The default.
     #[default]
     Auto,
     /// Every centre summed at every point (`O(n)` per point): the
@@ -66,9 +67,12 @@ pub enum Evaluation {
     Treecode,
 }
 
-/// Fewest centres for which [`Evaluation::Auto`] takes the dual tree on a
-/// lattice (measured crossover, `docs/EXPERIMENTS.md`).
+/// Fewest centres for which [`Evaluation::Auto`] takes the treecode or the
+/// dual tree (measured crossover, `docs/EXPERIMENTS.md`).
 pub const AUTO_MIN_CENTRES: usize = 2000;
+/// Fewest points in one batch for which [`Evaluation::Auto`] takes the
+/// treecode.
+pub const AUTO_MIN_POINTS: usize = 4096;
 /// Fewest lattice nodes for which [`Evaluation::Auto`] takes the dual tree.
 pub const AUTO_MIN_NODES: usize = 32 * 32 * 32;
 
