@@ -16,7 +16,7 @@ use isomorph_common::marching_cubes::{SparseSettings, polygonize_near_surface};
 use isomorph_common::marching_cubes::{marching_cubes, polygonize};
 use isomorph_common::{Aabb, Grid3};
 use isomorph_rbf::constraints::{NormalOffset, Subsample, SurfaceSettings, field_constraints};
-use isomorph_rbf::{Evaluation, FitSettings, Interpolant, Kernel, RbfMorph, Slice3, TransformSettings, lift};
+use isomorph_rbf::{FitSettings, Interpolant, Kernel, RbfMorph, Slice3, TransformSettings, lift};
 use std::hint::black_box;
 
 /// The reference case: a sphere (radius 0.3) and a torus (R = 0.3,
@@ -141,7 +141,8 @@ fn moment_free_weights(positions: &[[f32; 4]]) -> Vec<f32> {
 
 /// The t = 0.5 slice of a function with centres at the reference case's
 /// 16000 to 100000 constraint positions on the 128³ lattice over
-/// [-0.5, 0.5]³, by the treecode (`Evaluation::Treecode`).
+/// [-0.5, 0.5]³, at the default evaluation (`Evaluation::Auto`: the dual
+/// tree on lattices from 2000 centres).
 /// The weights do not come from a fit (the fit of 100000 constraints takes
 /// minutes): [`moment_free_weights`], through `Slice3::from_sources`; the
 /// cost of evaluation does not depend on the weights' values.
@@ -161,7 +162,6 @@ fn eval_grid_large(c: &mut Criterion) {
                 let centres: Vec<[f32; 3]> = positions.iter().map(|p| [p[0], p[1], p[2]]).collect();
                 let offsets: Vec<f32> = positions.iter().map(|p| (p[3] - 0.5).powi(2)).collect();
                 Slice3::from_sources(Kernel::ThinPlate, &centres, &offsets, &moment_free_weights(&positions))
-                    .with_evaluation(Evaluation::Treecode)
             });
             b.iter(|| grid.fill_from(black_box(slice)))
         });

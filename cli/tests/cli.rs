@@ -677,8 +677,8 @@ fn rbf_tolerance_fits_many_points_through_fewer_centres() {
     let centres = morph["details"]["constraints"].as_u64().unwrap();
     assert!(centres < 6000 && morph["details"]["input_constraints"] == 6000, "{morph}");
     assert!(morph["residual"]["value"].as_f64().unwrap() <= 0.05, "{morph}");
-    // Without a tolerance, 9000 points are over the exact fit's limit.
-    let o = isomorph(&[&args[..], &["--points", "9000", "--out", out.to_str().unwrap()]].concat());
+    // Without a tolerance, 25001 points are over the exact fit's limit.
+    let o = isomorph(&[&args[..], &["--points", "25001", "--out", out.to_str().unwrap()]].concat());
     let err = stderr(&o);
     assert!(!o.status.success() && err.contains("points"), "{err}");
     let o = isomorph(&[&args[..], &["--tolerance", "0", "--out", out.to_str().unwrap()]].concat());

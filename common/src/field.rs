@@ -1,7 +1,7 @@
 //! Scalar fields in 3D: the one interface every shape representation shares.
 
 use crate::Aabb;
-use glam::Vec3;
+use glam::{UVec3, Vec3};
 
 /// Step (world units) of the default central-difference [`Field3::gradient`].
 pub const GRADIENT_STEP: f32 = 1e-3;
@@ -55,6 +55,21 @@ pub trait Field3: Sync {
     fn bounds(&self) -> Option<Aabb> {
         None
     }
+
+    /// Evaluates the field at every node of the lattice of `dims` nodes at
+    /// `origin + spacing·(i, j, k)` into `out`, `i` fastest then `j`, `k`
+    /// (the layout of [`Grid3`](crate::Grid3)).
+    ///
+    /// The default calls [`Field3::values`] once per row of `dims.x` nodes,
+    /// rows in parallel ([`values_by_rows`](crate::values_by_rows));
+    /// fields that can share work across a whole lattice (e.g. a fast
+    /// summation over many centres) override it.
+    ///
+    /// # Panics
+    /// If `out` does not hold `dims.x · dims.y · dims.z` values.
+    fn values_on_lattice(&self, dims: UVec3, origin: Vec3, spacing: f32, out: &mut [f32]) {
+        crate::grid::values_by_rows(self, dims, origin, spacing, out);
+    }
 }
 
 impl<F> Field3 for F
@@ -75,6 +90,9 @@ impl Field3 for Box<dyn Field3 + '_> {
     }
     fn values(&self, points: &[Vec3], out: &mut [f32]) {
         (**self).values(points, out)
+    }
+    fn values_on_lattice(&self, dims: UVec3, origin: Vec3, spacing: f32, out: &mut [f32]) {
+        (**self).values_on_lattice(dims, origin, spacing, out)
     }
     fn bounds(&self) -> Option<Aabb> {
         (**self).bounds()
@@ -100,6 +118,9 @@ impl<F: Field3> Field3 for Bounded<F> {
     }
     fn values(&self, points: &[Vec3], out: &mut [f32]) {
         self.field.values(points, out)
+    }
+    fn values_on_lattice(&self, dims: UVec3, origin: Vec3, spacing: f32, out: &mut [f32]) {
+        self.field.values_on_lattice(dims, origin, spacing, out)
     }
     fn bounds(&self) -> Option<Aabb> {
         Some(self.bounds)

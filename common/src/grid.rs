@@ -380,6 +380,36 @@ fn check_geometry(dims: UVec3, origin: Vec3, spacing: f32, min: u32) -> Result<(
     Ok(())
 }
 
+/// The default of [`Field3::values_on_lattice`]: `field` at every node of
+/// the lattice of `dims` nodes at `origin + spacing·(i, j, k)` into `out`
+/// (`i` fastest), one batched [`Field3::values`] call per row of `dims.x`
+/// nodes, rows in parallel.
+///
+/// # Panics
+/// If `out` does not hold `dims.x · dims.y · dims.z` values.
+pub fn values_by_rows<F: Field3 + ?Sized>(
+    field: &F,
+    dims: UVec3,
+    origin: Vec3,
+    spacing: f32,
+    out: &mut [f32],
+) {
+    let (nx, ny) = (dims.x as usize, dims.y as usize);
+    assert_eq!(out.len(), nx * ny * dims.z as usize, "values_by_rows: out does not match the lattice");
+    let h = spacing;
+    out.par_chunks_mut(nx.max(1)).enumerate().for_each_init(
+        || vec![Vec3::ZERO; nx],
+        |points, (row, out)| {
+            let (j, k) = (row % ny, row / ny);
+            let yz = origin + h * Vec3::new(0.0, j as f32, k as f32);
+            for (i, p) in points.iter_mut().enumerate() {
+                *p = yz + Vec3::new(h * i as f32, 0.0, 0.0);
+            }
+            field.values(points, out);
+        },
+    );
+}
+
 /// Node placement of a grid that covers a box: `res` nodes along the longest
 /// edge, cubic voxels, the box centred in the lattice.
 ///
@@ -431,21 +461,10 @@ impl Grid3<f32> {
         Self::sample(field, dims, origin, spacing)
     }
 
-    /// Overwrites every node with `field`'s value there, in parallel.
+    /// Overwrites every node with `field`'s value there, in parallel
+    /// ([`Field3::values_on_lattice`]).
     pub fn fill_from<F: Field3 + ?Sized>(&mut self, field: &F) {
-        let (nx, ny) = (self.dims.x as usize, self.dims.y as usize);
-        let (origin, h) = (self.origin, self.spacing);
-        self.data.par_chunks_mut(nx).enumerate().for_each_init(
-            || vec![Vec3::ZERO; nx],
-            |points, (row, out)| {
-                let (j, k) = (row % ny, row / ny);
-                let yz = origin + h * Vec3::new(0.0, j as f32, k as f32);
-                for (i, p) in points.iter_mut().enumerate() {
-                    *p = yz + Vec3::new(h * i as f32, 0.0, 0.0);
-                }
-                field.values(points, out);
-            },
-        );
+        field.values_on_lattice(self.dims, self.origin, self.spacing, &mut self.data);
     }
 
     /// Trilinear interpolation at world point `p`; points outside the grid

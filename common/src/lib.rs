@@ -89,7 +89,7 @@ pub use field::{Bounded, Field3, GRADIENT_STEP};
 pub use glam;
 pub use grid::{
     Bytes, DEFAULT_MEMORY_LIMIT, Grid2, Grid3, GridError, MemoryLimitError, lattice_for_box, memory_limit,
-    reserve_memory, set_memory_limit, trilinear_blend,
+    reserve_memory, set_memory_limit, trilinear_blend, values_by_rows,
 };
 pub use landmarks::{LandmarkError, Landmarks, MIN_LANDMARKS};
 pub use mesh::trimesh::{MeshError, TriMesh};

@@ -435,7 +435,7 @@ impl<const D: usize> Interpolant<D> {
             linear: std::array::from_fn(|k| self.linear[k]),
             shift: std::array::from_fn(|k| self.shift[k]),
             scale: self.scale,
-            evaluation: Evaluation::Direct,
+            evaluation: Evaluation::default(),
             tree: std::sync::OnceLock::new(),
         })
     }

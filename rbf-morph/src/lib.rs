@@ -122,16 +122,19 @@
 //! Non-guarantees: the zero set of a slice between the two shapes has no
 //! bound on its distance to either input (that is the point of the method);
 //! the dense fit costs `O(n³)` time and `12 n²` bytes (3 GiB at 16000
-//! constraints); evaluation is direct (`O(n)` per point) by default; a
-//! treecode ([`treecode`], [`Evaluation::Treecode`]: far field interpolated
-//! within a stated bound, near field exact) is available but not yet shown
-//! faster on grids.
+//! constraints); from 2000 centres ([`Evaluation::Auto`], the default) large
+//! batches of points go through a treecode ([`treecode`]: far field
+//! interpolated within a stated bound, near field exact) and whole
+//! lattices of 3D slices (`Grid3::fill_from`, `Field3::values_on_lattice`)
+//! through the [`dual_tree`] (the same bound); smaller cases, and
+//! [`Evaluation::Direct`], sum every centre at every point.
 //!
 //! # Cost
 //! The dense fit is `O(n³)` time and `12 n²` bytes for `n` constraints (the
 //! hierarchical one above 16000: see the solver choice above);
-//! evaluating a slice is `O(n)` per point, and frame meshes evaluate it only
-//! near the surface. At the defaults ([`RbfSettings`]: 400 points per shape,
+//! evaluating a slice is `O(n)` per point directly, about `O(log n)` per
+//! point by the [`treecode`] and the [`dual_tree`], and frame meshes
+//! evaluate it only near the surface. At the defaults ([`RbfSettings`]: 400 points per shape,
 //! 1600 constraints) a morph is built in a fraction of a second; measured
 //! figures are in `docs/EXPERIMENTS.md` (`cargo bench -p isomorph-benches
 //! --bench rbf`).
@@ -162,6 +165,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod constraints;
+pub mod dual_tree;
 pub mod figures;
 
 mod error;

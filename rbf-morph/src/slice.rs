@@ -1,8 +1,9 @@
 //! Fast batch evaluation of 2D and 3D slices of an interpolant.
 
+use crate::dual_tree::Lattice;
 use crate::kernel::{Kernel, eval_r2_f32};
-use crate::treecode::{Evaluation, Treecode};
-use glam::{Vec2, Vec3};
+use crate::treecode::{AUTO_MIN_CENTRES, AUTO_MIN_NODES, AUTO_MIN_POINTS, Evaluation, Treecode};
+use glam::{UVec3, Vec2, Vec3};
 use isomorph_common::{Aabb, Field3, Grid2, GridError};
 use pulp::{Arch, Simd, WithSimd};
 use rayon::prelude::*;
@@ -220,11 +221,18 @@ impl<const S: usize> SliceEval<S> {
     }
 
     /// Values at `points` into `out`: direct (parallel over blocks of
-    /// points) or by the treecode, per [`SliceEval::evaluation`].
+    /// points) or by the treecode, per [`SliceEval::evaluation`] (`Auto`:
+    /// the treecode for batches of at least [`AUTO_MIN_POINTS`] points with
+    /// at least [`AUTO_MIN_CENTRES`] centres).
     pub(crate) fn values<P: AsPoint<S>>(&self, points: &[P], out: &mut [f32]) {
         assert_eq!(points.len(), out.len(), "values: points and out differ in length");
-        if self.evaluation == Evaluation::Treecode {
-            let tree = self.tree.get_or_init(|| Treecode::new(&self.sources, self.kernel));
+        let by_tree = match self.evaluation {
+            Evaluation::Direct => false,
+            Evaluation::Treecode => true,
+            Evaluation::Auto => self.sources.len() >= AUTO_MIN_CENTRES && points.len() >= AUTO_MIN_POINTS,
+        };
+        if by_tree {
+            let tree = self.tree();
             let normalized: Vec<[f32; S]> = points.iter().map(|p| self.normalize(p.coords())).collect();
             let mut sums = vec![0.0f64; points.len()];
             tree.sums(&normalized, &mut sums);
@@ -234,10 +242,24 @@ impl<const S: usize> SliceEval<S> {
         }
     }
 
+    /// The source tree, built at its first use.
+    fn tree(&self) -> &Treecode<S> {
+        self.tree.get_or_init(|| Treecode::new(&self.sources, self.kernel))
+    }
+
     /// Direct values at `points` into `out`, parallel over blocks of points.
     pub(crate) fn values_direct<P: AsPoint<S>>(&self, points: &[P], out: &mut [f32]) {
         assert_eq!(points.len(), out.len(), "values: points and out differ in length");
         points.par_chunks(TASK).zip(out.par_chunks_mut(TASK)).for_each(|(p, o)| self.run(p, o));
+    }
+
+    /// Whether lattices of `nodes` nodes are evaluated by the dual tree.
+    fn lattice_by_tree(&self, nodes: usize) -> bool {
+        match self.evaluation {
+            Evaluation::Direct => false,
+            Evaluation::Treecode => true,
+            Evaluation::Auto => self.sources.len() >= AUTO_MIN_CENTRES && nodes >= AUTO_MIN_NODES,
+        }
     }
 
     fn value(&self, p: [f32; S]) -> f32 {
@@ -260,6 +282,35 @@ impl<const S: usize> SliceEval<S> {
             }
         }
         g.map(|v| (v * self.scale) as f32)
+    }
+}
+
+impl SliceEval<3> {
+    /// Values at the lattice of `dims` nodes at `origin + spacing·(i, j, k)`
+    /// into `out` (`i` fastest) by the [`dual_tree`](crate::dual_tree).
+    fn lattice_values(&self, dims: UVec3, origin: Vec3, spacing: f32, out: &mut [f32]) {
+        // World coordinates as `values_by_rows` forms them, then normalized
+        // as the direct path does, so that the near field is bit-identical.
+        let axes: [Vec<f32>; 3] = std::array::from_fn(|d| {
+            (0..dims[d])
+                .map(|i| ((f64::from(origin[d] + spacing * i as f32) - self.shift[d]) * self.scale) as f32)
+                .collect()
+        });
+        let lattice = Lattice { axes };
+        let mut sums = vec![0.0f64; out.len()];
+        self.tree().lattice_sums(&lattice, &mut sums);
+        let (nx, ny) = (dims.x as usize, dims.y as usize);
+        out.par_chunks_mut(nx).zip(sums.par_chunks(nx)).enumerate().for_each(|(row, (out, sums))| {
+            let (j, k) = (row % ny, row / ny);
+            for (i, (o, s)) in out.iter_mut().zip(sums).enumerate() {
+                let q = [lattice.axes[0][i], lattice.axes[1][j], lattice.axes[2][k]];
+                let mut v = s + self.constant;
+                for d in 0..3 {
+                    v += self.linear[d] * f64::from(q[d]);
+                }
+                *o = v as f32;
+            }
+        });
     }
 }
 
@@ -287,7 +338,10 @@ impl<const S: usize> SliceEval<S> {
 /// [`Slice3::with_evaluation`] with [`Evaluation::Treecode`] evaluates
 /// batches through the [`treecode`](crate::treecode) instead: far clusters
 /// of centres are replaced by Chebyshev proxies, within the bound stated
-/// there.
+/// there. Whole lattices ([`Field3::values_on_lattice`], e.g.
+/// `Grid3::fill_from`) go through the [`dual_tree`](crate::dual_tree) with
+/// `Treecode`, and with the default [`Evaluation::Auto`] from
+/// [`AUTO_MIN_CENTRES`](crate::treecode::AUTO_MIN_CENTRES) centres.
 #[derive(Debug, Clone)]
 pub struct Slice3 {
     eval: SliceEval<3>,
@@ -321,7 +375,7 @@ impl Slice3 {
             linear: [0.0; 3],
             shift: [0.0; 3],
             scale: 1.0,
-            evaluation: Evaluation::Direct,
+            evaluation: Evaluation::default(),
             tree: OnceLock::new(),
         })
     }
@@ -339,7 +393,7 @@ impl Slice3 {
     }
 
     /// This slice evaluating batches by `evaluation` (default
-    /// [`Evaluation::Direct`], the reference).
+    /// [`Evaluation::Auto`]).
     pub fn with_evaluation(mut self, evaluation: Evaluation) -> Self {
         self.eval.evaluation = evaluation;
         self
@@ -362,6 +416,18 @@ impl Field3 for Slice3 {
     fn bounds(&self) -> Option<Aabb> {
         self.bounds
     }
+
+    /// By the [`dual_tree`](crate::dual_tree) when the slice's
+    /// [`Evaluation`] says so, else row by row.
+    fn values_on_lattice(&self, dims: UVec3, origin: Vec3, spacing: f32, out: &mut [f32]) {
+        let nodes = dims.x as usize * dims.y as usize * dims.z as usize;
+        assert_eq!(out.len(), nodes, "values_on_lattice: out does not match the lattice");
+        if nodes > 0 && self.eval.lattice_by_tree(nodes) {
+            self.eval.lattice_values(dims, origin, spacing, out);
+        } else {
+            isomorph_common::values_by_rows(self, dims, origin, spacing, out);
+        }
+    }
 }
 
 /// A 2D slice of an interpolant (the shape at time `t` of a transformation
@@ -378,7 +444,7 @@ impl Slice2 {
     }
 
     /// This slice evaluating batches by `evaluation` (default
-    /// [`Evaluation::Direct`], the reference).
+    /// [`Evaluation::Auto`]).
     pub fn with_evaluation(mut self, evaluation: Evaluation) -> Self {
         self.eval.evaluation = evaluation;
         self

@@ -104,9 +104,10 @@ fn check_separation(settings: &TransformSettings) -> Result<(), RbfError> {
     Ok(())
 }
 
-/// Most surface points per shape for an exact fit (`4 · points`
-/// constraints in a dense system).
-const MOST_POINTS: u64 = 8000;
+/// Most surface points per shape for an exact fit: `4 · points` = 100000
+/// constraints, which the hierarchical solver (`Solver::Auto` above 16000
+/// constraints) fits in a few GB.
+const MOST_POINTS: u64 = 25_000;
 
 /// Most surface points per shape with greedy centres.
 const MOST_GREEDY_POINTS: u64 = 250_000;
@@ -117,7 +118,7 @@ const MOST_GREEDY_POINTS: u64 = 250_000;
 pub struct RbfSettings {
     /// Surface points per shape, chosen by farthest-point sampling (each
     /// gives a boundary and a normal constraint: `4 · points` constraints in
-    /// all; 8–8000, or up to 250000 with a [`RbfSettings::tolerance`];
+    /// all; 8–25000, or up to 250000 with a [`RbfSettings::tolerance`];
     /// default 400). The exact fit costs `O(points³)`.
     pub points: usize,
     /// The separation `t_max` of the shapes along the fourth axis, in world

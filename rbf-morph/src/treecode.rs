@@ -46,21 +46,35 @@ use crate::slice::Sources;
 use rayon::prelude::*;
 
 /// How a slice ([`Slice3`](crate::Slice3), [`Slice2`](crate::Slice2))
-/// evaluates batches of points.
-///
-/// The treecode is opt-in: its accuracy is tested, but on the measured
-/// grid case (rows of 128 points per call, as `Grid3::fill_from` makes) it
-/// was slower than the direct sum, so it is not yet the default.
+/// evaluates batches of points and lattices.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
 pub enum Evaluation {
-    /// Every centre summed at every point (`O(n)` per point): the
-    /// reference. The default.
+    /// With at least [`AUTO_MIN_CENTRES`] centres, the fast paths where they
+    /// were measured faster: this treecode for batches of at least
+    /// [`AUTO_MIN_POINTS`] scattered points (e.g. the near-surface
+    /// polygonizer's), the [`dual_tree`](crate::dual_tree) on lattices of at
+    /// least [`AUTO_MIN_NODES`] nodes of a 3D slice
+    /// ([`Field3::values_on_lattice`](isomorph_common::Field3::values_on_lattice),
+    /// e.g. `Grid3::fill_from`); the direct sum otherwise. The default.
     #[default]
+    Auto,
+    /// Every centre summed at every point (`O(n)` per point): the
+    /// reference.
     Direct,
-    /// The treecode (the far field approximated within the module's stated
-    /// bound, the near field exact).
+    /// The far field approximated within the module's stated bound, the
+    /// near field exact: this treecode for scattered points, the
+    /// [`dual_tree`](crate::dual_tree) on lattices of 3D slices.
     Treecode,
 }
+
+/// Fewest centres for which [`Evaluation::Auto`] takes the treecode or the
+/// dual tree (measured crossover, `docs/EXPERIMENTS.md`).
+pub const AUTO_MIN_CENTRES: usize = 2000;
+/// Fewest points in one batch for which [`Evaluation::Auto`] takes the
+/// treecode.
+pub const AUTO_MIN_POINTS: usize = 4096;
+/// Fewest lattice nodes for which [`Evaluation::Auto`] takes the dual tree.
+pub const AUTO_MIN_NODES: usize = 32 * 32 * 32;
 
 /// Acceptance parameter: a cluster is far from a batch when the sum of
 /// their radii is at most `THETA` times the distance of their centres.
@@ -85,16 +99,16 @@ const MIN_BATCH: usize = 16;
 /// Axes of a box narrower than this (normalized units) are flat.
 const FLAT: f64 = 1e-9;
 /// Most axes: a slice of a 6D interpolant, plus the offset axis.
-const MAX_DIMS: usize = 7;
+pub(crate) const MAX_DIMS: usize = 7;
 
 /// A point in up to [`MAX_DIMS`] dimensions.
-type Point = [f64; MAX_DIMS];
+pub(crate) type Point = [f64; MAX_DIMS];
 
 /// An axis-aligned box in the first `dims` axes.
 #[derive(Debug, Clone, Copy)]
-struct Bbox {
-    lo: Point,
-    hi: Point,
+pub(crate) struct Bbox {
+    pub lo: Point,
+    pub hi: Point,
 }
 
 impl Bbox {
@@ -112,12 +126,12 @@ impl Bbox {
         b
     }
 
-    fn centre(&self) -> Point {
+    pub(crate) fn centre(&self) -> Point {
         std::array::from_fn(|d| 0.5 * (self.lo[d] + self.hi[d]))
     }
 
     /// Half the diagonal.
-    fn radius(&self) -> f64 {
+    pub(crate) fn radius(&self) -> f64 {
         0.5 * (0..MAX_DIMS).map(|d| (self.hi[d] - self.lo[d]).powi(2)).sum::<f64>().sqrt()
     }
 
@@ -132,13 +146,13 @@ impl Bbox {
 /// Chebyshev points of the second kind over one axis of a box, with their
 /// barycentric weights; a single point where the box is flat.
 #[derive(Debug, Clone)]
-struct Axis {
-    nodes: Vec<f64>,
+pub(crate) struct Axis {
+    pub nodes: Vec<f64>,
     weights: Vec<f64>,
 }
 
 impl Axis {
-    fn new(lo: f64, hi: f64) -> Self {
+    pub(crate) fn new(lo: f64, hi: f64) -> Self {
         let (mid, half) = (0.5 * (lo + hi), 0.5 * (hi - lo));
         if half * 2.0 <= FLAT {
             return Axis { nodes: vec![mid], weights: vec![1.0] };
@@ -156,7 +170,7 @@ impl Axis {
     }
 
     /// The Lagrange basis of the points at `y`, into `out`.
-    fn basis(&self, y: f64, out: &mut Vec<f64>) {
+    pub(crate) fn basis(&self, y: f64, out: &mut Vec<f64>) {
         out.clear();
         if let Some(i) = self.nodes.iter().position(|&x| x == y) {
             out.resize(self.nodes.len(), 0.0);
@@ -172,21 +186,21 @@ impl Axis {
 /// The tensor-product Chebyshev points of a box; point `m` takes index
 /// `(m / stride_d) mod len_d` on axis `d`, axis 0 fastest.
 #[derive(Debug, Clone)]
-struct Tensor {
-    axes: Vec<Axis>,
+pub(crate) struct Tensor {
+    pub axes: Vec<Axis>,
 }
 
 impl Tensor {
-    fn new(bbox: &Bbox, dims: usize) -> Self {
+    pub(crate) fn new(bbox: &Bbox, dims: usize) -> Self {
         Tensor { axes: (0..dims).map(|d| Axis::new(bbox.lo[d], bbox.hi[d])).collect() }
     }
 
-    fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.axes.iter().map(|a| a.nodes.len()).product()
     }
 
     /// Point `m`.
-    fn node(&self, mut m: usize) -> Point {
+    pub(crate) fn node(&self, mut m: usize) -> Point {
         let mut p = [0.0; MAX_DIMS];
         for (d, axis) in self.axes.iter().enumerate() {
             p[d] = axis.nodes[m % axis.nodes.len()];
@@ -219,27 +233,27 @@ impl Tensor {
 
 /// A cluster of the source tree.
 #[derive(Debug, Clone)]
-struct Node {
-    centre: Point,
-    radius: f64,
+pub(crate) struct Node {
+    pub centre: Point,
+    pub radius: f64,
     bbox: Bbox,
     /// Its sources, a range of the tree order.
-    sources: (usize, usize),
+    pub sources: (usize, usize),
     /// Index of the first of its two children (the second follows).
-    children: Option<usize>,
+    pub children: Option<usize>,
     /// Its proxies, a range of [`Treecode::proxies`] (empty without).
-    proxies: (usize, usize),
+    pub proxies: (usize, usize),
 }
 
 /// The source tree of a slice, with the clusters' proxies.
 #[derive(Debug, Clone)]
 pub(crate) struct Treecode<const S: usize> {
-    kernel: Kernel,
-    nodes: Vec<Node>,
+    pub kernel: Kernel,
+    pub nodes: Vec<Node>,
     /// The slice's centres in tree order.
-    sources: Sources<S>,
+    pub sources: Sources<S>,
     /// Every cluster's proxies, cluster after cluster.
-    proxies: Sources<S>,
+    pub proxies: Sources<S>,
 }
 
 /// Per-thread buffers of one batch.
@@ -451,15 +465,15 @@ impl<const S: usize> Treecode<S> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::slice::SliceEval;
     use crate::{Constraint, FitSettings, Interpolant};
 
     /// A seeded xorshift generator in [0, 1).
-    struct Rng(u64);
+    pub(crate) struct Rng(pub u64);
     impl Rng {
-        fn next(&mut self) -> f64 {
+        pub(crate) fn next(&mut self) -> f64 {
             self.0 ^= self.0 << 13;
             self.0 ^= self.0 >> 7;
             self.0 ^= self.0 << 17;
@@ -467,7 +481,7 @@ mod tests {
         }
     }
 
-    /// The largest two-sided interpolation error of one unit source over
+    /// The largest two- or one-sided interpolation error of one unit source over
     /// random separated configurations at the acceptance limit (`R = 1`,
     /// `r_source + r_target = θ`): 4D sources (3 axes and the offset), 3D
     /// targets, some axes flat.
@@ -511,14 +525,21 @@ mod tests {
                 let phi = |a: &Point, c: &Point| kernel.eval_r2((0..4).map(|d| (a[d] - c[d]).powi(2)).sum());
                 ts.basis(&y, 1.0, &mut bs, &mut ab);
                 tt.basis(&x, 1.0, &mut bt, &mut ab);
-                let mut approx = 0.0;
+                // Two-sided, and one-sided on either side (a cluster without
+                // proxies, a batch without target interpolation).
+                let (mut approx, mut target_side) = (0.0, 0.0);
                 for (m, wt) in bt.iter().enumerate() {
                     let xm = tt.node(m);
+                    target_side += wt * phi(&xm, &y);
                     for (n, ws) in bs.iter().enumerate() {
                         approx += wt * ws * phi(&xm, &ts.node(n));
                     }
                 }
-                worst = worst.max((approx - phi(&x, &y)).abs());
+                let source_side: f64 = bs.iter().enumerate().map(|(n, ws)| ws * phi(&x, &ts.node(n))).sum();
+                let exact = phi(&x, &y);
+                for a in [approx, target_side, source_side] {
+                    worst = worst.max((a - exact).abs());
+                }
             }
         }
         worst
@@ -538,7 +559,7 @@ mod tests {
     /// Boundary (0) and inward normal (1, offset 0.01) constraints of a
     /// sphere (radius 0.3) at `t = 0` and a torus (0.3, 0.12) at `t = 1`,
     /// `n` surface points each.
-    fn sphere_torus(n: usize) -> Vec<Constraint<4>> {
+    pub(crate) fn sphere_torus(n: usize) -> Vec<Constraint<4>> {
         let golden = std::f32::consts::PI * (3.0 - 5.0f32.sqrt());
         let mut out = Vec::new();
         for i in 0..n {
@@ -572,6 +593,16 @@ mod tests {
             .collect()
     }
 
+    /// The module's stated bound for the sources `src` at targets at most
+    /// `r_max` from every source, with the f32 round-off of both paths
+    /// (2⁻²⁴ per term, a few terms per source); and `Σ|λ|`.
+    pub(crate) fn stated_bound(kernel: Kernel, src: &Sources<3>, r_max: f64) -> (f64, f64) {
+        let (eps, k) = if kernel == Kernel::Cubic { (PAIR_ERROR_CUBIC, 3) } else { (PAIR_ERROR_TPS, 2) };
+        let weight_sum: f64 = src.weights.iter().map(|w| f64::from(w.abs())).sum();
+        let phi_max = kernel.eval_r2(r_max * r_max).abs().max(kernel.eval_r2(0.5f64.powi(2)).abs());
+        (eps * weight_sum * r_max.powi(k) + 16.0 * 2f64.powi(-24) * weight_sum * phi_max, weight_sum)
+    }
+
     #[test]
     fn treecode_agrees_with_direct_evaluation_within_the_bound() {
         for kernel in [Kernel::ThinPlate, Kernel::Cubic] {
@@ -599,11 +630,7 @@ mod tests {
                         })
                     })
                     .fold(0.0, f64::max);
-                let (eps, k) =
-                    if kernel == Kernel::Cubic { (PAIR_ERROR_CUBIC, 3) } else { (PAIR_ERROR_TPS, 2) };
-                let weight_sum: f64 = src.weights.iter().map(|w| f64::from(w.abs())).sum();
-                let phi_max = kernel.eval_r2(r_max * r_max).abs().max(kernel.eval_r2(0.5f64.powi(2)).abs());
-                let bound = eps * weight_sum * r_max.powi(k) + 16.0 * 2f64.powi(-24) * weight_sum * phi_max;
+                let (bound, weight_sum) = stated_bound(kernel, src, r_max);
                 let worst = fast.iter().zip(&direct).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
                 let range = direct.iter().fold(f64::NEG_INFINITY, |m, v| m.max(*v))
                     - direct.iter().fold(f64::INFINITY, |m, v| m.min(*v));
