@@ -81,16 +81,16 @@
 //!   | constraints | kernel | GMRES iterations | CPU (user) | peak memory |
 //!   |---|---|---|---|---|
 //!   | 8000 | `r² log r` | 13 | 1.4 s | 180 MB |
-//!   | 16000 | `r² log r` | 14 | 3.7 s | 377 MB |
-//!   | 32000 | `r² log r` | 14 | 8.5 s | 864 MB |
-//!   | 100000 | `r² log r` | 25 | 57 s | 3.5 GB |
+//!   | 16000 | `r² log r` | 14 | 2.8 s | 237 MB |
+//!   | 32000 | `r² log r` | 15 | 5.9 s | 478 MB |
+//!   | 100000 | `r² log r` | 25 | 27 s | 1.80 GB |
 //!   | 8000 | `r³` | 22 | 1.7 s | 176 MB |
-//!   | 16000 | `r³` | 156 | 20 s | 377 MB |
+//!   | 16000 | `r³` | 116 | 8.2 s | 239 MB |
 //!   | 32000 | `r³` | not converged in 300 iterations | | |
 //!
-//!   The issue-21 targets at 100000 constraints (60 s, 2 GB, both kernels)
-//!   are **not met**: most of the memory is the low-rank far blocks at
-//!   `ε = 1e-12`, and `r³` does not converge at 32000.
+//!   (8000 rows: an earlier build.) `r² log r` meets the issue-21 memory
+//!   and CPU targets at 100000 constraints (the wall time on a loaded
+//!   machine was longer); `r³` does not converge at 32000.
 //!   Measurement history and commands: `docs/EXPERIMENTS.md` (issue 21).
 //!   The reciprocal condition number
 //!   and the largest residual at the constraints are reported in
