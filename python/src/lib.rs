@@ -576,8 +576,8 @@ fn apply_settings(
                     v.extract().map_err(|_| setting_error(py, &name, "expected True or False"))?
             }
             "sampler" => {
-                triangulation_samples =
-                    choice(&name, v, &["marching-cubes", "marching-triangulation"])? == "marching-triangulation"
+                triangulation_samples = choice(&name, v, &["marching-cubes", "marching-triangulation"])?
+                    == "marching-triangulation"
             }
             "sample_edge" => sample_edge = number(&name, v, "a number", (0.05f64, 4.0))?,
             "links" => {
