@@ -89,10 +89,13 @@ impl Default for Settings {
     }
 }
 
-/// Why the iteration gave up.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Failure {
-    /// Iterations taken.
+/// Why the hierarchical solver's iteration gave up ([`FitReport::fallback`]
+/// when the dense solver then solved the system instead).
+///
+/// [`FitReport::fallback`]: crate::FitReport::fallback
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IterativeFailure {
+    /// GMRES iterations taken.
     pub iterations: usize,
     /// The last relative residual `‖g − B y‖₂ / ‖g‖₂`.
     pub residual: f64,
@@ -108,7 +111,7 @@ pub(crate) fn solve(
     kernel: Kernel,
     smoothing: f64,
     settings: &Settings,
-) -> Result<Result<Solution, Failure>, RbfError> {
+) -> Result<Result<Solution, IterativeFailure>, RbfError> {
     let n = values.len();
     let tree = ClusterTree::new(positions, dim, LEAF);
     let qr = PolyQr::new(&tree.points, dim)?;
@@ -126,7 +129,7 @@ pub(crate) fn solve(
         out.copy_from_slice(&phi_d[m..]);
     };
     let Some(preconditioner) = Schwarz::new(&tree, kernel, smoothing) else {
-        return Ok(Err(Failure { iterations: 0, residual: 1.0 }));
+        return Ok(Err(IterativeFailure { iterations: 0, residual: 1.0 }));
     };
     let apply_m = |r: &[f64], out: &mut [f64]| {
         let mut full = [vec![0.0; m], r.to_vec()].concat();
@@ -137,7 +140,7 @@ pub(crate) fn solve(
     };
     let (y2, iterations, residual) = gmres(&apply_b, &apply_m, &g2, settings);
     if residual.is_nan() || residual > settings.tolerance {
-        return Ok(Err(Failure { iterations, residual }));
+        return Ok(Err(IterativeFailure { iterations, residual }));
     }
     // d = Z y, then R c = Q₁ᵀ(h − Φ d); the values at the centres come with it.
     let mut d = [vec![0.0; m], y2.clone()].concat();
@@ -179,6 +182,7 @@ pub(crate) fn solve(
         factorization: Factorization::Hierarchical { iterations },
         rcond,
         centre_values: Some(centre_values),
+        fallback: None,
     }))
 }
 
@@ -503,6 +507,10 @@ mod tests {
         let fit = fit_with(&cs, Solver::Hierarchical, &capped).unwrap();
         assert_eq!(fit.report().factorization, Factorization::Cholesky);
         assert!(fit.report().max_residual.unwrap() < 1e-8);
+        // The report says the iteration gave way, and why.
+        let fallback = fit.report().fallback.expect("the fallback is reported");
+        assert_eq!(fallback.iterations, 2);
+        assert!(fallback.residual > TOLERANCE, "{fallback:?}");
         let no_fallback = Settings { dense_fallback: false, ..capped };
         let err = fit_with(&cs, Solver::Hierarchical, &no_fallback).unwrap_err();
         assert!(
@@ -520,6 +528,7 @@ mod tests {
         };
         let (one, three) = (fit(1), fit(3));
         assert!(matches!(one.report().factorization, Factorization::Hierarchical { .. }));
+        assert!(one.report().fallback.is_none());
         assert_eq!(one.report(), three.report());
         for c in cs.iter().step_by(37) {
             let x = c.position.map(f64::from);

@@ -4,6 +4,7 @@
 use crate::duplicates::{DuplicatePolicy, dedup};
 use crate::error::RbfError;
 use crate::greedy::{Centres, GreedyReport, fit_greedy};
+use crate::hierarchical::IterativeFailure;
 use crate::kernel::Kernel;
 use crate::slice::{Slice2, Slice3, SliceEval};
 pub use crate::solve::{Factorization, Solver};
@@ -98,6 +99,11 @@ pub struct FitReport {
     /// The greedy selection's rounds ([`Centres::Greedy`] with more
     /// constraints than its initial subset).
     pub greedy: Option<GreedyReport>,
+    /// Set when the hierarchical solver did not converge and the dense
+    /// solver solved the system instead: its iterations and last residual.
+    /// The fit is then exact but took the dense solver's `O(n²)` memory and
+    /// `O(n³)` time on top of the failed iteration.
+    pub fallback: Option<IterativeFailure>,
 }
 
 /// A fitted variational implicit function in `D` dimensions (`D = 2..=6`).
@@ -259,6 +265,7 @@ impl<const D: usize> Interpolant<D> {
                 rcond: sol.rcond,
                 max_residual: None,
                 greedy: None,
+                fallback: sol.fallback,
             },
         };
         if settings.check_residual {

@@ -189,6 +189,7 @@ mod solve;
 pub use duplicates::DuplicatePolicy;
 pub use error::RbfError;
 pub use greedy::{Centres, GreedyReport, GreedyRound, GreedySettings};
+pub use hierarchical::IterativeFailure;
 pub use image::image_constraints;
 pub use influence::{InfluencePath, InfluenceShapes};
 pub use interpolant::{Constraint, FitReport, FitSettings, Interpolant};

@@ -32,7 +32,7 @@
 //! estimate is within 10 % of the dense one).
 
 use crate::error::RbfError;
-use crate::hierarchical;
+use crate::hierarchical::{self, IterativeFailure};
 use crate::kernel::Kernel;
 use crate::slab::{self, SlabPreconditioner};
 use faer::dyn_stack::{MemBuffer, MemStack};
@@ -81,6 +81,8 @@ pub(crate) struct Solution {
     /// The fitted function at the centres, when the solver computed it
     /// (the hierarchical solver, with its H-matrix).
     pub centre_values: Option<Vec<f64>>,
+    /// Why the hierarchical solver gave way to this dense solution, if it did.
+    pub fallback: Option<IterativeFailure>,
 }
 
 /// Householder QR of the `n × m` polynomial matrix `P = [1 | x]`.
@@ -315,6 +317,7 @@ pub(crate) fn solve_with(
         Solver::Dense => false,
         Solver::Hierarchical => n > dim + 1,
     };
+    let mut fallback = None;
     if iterative {
         match hierarchical::solve(positions, dim, values, kernel, smoothing, settings)? {
             Ok(solution) => return Ok(solution),
@@ -325,9 +328,25 @@ pub(crate) fn solve_with(
                         residual: failure.residual,
                     });
                 }
+                fallback = Some(failure);
             }
         }
     }
+    let mut solution = solve_direct(positions, dim, values, kernel, smoothing, solver)?;
+    solution.fallback = fallback;
+    Ok(solution)
+}
+
+/// The direct solvers of [`solve_with`]: the slab solver when `solver` is
+/// [`Solver::Auto`] and the constraints split into slabs, dense otherwise.
+fn solve_direct(
+    positions: &[f64],
+    dim: usize,
+    values: &[f64],
+    kernel: Kernel,
+    smoothing: f64,
+    solver: Solver,
+) -> Result<Solution, RbfError> {
     let split = match solver {
         Solver::Auto => slab::find_split(positions, dim),
         Solver::Dense | Solver::Hierarchical => None,
@@ -429,7 +448,7 @@ fn solve_ordered(
     if rhs.iter().chain(&weights).any(|v| !v.is_finite()) {
         return Err(RbfError::Singular { rcond });
     }
-    Ok(Solution { weights, poly: rhs, factorization, rcond, centre_values: None })
+    Ok(Solution { weights, poly: rhs, factorization, rcond, centre_values: None, fallback: None })
 }
 
 /// Checks the dense system's memory (the `n × n` matrix of f64, and the

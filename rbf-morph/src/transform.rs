@@ -336,6 +336,13 @@ impl RbfMorph {
             .with_detail("constraints", n)
             .with_detail("merged", fit.merged)
             .with_detail("factorization", format!("{:?}", fit.factorization).as_str());
+        if let Some(f) = fit.fallback {
+            report = report.with_warnings([format!(
+                "the hierarchical solver did not converge ({} GMRES iterations, relative residual {:.2e}); \
+                 the {n} constraints were solved densely instead (exact, but O(n²) memory and much slower)",
+                f.iterations, f.residual
+            )]);
+        }
         if let Some(g) = &fit.greedy {
             report = report
                 .with_iterations(g.rounds.len())
