@@ -3,7 +3,7 @@
 
 use super::{Frame, Morph, MorphError, MorphFailure, MorphReport};
 use crate::{Aabb, Field3, TriMesh};
-use glam::{Affine3A, Vec3};
+use glam::{Affine3A, UVec3, Vec3};
 use std::fmt;
 
 /// A frame field of any method.
@@ -68,6 +68,9 @@ impl Field3 for DynField {
     fn values(&self, points: &[Vec3], out: &mut [f32]) {
         (**self).values(points, out)
     }
+    fn values_on_lattice(&self, dims: UVec3, origin: Vec3, spacing: f32, out: &mut [f32]) {
+        (**self).values_on_lattice(dims, origin, spacing, out)
+    }
     fn bounds(&self) -> Option<Aabb> {
         (**self).bounds()
     }
@@ -130,3 +133,29 @@ pub trait MorphExt: Morph + Sized + 'static {
 }
 
 impl<M: Morph + 'static> MorphExt for M {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A field whose lattice path differs from its pointwise one, to see
+    /// which one a wrapper calls.
+    struct LatticeMarked;
+
+    impl Field3 for LatticeMarked {
+        fn value(&self, _: Vec3) -> f32 {
+            1.0
+        }
+        fn values_on_lattice(&self, _: UVec3, _: Vec3, _: f32, out: &mut [f32]) {
+            out.fill(2.0);
+        }
+    }
+
+    #[test]
+    fn boxed_fields_keep_their_lattice_evaluation() {
+        let field: DynField = Box::new(LatticeMarked);
+        let mut out = vec![0.0; 8];
+        field.values_on_lattice(UVec3::splat(2), Vec3::ZERO, 1.0, &mut out);
+        assert_eq!(out, vec![2.0; 8]);
+    }
+}
