@@ -5,7 +5,7 @@ use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 use isomorph_common::alignment::{AlignMode, Alignment, PrincipalFrame, align};
 use isomorph_common::glam::Mat4;
-use isomorph_common::{Control, Landmarks};
+use isomorph_common::{Control, Landmarks, validate_inputs};
 use isomorph_io::inputs::{LoadOptions, load_solid};
 use isomorph_io::mesh::{MeshFormat, write_mesh};
 use serde_json::{Value, json};
@@ -87,6 +87,10 @@ pub fn run(args: &AlignArgs) -> anyhow::Result<()> {
         return Ok(());
     }
     let target = load_solid(&args.target, &own)?;
+    // Open meshes are measured by their winding-number inside: say so.
+    for warning in validate_inputs(&source, &target, &control)? {
+        eprintln!("warning: {warning}");
+    }
     let alignment = align(
         &source.moments(args.res, &control).with_context(|| format!("cannot measure {}", args.source))?,
         &target.moments(args.res, &control).with_context(|| format!("cannot measure {}", args.target))?,

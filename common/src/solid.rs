@@ -25,7 +25,7 @@
 //! # Ok::<(), isomorph_common::MorphError>(())
 //! ```
 
-use crate::alignment::Moments;
+use crate::alignment::{AlignError, Moments};
 use crate::control::Control;
 use crate::fast_marching::{FastMarchingSettings, redistance};
 use crate::grid::lattice_for_box;
@@ -406,18 +406,26 @@ impl Solid {
         })
     }
 
-    /// The solid's moments (volume, centroid, covariance): exact for meshes,
-    /// from the distance volume with `res` nodes along the longest edge
-    /// otherwise.
+    /// The solid's moments (volume, centroid, covariance): exact for closed
+    /// meshes, from the distance volume with `res` nodes along the longest
+    /// edge otherwise — including open meshes, whose inside (as everywhere in
+    /// the morphs) comes from the generalized winding number, so their
+    /// triangles alone bound no volume.
     ///
     /// # Errors
     /// [`MorphError::Alignment`] for empty or degenerate shapes, and as
     /// [`Solid::distance_volume`].
     pub fn moments(&self, res: u32, control: &Control) -> Result<Moments, MorphError> {
-        Ok(match &*self.0 {
-            Repr::Mesh { mesh, .. } => Moments::from_mesh(mesh)?,
-            _ => Moments::from_grid(&self.distance_volume(&self.bounds().padded(0.05), res, control)?)?,
-        })
+        let sampled = || -> Result<Moments, MorphError> {
+            Ok(Moments::from_grid(&self.distance_volume(&self.bounds().padded(0.05), res, control)?)?)
+        };
+        match &*self.0 {
+            Repr::Mesh { mesh, .. } => match Moments::from_mesh(mesh) {
+                Err(AlignError::OpenMesh { .. }) => sampled(),
+                closed => Ok(closed?),
+            },
+            _ => sampled(),
+        }
     }
 }
 
@@ -522,6 +530,26 @@ mod tests {
         open.triangles.truncate(open.triangles.len() - 32);
         let warnings = check(open).unwrap();
         assert!(warnings.len() == 1 && warnings[0].contains("open"), "{warnings:?}");
+    }
+
+    #[test]
+    fn open_meshes_have_the_moments_of_their_winding_number_inside() {
+        let control = Control::new();
+        let sphere = uv_sphere(Vec3::new(0.05, -0.02, 0.01), 0.3, 32, 64);
+        let closed = Solid::mesh(sphere.clone()).unwrap().moments(64, &control).unwrap();
+        // A cap of triangles removed: the triangles bound no volume, but the
+        // winding number still sees (nearly) the whole ball.
+        let mut cut = sphere;
+        cut.triangles.truncate(cut.triangles.len() - 64);
+        assert!(matches!(Moments::from_mesh(&cut), Err(AlignError::OpenMesh { .. })));
+        let open = Solid::mesh(cut).unwrap().moments(64, &control).unwrap();
+        assert!((open.volume / closed.volume - 1.0).abs() < 0.05, "{} vs {}", open.volume, closed.volume);
+        assert!(
+            (open.centroid - closed.centroid).length() < 0.02,
+            "{} vs {}",
+            open.centroid,
+            closed.centroid
+        );
     }
 
     #[test]
