@@ -54,7 +54,10 @@ fn bunny_becomes_a_petal_torus_in_one_piece() {
     assert!(components.iter().all(|&c| c == 1), "components per level set {components:?}");
     let genus: Vec<Option<i64>> = metrics.iter().map(|mt| mt.genus).collect();
     let opens = genus.iter().position(|&g| g == Some(1)).unwrap();
-    assert!(genus[..opens].iter().all(|&g| g == Some(0)) && genus[opens..].iter().all(|&g| g == Some(1)), "{genus:?}");
+    assert!(
+        genus[..opens].iter().all(|&g| g == Some(0)) && genus[opens..].iter().all(|&g| g == Some(1)),
+        "{genus:?}"
+    );
     println!(
         "{} coefficients, {} steps, hole open from level set {opens}",
         m.tmesh().anchor_count(),
