@@ -113,6 +113,12 @@ pub struct MethodArgs {
     /// Most evolution steps (0 keeps the initial fit).
     #[arg(long, help_heading = "T-spline (Yang & Jüttler)", default_value_t = TsplineSettings::default().evolve.max_steps)]
     pub max_steps: usize,
+    /// Stop the evolution as stalled when its error has not dropped by 1 %
+    /// over this many steps (at least 1; the paper's speed on a depth-5
+    /// T-mesh needs about 40, e.g. Example 1: `--speed paper --depth 5 --nt
+    /// 60 --stall-steps 40`).
+    #[arg(long, help_heading = "T-spline (Yang & Jüttler)", default_value_t = TsplineSettings::default().evolve.stall_steps)]
+    pub stall_steps: usize,
     /// Weight of the distance-field constraint |∇f| = 1 (0 to 1e6; lower
     /// lets narrow features open).
     #[arg(long, help_heading = "T-spline (Yang & Jüttler)", default_value_t = TsplineSettings::default().evolve.distance_weight)]
@@ -226,6 +232,7 @@ const OWNERS: &[(&str, &[Method])] = &[
     ("min_depth", &[Method::Tspline]),
     ("sample_spacing", &[Method::Tspline]),
     ("max_steps", &[Method::Tspline]),
+    ("stall_steps", &[Method::Tspline]),
     ("distance_weight", &[Method::Tspline]),
     ("no_projection_frames", &[Method::Tspline]),
     ("step", &[Method::Tspline]),
@@ -333,6 +340,7 @@ impl MethodArgs {
         t.tmesh.min_depth = self.min_depth.unwrap_or(t.tmesh.min_depth.min(self.depth));
         t.tmesh.sample_spacing = self.sample_spacing;
         t.evolve.max_steps = self.max_steps;
+        t.evolve.stall_steps = self.stall_steps;
         t.evolve.distance_weight = self.distance_weight;
         t.projection_frames = !self.no_projection_frames;
         t.align = match &self.align {

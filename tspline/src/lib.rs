@@ -47,8 +47,10 @@
 //! sphere → holed cube example ([`demo::holed_cube_settings`]), the bunny
 //! bench and `isomorph demo` therefore use the note's [`Speed::Robust`]
 //! (`v = clamp(d_B, ±0.2) + β (1 − λ) κ`, `β` a finest cell or less).
-//! [`Speed::Distance`] (`λ ≡ 1`) is Breen & Whitaker's speed, for the
-//! paper's Fig. 2 comparison. With [`TsplineMorph`]'s defaults otherwise,
+//! The paper's Example 1 (bunny → petal torus, [`demo::example1_settings`])
+//! uses eq. 8 on a T-mesh of depth at most 5 and keeps one component in
+//! every level set. [`Speed::Distance`] (`λ ≡ 1`) is Breen & Whitaker's
+//! speed, for the paper's Fig. 2 comparison. With [`TsplineMorph`]'s defaults otherwise,
 //! the paper's speed converges for sphere → torus, holed cube, C and cube,
 //! and stalls for sphere → chain (18 steps), sphere → mug and ball → C
 //! (measured 2026-11 with `isomorph morph --speed paper`); a stall ends as
