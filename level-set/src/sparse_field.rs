@@ -59,7 +59,12 @@
 //!   the margin, on a target the grid does not resolve, it would
 //!   otherwise leave and rejoin every few iterations);
 //! - the speed is interpolated with trilinear's second-order error term
-//!   removed ([`SpeedGrid`]).
+//!   removed ([`SpeedGrid`]);
+//! - no active point stays alone on its side of the surface (none of its
+//!   face neighbours on it): such a one-node island is a target feature
+//!   thinner than a voxel (a thin sheet or crevice sampled at one node) that
+//!   the grid cannot resolve, and marching cubes would show it as a
+//!   separate speck; the point goes back to its neighbours' side.
 //!
 //! Each iteration visits only the layer lists and their neighbours: the cost
 //! grows with the surface area, not the volume.
