@@ -59,7 +59,12 @@
 //!   the margin, on a target the grid does not resolve, it would
 //!   otherwise leave and rejoin every few iterations);
 //! - the speed is interpolated with trilinear's second-order error term
-//!   removed ([`SpeedGrid`]).
+//!   removed ([`SpeedGrid`]);
+//! - no active point stays alone on its side of the surface (none of its
+//!   face neighbours on it): such a one-node island is a target feature
+//!   thinner than a voxel (a thin sheet or crevice sampled at one node) that
+//!   the grid cannot resolve, and marching cubes would show it as a
+//!   separate speck; the point goes back to its neighbours' side.
 //!
 //! Each iteration visits only the layer lists and their neighbours: the cost
 //! grows with the surface area, not the volume.
@@ -351,6 +356,7 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> SparseFieldSolver<U, S> {
             before.push(self.u[n]);
             self.u[n] += dt * rate;
         }
+        self.dissolve_islands(&active, &before);
         let mut leaving = std::mem::take(&mut self.leaving);
         let solver = &*self;
         active
@@ -415,6 +421,54 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> SparseFieldSolver<U, S> {
             surface_nodes: self.rates.len(),
         };
         (up, down, stats)
+    }
+
+    /// Keeps the embedding free of one-node islands after step 2's update
+    /// (`active` sorted, `before` its values before the step): an active
+    /// point that none of its face neighbours shares a side with encloses a
+    /// component smaller than a voxel, which marching cubes would show as a
+    /// separate speck. Such points appear where the target has a feature
+    /// thinner than a voxel (a thin sheet or crevice sampled at one node):
+    /// the front passing it leaves the node behind, or the node crosses
+    /// alone. A point that crossed zero this step goes back to its old
+    /// value; a point its neighbours left takes their side (its value
+    /// mirrored). Only points that crossed and their active neighbours can
+    /// be alone, so the work is ∝ the crossings.
+    fn dissolve_islands(&mut self, active: &[u32], before: &[f32]) {
+        let (u, lattice) = (&self.u, &self.lattice);
+        let inside = |n: usize| u[n] > 0.0;
+        let crossed: Vec<(usize, f32)> = active
+            .par_iter()
+            .zip(before)
+            .filter(|&(&n, &old)| (old > 0.0) != inside(n as usize))
+            .map(|(&n, &old)| (n as usize, old))
+            .collect();
+        if crossed.is_empty() {
+            return;
+        }
+        let mut candidates = crossed.clone();
+        for &(n, _) in &crossed {
+            for m in lattice.neighbours(n).into_iter().flatten() {
+                if let Ok(k) = active.binary_search(&(m as u32)) {
+                    candidates.push((m, before[k]));
+                }
+            }
+        }
+        candidates.sort_unstable_by_key(|c| c.0);
+        candidates.dedup_by_key(|c| c.0);
+        let alone = |n: usize| lattice.neighbours(n).into_iter().flatten().all(|m| inside(m) != inside(n));
+        let moves: Vec<(usize, f32)> = candidates
+            .into_iter()
+            .filter(|&(n, _)| alone(n))
+            .map(|(n, old)| match ((old > 0.0) != inside(n), u[n] > 0.0) {
+                (true, _) => (n, old),
+                (false, true) => (n, -u[n]),
+                (false, false) => (n, (-u[n]).max(f32::MIN_POSITIVE)),
+            })
+            .collect();
+        for (n, v) in moves {
+            self.u[n] = v;
+        }
     }
 
     /// Moves every point of `input` to `to`, and puts its neighbours of
@@ -907,6 +961,42 @@ mod tests {
                 .fold(0.0f32, f32::max);
             assert!(worst < 0.005, "layer {layer}: {worst} voxel off the distance");
         }
+    }
+
+    /// A target feature thinner than a voxel, sampled at one node (a ball
+    /// of 0.4 voxel about a node outside the target's body), would be left
+    /// behind by the shrinking front as a one-node island, which marching
+    /// cubes shows as a separate speck; the island is dissolved, and the
+    /// converged surface is the body's one component.
+    #[test]
+    fn no_one_node_island_is_left_behind() {
+        let n = 32u32;
+        let bounds = Aabb::cube(0.5);
+        let source = Grid3::sample_box(&Shape::sphere(0.35), &bounds, n).unwrap();
+        let h = source.spacing();
+        let node = UVec3::new(24, 16, 16);
+        let speck = source.position(node.x, node.y, node.z);
+        assert!(speck.length() > 0.2 + 2.0 * h && speck.length() < 0.35 - 2.0 * h, "{speck}");
+        let body = Shape::sphere(0.2);
+        // A disc of a sheet 0.6 voxel thick through the node, across the
+        // lattice's diagonal: its face neighbours lie 0.58 voxel from the
+        // mid-plane (outside), its nodes touch along edges only.
+        let normal = Vec3::ONE.normalize();
+        let sheet =
+            move |p: Vec3| (0.3 * h - normal.dot(p - speck).abs()).min(2.0 * h - (p - speck).length());
+        let target = move |p: Vec3| body.value(p).max(sheet(p));
+        let speed = SpeedGrid::sample(&source, &target, |x| x, crate::Response::Identity).unwrap();
+        let at = |u: &Bricks<f32>| u[source.index(node.x, node.y, node.z)];
+        assert!(speed.node_value(source.index(node.x, node.y, node.z)) > 0.25, "the speck's node is inside");
+        let mut solver = SparseFieldSolver::new(&source).unwrap();
+        for _ in 0..200 {
+            solver.step(&speed, &StepParams::default());
+        }
+        assert!(at(&solver.u) <= 0.0, "the speck's node is outside: {}", at(&solver.u));
+        let u: Vec<f32> = dense(&solver.u, source.len()).iter().map(|v| v * h).collect();
+        let grid = Grid3::from_vec(source.dims(), source.origin(), h, u).unwrap();
+        let mesh = isomorph_common::marching_cubes::marching_cubes(&grid, 0.0);
+        assert_eq!(mesh.metrics().components, 1);
     }
 
     #[test]
