@@ -56,11 +56,18 @@
 //!   inverse; FGMRES works in f64), and a coarse
 //!   problem of about 1500 points fitted to the residual the local
 //!   corrections leave (multiplicative, one more H-matrix product per
-//!   iteration). GMRES stops at a relative residual of
-//!   `1e-11`; if it does not converge within 300 iterations the dense
+//!   iteration). The cluster tree never splits a layer of equal
+//!   coordinates, so each subdomain is a patch of one of the two shapes
+//!   whatever their point counts. GMRES stops at a relative residual of
+//!   `1e-11`, or when its normwise backward error
+//!   `‖g − B y‖ / (‖B‖ ‖y‖ + ‖g‖)` reaches round-off (`1.1e-16`, what the
+//!   dense Cholesky attains; real meshes' close boundary and normal
+//!   constraints give `rcond` ~1e-10, and then the relative residual stops
+//!   near 1e-10); if it does not converge within 300 iterations the dense
 //!   Cholesky runs, or [`RbfError::NotConverged`] is returned when the
 //!   dense system would not fit in memory. **Error bound**: the weights
-//!   solve the H-matrix system to `1e-11 ‖h‖`, and the H-matrix differs
+//!   solve the H-matrix system to `1e-11 ‖h‖` (or that backward error),
+//!   and the H-matrix differs
 //!   from `Φ` by at most about `ε ‖Φ‖_F` (tested against the dense product);
 //!   so the residual at the constraints is about `1e-11 ‖h‖ + ε ‖Φ‖_F ‖d‖`
 //!   (reported, evaluated through the H-matrix), and on the reference case
