@@ -68,17 +68,20 @@ fn hygiene(name: &str, cs: &[Constraint<3>]) {
     let k = cs.chunks(2).map(|pair| p(&pair[0]).distance(p(&pair[1]))).fold(0.0f32, f32::max);
     let boundary: Vec<glam::Vec3> = cs.iter().step_by(2).map(p).collect();
     let normal: Vec<glam::Vec3> = cs.iter().skip(1).step_by(2).map(p).collect();
-    // Nearest boundary point of every normal point other than its own.
-    let mut crossing = [0usize; 3];
-    let mut closest_other = f32::INFINITY;
-    let mut nn_boundary = Vec::with_capacity(boundary.len());
-    for (i, q) in normal.iter().enumerate() {
-        let d = boundary
+    // Distance from `q` to the nearest boundary point other than the `i`-th.
+    let nearest_other = |i: usize, q: glam::Vec3| {
+        boundary
             .iter()
             .enumerate()
             .filter(|&(j, _)| j != i)
-            .map(|(_, b)| b.distance(*q))
-            .fold(f32::INFINITY, f32::min);
+            .map(|(_, b)| b.distance(q))
+            .fold(f32::INFINITY, f32::min)
+    };
+    // Normal points nearer another boundary point than their own.
+    let mut crossing = [0usize; 3];
+    let mut closest_other = f32::INFINITY;
+    for (i, q) in normal.iter().enumerate() {
+        let d = nearest_other(i, *q);
         closest_other = closest_other.min(d);
         for (slot, frac) in crossing.iter_mut().zip([1.0, 0.5, 0.25]) {
             if d < frac * k {
@@ -86,15 +89,7 @@ fn hygiene(name: &str, cs: &[Constraint<3>]) {
             }
         }
     }
-    for (i, b) in boundary.iter().enumerate() {
-        let d = boundary
-            .iter()
-            .enumerate()
-            .filter(|&(j, _)| j != i)
-            .map(|(_, c)| c.distance(*b))
-            .fold(f32::INFINITY, f32::min);
-        nn_boundary.push(d);
-    }
+    let mut nn_boundary: Vec<f32> = boundary.iter().enumerate().map(|(i, b)| nearest_other(i, *b)).collect();
     nn_boundary.sort_by(f32::total_cmp);
     let q = |f: f64| nn_boundary[((nn_boundary.len() - 1) as f64 * f) as usize];
     println!(
