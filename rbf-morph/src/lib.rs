@@ -74,9 +74,8 @@
 //!   the fitted function agrees with the dense solve to within 1e-6 of its
 //!   range at probe points in and around the constraints (both kernels;
 //!   tested at 3000 constraints, and at 8000 in a release-only test).
-//!   `r³` is not chosen by [`Solver::Auto`]: its iteration count grows with
-//!   `n` (see the table) and its crossover with the slab solver was not
-//!   measured; select it with [`Solver::Hierarchical`].
+//!   `r³` is not chosen by [`Solver::Auto`]: its crossover with the slab
+//!   solver was not measured; select it with [`Solver::Hierarchical`].
 //!
 //!   Scaling on the reference case (sphere → torus in 4D; the `fit_scale`
 //!   example: `cargo run --release -p isomorph-rbf --example fit_scale --
@@ -92,12 +91,12 @@
 //!   | 32000 | `r² log r` | 15 | 5.9 s | 478 MB |
 //!   | 100000 | `r² log r` | 19 | 29 s | 1.78 GB |
 //!   | 8000 | `r³` | 22 | 1.7 s | 176 MB |
-//!   | 16000 | `r³` | 116 | 8.2 s | 239 MB |
-//!   | 32000 | `r³` | not converged in 300 iterations | | |
+//!   | 16000 | `r³` | 28 | 3.7 s | 238 MB |
+//!   | 32000 | `r³` | 26 | 6.7 s | 484 MB |
 //!
 //!   (8000 rows: an earlier build.) `r² log r` meets the issue-21 memory
 //!   and CPU targets at 100000 constraints (the wall time on a loaded
-//!   machine was longer); `r³` does not converge at 32000. On real meshes
+//!   machine was longer). On real meshes
 //!   (the bunny → Stanford dragon morph, `--points 10000` and `25000`:
 //!   23678 and 48572 constraints, `rcond` ~1e-9) the iteration takes 18
 //!   and 24 steps, 6.8 s and 20 s of CPU, 0.5 and 1.2 GB.
