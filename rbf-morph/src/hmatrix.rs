@@ -127,16 +127,42 @@ fn split(
         let node = &nodes[id];
         let axis = (0..dim).max_by(|&a, &b| (node.hi[a] - node.lo[a]).total_cmp(&(node.hi[b] - node.lo[b])));
         let axis = axis.expect("dim ≥ 1");
-        let half = idx.len() / 2;
-        idx.select_nth_unstable_by(half, |&a, &b| {
-            positions[a * dim + axis].total_cmp(&positions[b * dim + axis]).then(a.cmp(&b))
-        });
+        let half = split_index(idx, positions, dim, axis);
         let (left, right) = idx.split_at_mut(half);
         let l = split(nodes, left, start, positions, dim, leaf);
         let r = split(nodes, right, start + half, positions, dim, leaf);
         nodes[id].children = Some((l, r));
     }
     id
+}
+
+/// Sorts `idx` along `axis` and returns where to split it: the position
+/// nearest the median at which the coordinate changes, so that points with
+/// equal coordinates (a layer such as a shape transformation's `t = 0`)
+/// are never cut apart. Cutting a layer at the median would put an
+/// arbitrary subset of its points, spread over the whole layer, into a
+/// cluster of the other one: a subdomain scattered over a whole shape,
+/// whose local solve is no approximation of the global one.
+fn split_index(idx: &mut [usize], positions: &[f64], dim: usize, axis: usize) -> usize {
+    let x = |i: usize| positions[i * dim + axis];
+    idx.sort_unstable_by(|&a, &b| x(a).total_cmp(&x(b)).then(a.cmp(&b)));
+    let half = idx.len() / 2;
+    let changes = |i: &usize| x(idx[*i - 1]) < x(idx[*i]);
+    let above = (half..idx.len()).find(changes);
+    let below = (1..=half).rev().find(changes);
+    match (below, above) {
+        (Some(b), Some(a)) => {
+            if half - b <= a - half {
+                b
+            } else {
+                a
+            }
+        }
+        (Some(b), None) => b,
+        (None, Some(a)) => a,
+        // Every point has the same coordinate (only when all coincide).
+        (None, None) => half,
+    }
 }
 
 /// A block of the lower triangle of `Φ`.
@@ -617,6 +643,29 @@ mod tests {
                 assert!((0..4).all(|k| node.lo[k] <= x[k] && x[k] <= node.hi[k]));
             }
         }
+    }
+
+    #[test]
+    fn clusters_never_cut_a_layer_of_equal_coordinates() {
+        // 700 points at t = −0.5 and 300 at t = +0.5: the median of t falls
+        // inside the first layer.
+        let p: Vec<f64> = two_spheres(1400)
+            .chunks_exact(4)
+            .enumerate()
+            .filter(|(i, _)| i % 2 == 0 || i % 7 < 3)
+            .flat_map(|(_, x)| x.iter().copied())
+            .collect();
+        let count = |t: f64| p.chunks_exact(4).filter(|x| x[3] == t).count();
+        assert_eq!((count(-0.5), count(0.5)), (700, 300));
+        let tree = ClusterTree::new(&p, 4, LEAF);
+        let (a, b) = tree.nodes[0].children.unwrap();
+        assert_eq!((tree.nodes[a].range.len(), tree.nodes[b].range.len()), (700, 300));
+        for node in &tree.nodes[1..] {
+            assert_eq!(node.lo[3], node.hi[3], "a cluster below the root spans both layers");
+        }
+        // Within a layer the split stays at the median.
+        let (c, _) = tree.nodes[a].children.unwrap();
+        assert_eq!(tree.nodes[c].range.len(), 350);
     }
 
     #[test]
