@@ -171,6 +171,37 @@ fn bad_inputs_are_typed_errors() {
         evolve(&source, &speed, Placement::Identity, &zero, &none),
         Err(LevelSetError::Morph(MorphError::BadSetting { .. }))
     ));
+    for front_step in [0.0, 0.6, f32::NAN] {
+        let bad = EvolveSettings { front_step, ..settings };
+        assert!(matches!(
+            evolve(&source, &speed, Placement::Identity, &bad, &none),
+            Err(LevelSetError::Morph(MorphError::BadSetting { name: "front_step", .. }))
+        ));
+    }
+}
+
+/// Half a voxel per iteration for the fastest front (the default) instead
+/// of eq. 24's third reaches the same converged surface in fewer
+/// iterations: the two final meshes lie within a fiftieth of a voxel of
+/// each other, and the paper's step needs at least a quarter more
+/// iterations.
+#[test]
+fn the_half_voxel_front_step_converges_to_the_papers_surface_sooner() {
+    let res = 48;
+    let source = Grid3::sample_box(&Shape::sphere(0.3), &Aabb::cube(0.5), res).unwrap();
+    let speed = SpeedGrid::sample(&source, &Shape::torus(0.3, 0.12), |x| x, Response::Identity).unwrap();
+    let run = |front_step| {
+        let settings = EvolveSettings { front_step, ..EvolveSettings::default() };
+        evolve(&source, &speed, Placement::Identity, &settings, &Control::new()).unwrap()
+    };
+    let (half, paper) = (run(0.5), run(1.0 / 3.0));
+    assert!(half.converged() && paper.converged());
+    let (a, b) = (half.frame_mesh(1.0, 0).unwrap(), paper.frame_mesh(1.0, 0).unwrap());
+    let d = surface_distance(&a, &b, 4000).unwrap();
+    let h = source.spacing();
+    assert!(d.hausdorff / h < 0.02, "final surfaces {} voxels apart (Hausdorff)", d.hausdorff / h);
+    let (fast, slow) = (half.stats().len(), paper.stats().len());
+    assert!(4 * slow >= 5 * fast, "{fast} iterations at half a voxel, {slow} at a third");
 }
 
 #[test]
@@ -271,10 +302,14 @@ fn a_run_that_stops_improving_under_the_settled_distance_has_converged() {
     let best = settled.stats().iter().map(|s| s.rms_distance).fold(f32::INFINITY, f32::min);
     assert!(settled.report().converged, "{:?}", settled.report().outcome);
     assert!(best <= 0.05, "best RMS distance {best} voxels");
-    // Without the rule the same run is a stall, 40 iterations later.
+    // Without the rule the same run is a stall, at least 40 iterations
+    // later (60 instead of 20 after its best; the residual may still creep
+    // down by 1 % after the settled run stopped, which moves the best later).
     let stalled = run(0.0);
     assert!(!stalled.report().converged, "{:?}", stalled.report().outcome);
-    assert_eq!(stalled.stats().len(), settled.stats().len() + 40);
+    let n = settled.stats().len();
+    assert_eq!(&stalled.stats()[..n], settled.stats(), "not the same run");
+    assert!(stalled.stats().len() >= n + 40, "stalled after {}, settled after {n}", stalled.stats().len());
 }
 
 /// Under a small frame budget (4: between 5 and 10 kept frames) the same
