@@ -626,20 +626,23 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> SparseFieldSolver<U, S> {
     /// sorted and merged in, duplicates dropped): the next iteration then
     /// sweeps memory in order instead of jumping about the grid, which is
     /// what keeps the cost per point flat once the grid outgrows the cache.
+    /// The five lists are compacted in parallel (each on its own).
     fn compact(&mut self) {
         let status = &self.status;
-        for layer in -LAYERS..=LAYERS {
-            let list = &mut self.layers[slot(layer)];
-            let keep = |n: &u32| status[*n as usize] == layer;
-            let split = self.sorted[slot(layer)].min(list.len());
-            let mut fresh: Vec<u32> = list.drain(split..).filter(keep).collect();
-            list.retain(keep);
-            if !fresh.is_empty() {
-                fresh.sort_unstable();
-                *list = merge_sorted(list, &fresh);
-            }
-            self.sorted[slot(layer)] = list.len();
-        }
+        self.layers.par_iter_mut().zip(self.sorted.par_iter_mut()).enumerate().for_each(
+            |(i, (list, sorted))| {
+                let layer = i as i8 - LAYERS;
+                let keep = |n: &u32| status[*n as usize] == layer;
+                let split = (*sorted).min(list.len());
+                let mut fresh: Vec<u32> = list.drain(split..).filter(keep).collect();
+                list.retain(keep);
+                if !fresh.is_empty() {
+                    fresh.sort_unstable();
+                    *list = merge_sorted(list, &fresh);
+                }
+                *sorted = list.len();
+            },
+        );
     }
 }
 
