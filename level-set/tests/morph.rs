@@ -25,6 +25,17 @@ fn reference_case(res: u32) -> (Grid3<f32>, SpeedGrid) {
     (source, speed)
 }
 
+/// The reference case at `res³` evolved with each of `settings`, and its
+/// source.
+fn reference_runs<const N: usize>(
+    res: u32,
+    settings: [EvolveSettings; N],
+) -> (Grid3<f32>, [LevelSetMorph; N]) {
+    let (source, speed) = reference_case(res);
+    let runs = settings.map(|s| evolve(&source, &speed, Placement::Identity, &s, &Control::new()).unwrap());
+    (source, runs)
+}
+
 /// Mean and max distance (voxels) of the mesh's vertices to the zero set of
 /// an exact distance field.
 fn vertex_error(mesh: &TriMesh, exact: &dyn Field3, h: f32) -> (f32, f32) {
@@ -193,12 +204,8 @@ fn bad_inputs_are_typed_errors() {
 /// iterations.
 #[test]
 fn the_half_voxel_front_step_converges_to_the_papers_surface_sooner() {
-    let (source, speed) = reference_case(48);
-    let run = |front_step| {
-        let settings = EvolveSettings { front_step, ..EvolveSettings::default() };
-        evolve(&source, &speed, Placement::Identity, &settings, &Control::new()).unwrap()
-    };
-    let (half, paper) = (run(0.5), run(1.0 / 3.0));
+    let with = |front_step| EvolveSettings { front_step, ..EvolveSettings::default() };
+    let (source, [half, paper]) = reference_runs(48, [with(0.5), with(1.0 / 3.0)]);
     assert!(half.converged() && paper.converged());
     let (a, b) = (half.frame_mesh(1.0, 0).unwrap(), paper.frame_mesh(1.0, 0).unwrap());
     let d = surface_distance(&a, &b, 4000).unwrap();
@@ -320,12 +327,9 @@ fn a_run_that_stops_improving_under_the_settled_distance_has_converged() {
 /// two frames (plus half a voxel for the sampled distances) of the true one.
 #[test]
 fn a_frame_budget_gives_the_every_iteration_frames() {
-    let (source, speed) = reference_case(40);
-    let run = |frames| {
-        let settings = EvolveSettings { frames, ..EvolveSettings::default() };
-        evolve(&source, &speed, Placement::Identity, &settings, &Control::new()).unwrap()
-    };
-    let (all, budget) = (run(FrameSchedule::EveryIterations(1)), run(FrameSchedule::Budget(4)));
+    let with = |frames| EvolveSettings { frames, ..EvolveSettings::default() };
+    let schedules = [with(FrameSchedule::EveryIterations(1)), with(FrameSchedule::Budget(4))];
+    let (source, [all, budget]) = reference_runs(40, schedules);
     let iterations = all.stats().len();
     assert_eq!(all.stats(), budget.stats(), "the kept frames changed the evolution");
     assert_eq!(all.len(), iterations + 1);
