@@ -56,11 +56,12 @@ fn case(n: u32) -> (Grid3<f32>, SpeedGrid) {
 /// convergence; the dense solver runs to the same evolution time (eq. 17's
 /// `t`) that the sparse field needed, since its zero set then lies where the
 /// sparse one converged (tested in `level-set/tests/morph.rs`) while its
-/// RMS statistics keep moving with the far level sets. Eq. 24 over the
-/// whole grid bounds its step by the largest target distance anywhere, so
-/// at 64³ it needs about 600 iterations where the sparse field needs 83; at
-/// 128³ about 2400 (about 2 minutes a run here, so `dense/128` takes some 20
-/// minutes for criterion's ten samples). Before timing, each size prints
+/// RMS statistics keep moving with the far level sets. Its time step is
+/// bounded by the largest target distance anywhere on the grid, so it
+/// needs several times the sparse field's iterations (with eq. 24's third
+/// of a voxel per iteration: about 600 against 84 at 64³, about 2400 at
+/// 128³, some 2 minutes a run here, so `dense/128` takes some 20 minutes
+/// for criterion's ten samples). Before timing, each size prints
 /// the sparse field's final surface error against the analytic torus.
 fn morph(c: &mut Criterion) {
     let mut group = c.benchmark_group("morph/sphere_torus");

@@ -43,7 +43,7 @@ impl Solver for DenseSolver {
         self.change.par_iter_mut().enumerate().for_each(|(n, c)| {
             *c = node_rate(lattice, u, n, v.node(n), h, params.curvature).0;
         });
-        // Step 5: eq. 24 (λ ≤ 1, so the largest target speed bounds the
+        // Step 5: eq. 24 with the front step (λ ≤ 1, so the largest target speed bounds the
         // distance term with or without curvature).
         let dt = stable_time_step(speed.max_abs(), params);
         // Step 6: update, and the stopping statistics at the surface nodes

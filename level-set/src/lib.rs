@@ -106,11 +106,12 @@ pub use contract::{Align, FRAME_BUDGET, LevelSetSettings, SPARSE_FROM, Storage};
 pub use dense::DenseSolver;
 pub use error::LevelSetError;
 pub use evolution::{
-    EvolveSettings, FrameSchedule, LevelSetMorph, SolverKind, SparseInputs, evolve, evolve_sparse,
+    EvolveSettings, FLAT_STATE_NODES, FrameSchedule, LevelSetMorph, SolverKind, SparseInputs, evolve,
+    evolve_sparse,
 };
 pub use overlap::{Overlap, check_overlap, check_overlap_sparse};
 pub use placement::{Placement, Warp};
-pub use solver::{Curvature, Solver, StepParams, StepStats};
+pub use solver::{Curvature, FRONT_STEP, Solver, StepParams, StepStats};
 pub use sparse_field::SparseFieldSolver;
 pub use speed::{Response, SpeedGrid, SpeedSampler};
 

@@ -7,7 +7,9 @@ use crate::{BandFrame, SpeedGrid};
 /// Statistics of one solver iteration; distances in voxels.
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
 pub struct StepStats {
-    /// Time step used (eq. 24, and the sparse field's half-voxel limit).
+    /// Time step used ([`StepParams::front_step`] over the largest speed,
+    /// eq. 24's bound for a front step of ⅓, and the sparse field's
+    /// half-voxel limit).
     pub dt: f32,
     /// RMS change of the embedding at the surface nodes (voxels).
     pub rms_change: f32,
@@ -43,15 +45,31 @@ pub struct Curvature {
 pub struct StepParams {
     /// Upper bound on the time step besides the stability bounds.
     pub max_time_step: f32,
+    /// How far (voxels) the fastest front may move in one iteration: the
+    /// time step is at most `front_step / max |γ|` (see
+    /// [`FRONT_STEP`]).
+    pub front_step: f32,
     /// Optional mean-curvature regularization.
     pub curvature: Option<Curvature>,
 }
 
 impl Default for StepParams {
     fn default() -> Self {
-        Self { max_time_step: 1.0, curvature: None }
+        Self { max_time_step: 1.0, front_step: FRONT_STEP, curvature: None }
     }
 }
+
+/// The default distance (voxels) the fastest front moves per iteration:
+/// Breen & Whitaker's eq. 24, `Δt ≤ 1 / (3 max |γ|)`, a third of a voxel.
+/// The up-wind scheme's own stability (CFL) bound is
+/// `Δt · max |γ| · (|n_x| + |n_y| + |n_z|) ≤ 1`, at worst `1/√3 ≈ 0.58`
+/// voxel, and the sparse field moves no active value by more than half a
+/// voxel per iteration anyway, so up to ½ is allowed
+/// ([`StepParams::front_step`]): the same converged surface in about a
+/// quarter fewer iterations, but the in-between frames, placed by
+/// iteration (`round(t · I)`), then depend more on when the stopping test
+/// fires, since the tail of small changes is a larger share of the run.
+pub const FRONT_STEP: f32 = 1.0 / 3.0;
 
 /// The rate `∂φ/∂t` at node `n` for target distance `d` (voxels, already
 /// sampled where the solver samples it) and the parts that bound the time
@@ -76,12 +94,14 @@ pub(crate) fn node_rate(
     }
 }
 
-/// The largest stable time step: eq. 24 for the distance term (largest
-/// speed `max_speed`), `1/(6w)` for the curvature term, and `max_dt`.
+/// The largest stable time step: the fastest front moving
+/// `params.front_step` voxels for the distance term (largest speed
+/// `max_speed`; eq. 24 with `front_step = 1/3`), `1/(6w)` for the
+/// curvature term, and `params.max_time_step`.
 pub(crate) fn stable_time_step(max_speed: f32, params: &StepParams) -> f32 {
     let mut dt = params.max_time_step;
     if max_speed > 0.0 {
-        dt = dt.min(1.0 / (3.0 * max_speed));
+        dt = dt.min(params.front_step / max_speed);
     }
     if let Some(c) = params.curvature.filter(|c| c.weight > 0.0) {
         dt = dt.min(1.0 / (6.0 * c.weight));

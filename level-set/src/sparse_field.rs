@@ -14,7 +14,8 @@
 //!    speed is interpolated there ([`SpeedGrid`]: trilinear plus its
 //!    limited second-order correction); the up-wind change (eq. 23) is
 //!    computed.
-//! 2. The changes are applied with one time step (eq. 24, and at most half a
+//! 2. The changes are applied with one time step (the fastest front moving
+//!    [`StepParams::front_step`] voxels, ⅓ by eq. 24, and at most half a
 //!    voxel of change); active points leaving `[−0.55, 0.55]` go on the
 //!    status lists `S±1`. An active point does not leave upwards while a
 //!    neighbour leaves downwards in the same iteration (and vice versa),
@@ -679,20 +680,23 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> SparseFieldSolver<U, S> {
     /// sorted and merged in, duplicates dropped): the next iteration then
     /// sweeps memory in order instead of jumping about the grid, which is
     /// what keeps the cost per point flat once the grid outgrows the cache.
+    /// The five lists are compacted in parallel (each on its own).
     fn compact(&mut self) {
         let status = &self.status;
-        for layer in -LAYERS..=LAYERS {
-            let list = &mut self.layers[slot(layer)];
-            let keep = |n: &u32| status[*n as usize] == layer;
-            let split = self.sorted[slot(layer)].min(list.len());
-            let mut fresh: Vec<u32> = list.drain(split..).filter(keep).collect();
-            list.retain(keep);
-            if !fresh.is_empty() {
-                fresh.sort_unstable();
-                *list = merge_sorted(list, &fresh);
-            }
-            self.sorted[slot(layer)] = list.len();
-        }
+        self.layers.par_iter_mut().zip(self.sorted.par_iter_mut()).enumerate().for_each(
+            |(i, (list, sorted))| {
+                let layer = i as i8 - LAYERS;
+                let keep = |n: &u32| status[*n as usize] == layer;
+                let split = (*sorted).min(list.len());
+                let mut fresh: Vec<u32> = list.drain(split..).filter(keep).collect();
+                list.retain(keep);
+                if !fresh.is_empty() {
+                    fresh.sort_unstable();
+                    *list = merge_sorted(list, &fresh);
+                }
+                *sorted = list.len();
+            },
+        );
     }
 }
 

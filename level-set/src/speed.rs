@@ -374,14 +374,6 @@ impl SpeedReader<'_> {
         }
     }
 
-    /// Nodes per axis.
-    fn dims(&self) -> UVec3 {
-        match self {
-            SpeedReader::Dense(grid) => grid.dims(),
-            SpeedReader::Lazy { dims, .. } => *dims,
-        }
-    }
-
     /// Speed at voxel coordinates `g` (clamped to the grid): trilinear
     /// interpolation of the node speeds, corrected by its second-order
     /// error term.
@@ -405,44 +397,55 @@ impl SpeedReader<'_> {
     /// sits on the jump flip across it every iteration, a period-2
     /// oscillation that never settles (seen on an under-resolved target).
     pub(crate) fn at_voxel(&self, g: Vec3) -> f32 {
-        let dims = self.dims();
-        let v = |n: usize| self.node(n);
-        let strides = [1usize, dims.x as usize, (dims.x * dims.y) as usize];
-        let g = g.clamp(Vec3::ZERO, (dims - UVec3::ONE).as_vec3());
-        // Solver lattices have at least 3 nodes per axis.
-        let base = g.floor().min((dims - UVec3::splat(2)).as_vec3());
-        let t = g - base;
-        let b = base.as_uvec3();
-        let corner = b.x as usize + b.y as usize * strides[1] + b.z as usize * strides[2];
-        let trilinear = trilinear_blend(|i, j, k| v(corner + i + j * strides[1] + k * strides[2]), t);
-        let mut correction = 0.0;
-        for axis in 0..3 {
-            if b[axis] == 0 || b[axis] + 2 >= dims[axis] {
-                continue;
+        // One dispatch per sample rather than per node read.
+        match self {
+            SpeedReader::Dense(grid) => {
+                let data = grid.data();
+                corrected_trilinear(grid.dims(), g, |n| data[n])
             }
-            let s = strides[axis];
-            let (p, q) = ((axis + 1) % 3, (axis + 2) % 3);
-            // The four cell edges along `axis`, weighted bilinearly across it.
-            let mut curvature = 0.0;
-            for (j, wj) in [(0, 1.0 - t[p]), (1, t[p])] {
-                for (k, wk) in [(0, 1.0 - t[q]), (1, t[q])] {
-                    let n = corner + j * strides[p] + k * strides[q];
-                    let (before, first, second, after) = (v(n - s), v(n), v(n + s), v(n + 2 * s));
-                    let (d_first, d_second) = (before - 2.0 * first + second, first - 2.0 * second + after);
-                    let limited = if d_first * d_second <= 0.0 {
-                        0.0
-                    } else if d_first.abs() < d_second.abs() {
-                        d_first
-                    } else {
-                        d_second
-                    };
-                    curvature += wj * wk * limited;
-                }
-            }
-            correction += t[axis] * (1.0 - t[axis]) * curvature;
+            SpeedReader::Lazy { dims, .. } => corrected_trilinear(*dims, g, |n| self.node(n)),
         }
-        trilinear - 0.5 * correction
     }
+}
+
+/// [`SpeedReader::at_voxel`] of the node speeds `v` (voxel units, by linear
+/// node index) on a lattice of `dims` nodes (at least 3 per axis).
+fn corrected_trilinear(dims: UVec3, g: Vec3, v: impl Fn(usize) -> f32) -> f32 {
+    let strides = [1usize, dims.x as usize, (dims.x * dims.y) as usize];
+    let g = g.clamp(Vec3::ZERO, (dims - UVec3::ONE).as_vec3());
+    // Solver lattices have at least 3 nodes per axis.
+    let base = g.floor().min((dims - UVec3::splat(2)).as_vec3());
+    let t = g - base;
+    let b = base.as_uvec3();
+    let corner = b.x as usize + b.y as usize * strides[1] + b.z as usize * strides[2];
+    let trilinear = trilinear_blend(|i, j, k| v(corner + i + j * strides[1] + k * strides[2]), t);
+    let mut correction = 0.0;
+    for axis in 0..3 {
+        if b[axis] == 0 || b[axis] + 2 >= dims[axis] {
+            continue;
+        }
+        let s = strides[axis];
+        let (p, q) = ((axis + 1) % 3, (axis + 2) % 3);
+        // The four cell edges along `axis`, weighted bilinearly across it.
+        let mut curvature = 0.0;
+        for (j, wj) in [(0, 1.0 - t[p]), (1, t[p])] {
+            for (k, wk) in [(0, 1.0 - t[q]), (1, t[q])] {
+                let n = corner + j * strides[p] + k * strides[q];
+                let (before, first, second, after) = (v(n - s), v(n), v(n + s), v(n + 2 * s));
+                let (d_first, d_second) = (before - 2.0 * first + second, first - 2.0 * second + after);
+                let limited = if d_first * d_second <= 0.0 {
+                    0.0
+                } else if d_first.abs() < d_second.abs() {
+                    d_first
+                } else {
+                    d_second
+                };
+                curvature += wj * wk * limited;
+            }
+        }
+        correction += t[axis] * (1.0 - t[axis]) * curvature;
+    }
+    trilinear - 0.5 * correction
 }
 
 #[cfg(test)]
