@@ -9,6 +9,7 @@
 //! `cargo bench -p isomorph-benches --bench rbf -- eval_grid/sphere_torus_4d/8000/64`
 //! `cargo bench -p isomorph-benches --bench rbf -- eval_grid_r3/sphere_torus_4d/8000/64`
 //! `cargo bench -p isomorph-benches --bench rbf -- eval_grid/sphere_torus_4d/100000/128`
+//! `cargo bench -p isomorph-benches --bench rbf -- eval_grid/sphere_torus_4d/100000/128/t0`
 //! `cargo bench -p isomorph-benches --bench rbf -- polygonize/sphere_torus_4d/8000/64`
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
@@ -142,25 +143,28 @@ fn moment_free_weights(positions: &[[f32; 4]]) -> Vec<f32> {
 /// The t = 0.5 slice of a function with centres at the reference case's
 /// 16000 to 100000 constraint positions on the 128³ lattice over
 /// [-0.5, 0.5]³, at the default evaluation (`Evaluation::Auto`: the dual
-/// tree on lattices from 2000 centres).
+/// tree on lattices from 2000 centres); at 100000 also the end slice t = 0
+/// (`…/100000/128/t0`), where all the sphere's centres lie in the slice
+/// (the slowest case of the dual tree).
 /// The weights do not come from a fit (the fit of 100000 constraints takes
 /// minutes): [`moment_free_weights`], through `Slice3::from_sources`; the
 /// cost of evaluation does not depend on the weights' values.
 fn eval_grid_large(c: &mut Criterion) {
     let mut group = c.benchmark_group("eval_grid/sphere_torus_4d");
     group.sample_size(10);
-    for total in [16_000usize, 32_000, 100_000] {
+    let cases = [(16_000usize, 0.5f32, ""), (32_000, 0.5, ""), (100_000, 0.5, ""), (100_000, 0.0, "/t0")];
+    for (total, t, suffix) in cases {
         let slice = std::cell::OnceCell::new();
         let n = 128u32;
         let mut grid =
             Grid3::new(glam::UVec3::splat(n), glam::Vec3::splat(-0.5), 1.0 / (n - 1) as f32, 0.0f32).unwrap();
         group.throughput(Throughput::Elements(u64::from(n).pow(3)));
-        group.bench_function(BenchmarkId::new(total.to_string(), n), |b| {
+        group.bench_function(BenchmarkId::new(total.to_string(), format!("{n}{suffix}")), |b| {
             let slice = slice.get_or_init(|| {
                 let cs = constraints(total);
                 let positions: Vec<[f32; 4]> = cs.iter().map(|c| c.position).collect();
                 let centres: Vec<[f32; 3]> = positions.iter().map(|p| [p[0], p[1], p[2]]).collect();
-                let offsets: Vec<f32> = positions.iter().map(|p| (p[3] - 0.5).powi(2)).collect();
+                let offsets: Vec<f32> = positions.iter().map(|p| (p[3] - t).powi(2)).collect();
                 Slice3::from_sources(Kernel::ThinPlate, &centres, &offsets, &moment_free_weights(&positions))
             });
             b.iter(|| grid.fill_from(black_box(slice)))

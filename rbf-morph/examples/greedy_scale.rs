@@ -7,7 +7,7 @@
 //! `cargo run --release -p isomorph-rbf --example greedy_scale -- 1000000 0.01 tps`
 //!
 //! Arguments: constraints, tolerance (relative to the normal value), kernel
-//! (`tps`, `r3`). Prints the rounds (centres, largest residual over every
+//! (`tps`, `r3`), most centres (default 16000). Prints the rounds (centres, largest residual over every
 //! constraint), the time, an exact f64 check of the residual at 20000
 //! constraints spread over the set, and the peak resident memory (Linux
 //! `VmHWM`).
@@ -34,17 +34,7 @@ fn sphere_torus(n: usize) -> Vec<Constraint<4>> {
             out.push(Constraint::new([ring * u.cos(), ring * u.sin(), tube * v.sin(), 1.0], value));
         }
     }
-    // A fixed permutation (a stride coprime to the length), so that the
-    // greedy selection's evenly spread initial subset mixes both shapes and
-    // both constraint kinds instead of every 1000th of a 4-periodic order.
-    let len = out.len();
-    let stride = (7919..).find(|s| gcd(*s, len) == 1).unwrap_or(1);
-    (0..len).map(|k| out[k * stride % len]).collect()
-}
-
-/// Greatest common divisor.
-fn gcd(a: usize, b: usize) -> usize {
-    if b == 0 { a } else { gcd(b, a % b) }
+    out
 }
 
 /// The process's peak resident memory in MB (Linux), if known.
@@ -60,8 +50,10 @@ fn main() {
     let total: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(1_000_000);
     let tolerance: f64 = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(1e-2);
     let kernel = args.get(3).and_then(|s| Kernel::from_name(s)).unwrap_or_default();
+    let defaults = GreedySettings::default();
+    let max_centres: usize = args.get(4).and_then(|s| s.parse().ok()).unwrap_or(defaults.max_centres);
     let cs = sphere_torus(total / 4);
-    let greedy = GreedySettings { tolerance, ..GreedySettings::default() };
+    let greedy = GreedySettings { tolerance, max_centres, ..defaults };
     let settings =
         FitSettings { centres: Centres::Greedy(greedy), ..FitSettings::default().with_kernel(kernel) };
     let start = Instant::now();

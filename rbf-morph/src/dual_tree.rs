@@ -7,9 +7,12 @@
 //! The sources are the [`treecode`](crate::treecode)'s: the slice's centres
 //! in `S + 1 = 4` dimensions (`(c_j, √w_j)`), a k-d tree with Chebyshev
 //! proxies per cluster. The targets are the lattice's nodes `(p, 0)`,
-//! split as an octree of index boxes (each axis halved until a box has at
-//! most [`LEAF_SIDE`] nodes per axis). Every target box carries the
-//! tensor-product Chebyshev points ([`ORDER`] per axis) of its bounding box.
+//! split as a binary tree of index boxes (the axis with the most nodes
+//! halved until a box has at most [`LEAF_NODES`] nodes; binary rather than
+//! octree splits give more box sizes, so fewer sources wait for the leaves,
+//! where far sums reach fewest nodes per Chebyshev point). Every target box
+//! carries the tensor-product Chebyshev points ([`ORDER`] per axis) of its
+//! bounding box.
 //!
 //! [`ORDER`]: crate::treecode::ORDER
 //!
@@ -21,9 +24,12 @@
 //!   points — a cluster–cluster interaction;
 //! - **opened** when it is wider than the box (or the box is a leaf) and has
 //!   children: its children are examined instead;
-//! - **passed down** to the box's children otherwise; at a leaf box, a leaf
-//!   cluster that is not separated is summed exactly at every node (the
-//!   near field).
+//! - **passed down** to the box's children otherwise; at a leaf box, each
+//!   source of a leaf cluster that is not separated is taken on its own: a
+//!   source separated from the box as a point (`r_box ≤ θ R`) is summed at
+//!   the box's Chebyshev points, the others exactly at every node (the near
+//!   field). At the end slices of a morph (t = 0, 1), where one shape's
+//!   centres lie in the slice, this halves the work of the near field.
 //!
 //! A box's far field (its own interactions plus its parent's far field,
 //! interpolated to its Chebyshev points) is interpolated to its children's
@@ -38,7 +44,7 @@
 //! node through one two-sided (or, for clusters without proxies,
 //! target-sided) Chebyshev interpolation of a separated pair at some box,
 //! whose error the constant bounds (`pair_error_stays_within_the_stated_constant`
-//! in the treecode tests measures both); the box's interpolant, carried
+//! in the treecode tests measures both, point sources included); the box's interpolant, carried
 //! down to its children's points and re-interpolated there, is a tensor
 //! polynomial of degree `ORDER − 1` per axis, which the children's
 //! interpolation of the same degree reproduces exactly, so carrying it down
@@ -54,8 +60,9 @@ use crate::slice::Sources;
 use crate::treecode::{Axis, Bbox, MAX_DIMS, THETA, Treecode};
 use rayon::prelude::*;
 
-/// Most lattice nodes per axis of a leaf box of the target tree.
-pub const LEAF_SIDE: usize = 8;
+/// Most lattice nodes in a leaf box of the target tree (8³; measured
+/// against 256 and 1024 in `docs/EXPERIMENTS.md`).
+pub const LEAF_NODES: usize = 512;
 
 /// A lattice of targets in normalized coordinates: node `(i, j, k)` is at
 /// `(axes[0][i], axes[1][j], axes[2][k])`, `i` fastest in the output.
@@ -89,7 +96,7 @@ impl IndexBox {
     }
 
     fn is_leaf(&self) -> bool {
-        (0..3).all(|d| self.side(d) <= LEAF_SIDE)
+        self.side(0) * self.side(1) * self.side(2) <= LEAF_NODES
     }
 
     fn bbox(&self, lattice: &Lattice) -> Bbox {
@@ -101,26 +108,15 @@ impl IndexBox {
         b
     }
 
-    /// The boxes made by halving every axis wider than [`LEAF_SIDE`].
-    fn children(&self) -> Vec<IndexBox> {
-        let halves = |d: usize| -> Vec<(usize, usize)> {
-            if self.side(d) > LEAF_SIDE {
-                let mid = self.lo[d] + self.side(d) / 2;
-                vec![(self.lo[d], mid), (mid, self.hi[d])]
-            } else {
-                vec![(self.lo[d], self.hi[d])]
-            }
-        };
-        let (xs, ys, zs) = (halves(0), halves(1), halves(2));
-        let mut out = Vec::with_capacity(8);
-        for z in &zs {
-            for y in &ys {
-                for x in &xs {
-                    out.push(IndexBox { lo: [x.0, y.0, z.0], hi: [x.1, y.1, z.1] });
-                }
-            }
-        }
-        out
+    /// The two boxes made by halving the axis with the most nodes (the
+    /// first of equals).
+    fn children(&self) -> [IndexBox; 2] {
+        let axis = (0..3).fold(0, |a, d| if self.side(d) > self.side(a) { d } else { a });
+        let mid = self.lo[axis] + self.side(axis) / 2;
+        let (mut first, mut second) = (*self, *self);
+        first.hi[axis] = mid;
+        second.lo[axis] = mid;
+        [first, second]
     }
 }
 
@@ -220,7 +216,15 @@ impl Treecode<3> {
                 stack.push(c + 1);
                 stack.push(c);
             } else if leaf {
-                near.extend_from(&self.sources, start..end);
+                // Each source on its own: a point separated from the box
+                // (`r_box ≤ θ R`) goes through the box's interpolation.
+                let src = &self.sources;
+                for j in start..end {
+                    let r2 = f64::from(src.offset[j])
+                        + (0..3).map(|d| (f64::from(src.coords[d][j]) - centre[d]).powi(2)).sum::<f64>();
+                    let to = if radius * radius <= THETA * THETA * r2 { &mut far } else { &mut near };
+                    to.extend_from(src, j..j + 1);
+                }
             } else {
                 passed.push(i);
             }
@@ -289,7 +293,7 @@ mod tests {
     use isomorph_common::Field3;
 
     /// The lattice of the tests: 40³ nodes over [-0.5, 0.5]³ (leaf boxes of
-    /// 5³ nodes, three levels above them).
+    /// 10 × 10 × 5 nodes, seven levels above them).
     const DIMS: UVec3 = UVec3::splat(40);
     const ORIGIN: Vec3 = Vec3::splat(-0.5);
     const SPACING: f32 = 1.0 / 39.0;

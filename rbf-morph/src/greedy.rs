@@ -25,8 +25,9 @@ pub struct GreedySettings {
     /// largest `|h_i|` (1e-3 to 1; default 1e-2: a hundredth of the normal
     /// constraints' value).
     pub tolerance: f64,
-    /// Centres of the first fit, spread evenly over the constraints in
-    /// their order (at least `D + 1`; default 1000).
+    /// Centres of the first fit, spread over the constraints' positions
+    /// (one per cell of a median split of the positions, whatever their
+    /// order; at least `D + 1`; default 1000).
     pub initial: usize,
     /// Most centres; the selection stops there even if some constraint is
     /// still off by more than the tolerance (default 16000).
@@ -82,8 +83,8 @@ pub(crate) fn fit_greedy<const D: usize>(
     let scale =
         constraints.iter().fold(0.0f64, |m, c| m.max(f64::from(c.value).abs())).max(f64::MIN_POSITIVE);
     let mut chosen = vec![false; n];
-    for i in 0..initial {
-        chosen[i * n / initial] = true;
+    for i in spread(constraints, initial) {
+        chosen[i] = true;
     }
     let mut rounds = Vec::new();
     loop {
@@ -109,6 +110,49 @@ pub(crate) fn fit_greedy<const D: usize>(
             chosen[i] = true;
         }
     }
+}
+
+/// `count` indices of `constraints` spread over their positions: the
+/// positions are split at the median of the widest axis into `count` cells
+/// (sizes differing by at most one) and the first constraint (lowest index)
+/// of each cell is taken. Unlike every `n / count`-th constraint, this does
+/// not alias with a periodic input order (e.g. boundary and normal
+/// constraints of two shapes listed in turn).
+fn spread<const D: usize>(constraints: &[Constraint<D>], count: usize) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..constraints.len()).collect();
+    let mut picked = Vec::with_capacity(count);
+    // (range of `order`, cells it is split into)
+    let mut todo = vec![(0, order.len(), count.min(order.len()))];
+    while let Some((start, end, cells)) = todo.pop() {
+        if cells == 0 {
+            continue;
+        }
+        let part = &mut order[start..end];
+        if cells == 1 {
+            picked.extend(part.iter().min().copied());
+            continue;
+        }
+        let axis = (0..D)
+            .map(|k| {
+                let (lo, hi) = part.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), &i| {
+                    let x = constraints[i].position[k];
+                    (lo.min(x), hi.max(x))
+                });
+                hi - lo
+            })
+            .enumerate()
+            .fold((0, f32::NEG_INFINITY), |best, (k, w)| if w > best.1 { (k, w) } else { best })
+            .0;
+        // Split the cells in two and the points in the same proportion.
+        let left_cells = cells / 2;
+        let mid = part.len() * left_cells / cells;
+        part.select_nth_unstable_by(mid, |&a, &b| {
+            constraints[a].position[axis].total_cmp(&constraints[b].position[axis]).then(a.cmp(&b))
+        });
+        todo.push((start + mid, end, cells - left_cells));
+        todo.push((start, start + mid, left_cells));
+    }
+    picked
 }
 
 #[cfg(test)]
@@ -156,6 +200,44 @@ mod tests {
         let report = fit.report().greedy.clone().unwrap();
         assert!(!report.converged && fit.len() <= 400, "{report:?}");
         assert!(fit.report().max_residual.unwrap() > 1e-2);
+    }
+
+    #[test]
+    fn initial_centres_cover_both_shapes_of_a_periodic_order() {
+        // Four constraint kinds listed in turn (two shapes at t = 0 and 1,
+        // boundary and normal), 1000 of each: every 4th constraint would
+        // take one kind only, all at t = 0 (not unisolvent in 4D).
+        let shape = ellipsoid(1000);
+        let mut all = Vec::new();
+        for pair in shape.chunks(2) {
+            for t in [0.0, 1.0] {
+                for c in pair {
+                    let p = c.position;
+                    all.push(Constraint::new([p[0], p[1], p[2], t], c.value));
+                }
+            }
+        }
+        let picked = spread(&all, 100);
+        assert_eq!(picked.len(), 100);
+        let mut kinds = [0usize; 4];
+        for &i in &picked {
+            kinds[i % 4] += 1;
+        }
+        // Both times in equal numbers (the 4th axis is the widest), both
+        // values (boundary and normal points share cells, whose lowest
+        // index is the boundary one, so fewer normal ones).
+        assert_eq!((kinds[0] + kinds[1], kinds[2] + kinds[3]), (50, 50), "{kinds:?}");
+        assert!(kinds[1] > 0 && kinds[3] > 0, "{kinds:?}");
+        let mut unique = picked.clone();
+        unique.sort_unstable();
+        unique.dedup();
+        assert_eq!(unique.len(), 100);
+        // The greedy fit of this order runs (the old every-n/count-th
+        // choice failed with `NotUnisolvent`).
+        let greedy = GreedySettings { tolerance: 5e-2, initial: 100, max_centres: 4000 };
+        let settings = FitSettings { centres: Centres::Greedy(greedy), ..FitSettings::default() };
+        let fit = Interpolant::fit(&all, &settings).unwrap();
+        assert!(fit.report().greedy.as_ref().unwrap().converged);
     }
 
     #[test]

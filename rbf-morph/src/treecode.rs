@@ -484,18 +484,22 @@ pub(crate) mod tests {
     /// The largest two- or one-sided interpolation error of one unit source over
     /// random separated configurations at the acceptance limit (`R = 1`,
     /// `r_source + r_target = θ`): 4D sources (3 axes and the offset), 3D
-    /// targets, some axes flat.
+    /// targets, some axes flat, every fourth source a point (the dual
+    /// tree's leaves take single sources with `r_target = θ`).
     fn worst_pair_error(kernel: Kernel, seed: u64, samples: usize) -> f64 {
         let mut rng = Rng(seed);
         let mut worst = 0.0f64;
         let mut ab = Vec::new();
         let (mut bt, mut bs) = (Vec::new(), Vec::new());
-        for _ in 0..samples {
+        for sample in 0..samples {
             // Box shapes: random half-widths, each axis flat with chance 1/4.
             let mut half = |dims: usize| -> Point {
                 std::array::from_fn(|d| if d < dims && rng.next() > 0.25 { rng.next() } else { 0.0 })
             };
-            let (hs, ht) = (half(4), half(3));
+            let (mut hs, ht) = (half(4), half(3));
+            if sample % 4 == 3 {
+                hs = [0.0; MAX_DIMS];
+            }
             let norm = |h: &Point| h.iter().map(|x| x * x).sum::<f64>().sqrt();
             let (rs, rt) = (norm(&hs), norm(&ht));
             if rs + rt == 0.0 {
@@ -606,10 +610,12 @@ pub(crate) mod tests {
     #[test]
     fn treecode_agrees_with_direct_evaluation_within_the_bound() {
         for kernel in [Kernel::ThinPlate, Kernel::Cubic] {
-            for n in [300, 700] {
+            // t = 0 is not checked here: 1.8e-4 of the range measured with
+            // r² log r at 1200 centres (docs/EXPERIMENTS.md, not resolved).
+            for (n, t) in [(300, 0.5), (700, 0.5)] {
                 let cs = sphere_torus(n);
                 let f = Interpolant::fit(&cs, &FitSettings::default().with_kernel(kernel)).unwrap();
-                let eval = f.slice_eval::<3>(&[0.5]).unwrap();
+                let eval = f.slice_eval::<3>(&[t]).unwrap();
                 let points = probes(&eval, 7 + n as u64);
                 let tree = Treecode::new(&eval.sources, kernel);
                 assert!(tree.proxies.len() > 0, "no cluster has proxies");
@@ -635,7 +641,7 @@ pub(crate) mod tests {
                 let range = direct.iter().fold(f64::NEG_INFINITY, |m, v| m.max(*v))
                     - direct.iter().fold(f64::INFINITY, |m, v| m.min(*v));
                 println!(
-                    "{kernel:?} {} centres: max |tree − direct| {worst:e}, {:e} of the range, bound {bound:e}, Σ|λ| {weight_sum:e}",
+                    "{kernel:?} {} centres, t = {t}: max |tree − direct| {worst:e}, {:e} of the range, bound {bound:e}, Σ|λ| {weight_sum:e}",
                     src.len(),
                     worst / range
                 );
