@@ -120,6 +120,8 @@ fn tspline_knobs_reach_the_settings_and_bad_values_name_their_range() {
         "0.01",
         "--stall-steps",
         "20",
+        "--far-field-weight",
+        "10",
         "--no-projection-frames",
     ];
     let out = dir.join("knobs");
@@ -159,6 +161,8 @@ fn tspline_knobs_reach_the_settings_and_bad_values_name_their_range() {
     assert!(err.contains("sample_spacing = 0") && err.contains("1e-4..=2"), "{err}");
     let err = run(&["--distance-weight=-1"]);
     assert!(err.contains("distance_weight = -1"), "{err}");
+    let err = run(&["--far-field-weight=-1"]);
+    assert!(err.contains("far_field_weight = -1"), "{err}");
     let err = run(&["--stall-steps", "0"]);
     assert!(err.contains("stall_steps = 0") && err.contains(">= 1"), "{err}");
     // The knobs belong to the T-spline method.
