@@ -7,7 +7,8 @@
 //! `cargo run --release -p isomorph-rbf --example greedy_scale -- 1000000 0.01 tps`
 //!
 //! Arguments: constraints, tolerance (relative to the normal value), kernel
-//! (`tps`, `r3`), most centres (default 16000). Prints the rounds (centres, largest residual over every
+//! (`tps`, `r3`), most centres (default 16000), centres of the first round
+//! (default 1000). Prints the rounds (centres, largest residual over every
 //! constraint), the time, an exact f64 check of the residual at 20000
 //! constraints spread over the set, and the peak resident memory (Linux
 //! `VmHWM`).
@@ -53,7 +54,8 @@ fn main() {
     let defaults = GreedySettings::default();
     let max_centres: usize = args.get(4).and_then(|s| s.parse().ok()).unwrap_or(defaults.max_centres);
     let cs = sphere_torus(total / 4);
-    let greedy = GreedySettings { tolerance, max_centres, ..defaults };
+    let initial: usize = args.get(5).and_then(|s| s.parse().ok()).unwrap_or(defaults.initial);
+    let greedy = GreedySettings { tolerance, max_centres, initial };
     let settings =
         FitSettings { centres: Centres::Greedy(greedy), ..FitSettings::default().with_kernel(kernel) };
     let start = Instant::now();

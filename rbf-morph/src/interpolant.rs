@@ -47,7 +47,7 @@ pub struct FitSettings {
     /// largest residual (`O(n²)`, cheap next to the `O(n³)` solve). Default on.
     pub check_residual: bool,
     /// How the system is solved (default [`Solver::Auto`]: the hierarchical
-    /// solver from 16000 constraints, below that the slab solver for two
+    /// solver from 4000 constraints, below that the slab solver for two
     /// separated groups of constraints, the dense Cholesky otherwise).
     pub solver: Solver,
     /// Which constraints become centres (default [`Centres::All`]: exact
@@ -156,8 +156,9 @@ impl<const D: usize> Interpolant<D> {
         match settings.centres {
             Centres::Greedy(greedy) if constraints.len() > greedy.initial => {
                 Self::check_input(constraints, settings)?;
-                let (mut fit, report) =
-                    fit_greedy(constraints, &greedy, |subset| Self::fit_all(subset, settings))?;
+                let (mut fit, report) = fit_greedy(constraints, &greedy, |subset, iterative| {
+                    Self::fit_solved(subset, settings, iterative)
+                })?;
                 fit.report.max_residual = report.rounds.last().map(|r| r.max_residual);
                 fit.report.greedy = Some(report);
                 Ok(fit)

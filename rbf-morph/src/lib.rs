@@ -38,8 +38,10 @@
 //!   conjugate gradients, run in f64 to the backward error of a direct
 //!   solve (4 iterations with `r² log r`, 8 with `r³` on the reference case).
 //!   That is about a quarter of the dense factorization's flops; if it does
-//!   not converge the dense Cholesky runs. From 16000 constraints with the
-//!   thin-plate kernel [`Solver::Auto`] uses the **hierarchical solver**
+//!   not converge the dense Cholesky runs. From [`HIERARCHICAL_MIN`] = 4000
+//!   constraints (both kernels; measured: there it takes 1.7× less CPU
+//!   and half the memory of the slab solver, at 3000 as much CPU, at 2000
+//!   more) [`Solver::Auto`] uses the **hierarchical solver**
 //!   ([`Solver::Hierarchical`], [`Factorization::Hierarchical`]) instead:
 //!   a kd-type cluster tree over the `N + 1`-dimensional constraint points,
 //!   the kernel matrix as an H-matrix (strong admissibility
@@ -74,29 +76,29 @@
 //!   the fitted function agrees with the dense solve to within 1e-6 of its
 //!   range at probe points in and around the constraints (both kernels;
 //!   tested at 3000 constraints, and at 8000 in a release-only test).
-//!   `r³` is not chosen by [`Solver::Auto`]: its crossover with the slab
-//!   solver was not measured; select it with [`Solver::Hierarchical`].
 //!
-//!   Scaling on the reference case (sphere → torus in 4D; the `fit_scale`
-//!   example: `cargo run --release -p isomorph-rbf --example fit_scale --
-//!   N KERNEL hierarchical`; process CPU time from `/usr/bin/time`, taken on
-//!   a 2-core machine shared with other jobs, load average about 20, so
-//!   wall times were several times these; peak resident memory of the whole
-//!   process):
+//!   Scaling on the reference case (sphere → torus in 4D, boundary and
+//!   inward normal constraints; the `fit_scale` example: `cargo run
+//!   --release -p isomorph-rbf --example fit_scale -- N KERNEL
+//!   hierarchical`; process user CPU and peak resident memory from
+//!   `/usr/bin/time`, including the constraints' construction; on a
+//!   2-core machine shared with other jobs at load 12–15, so wall times
+//!   were 2.5–5× these CPU times):
 //!
-//!   | constraints | kernel | GMRES iterations | CPU (user) | peak memory |
-//!   |---|---|---|---|---|
-//!   | 8000 | `r² log r` | 13 | 1.4 s | 180 MB |
-//!   | 16000 | `r² log r` | 14 | 2.8 s | 237 MB |
-//!   | 32000 | `r² log r` | 15 | 5.9 s | 478 MB |
-//!   | 100000 | `r² log r` | 19 | 29 s | 1.78 GB |
-//!   | 8000 | `r³` | 22 | 1.7 s | 176 MB |
-//!   | 16000 | `r³` | 28 | 3.7 s | 238 MB |
-//!   | 32000 | `r³` | 26 | 6.7 s | 484 MB |
+//!   | constraints | `r² log r`: GMRES | CPU | peak memory | `r³`: GMRES | CPU | peak memory |
+//!   |---|---|---|---|---|---|---|
+//!   | 4000 | 11 | 0.44 s | 80 MB | 19 | 0.56 s | 81 MB |
+//!   | 8000 | 13 | 1.00 s | 128 MB | 21 | 1.17 s | 129 MB |
+//!   | 16000 | 14 | 2.41 s | 236 MB | 28 | 3.60 s | 238 MB |
+//!   | 32000 | 15 | 5.55 s | 478 MB | 26 | 6.69 s | 483 MB |
+//!   | 64000 | 26 | 15.9 s | 1.06 GB | 58 | 26.2 s | 1.08 GB |
+//!   | 100000 | 19 | 28.8 s | 1.78 GB | 46 | 35.0 s | 1.78 GB |
 //!
-//!   (8000 rows: an earlier build.) `r² log r` meets the issue-21 memory
-//!   and CPU targets at 100000 constraints (the wall time on a loaded
-//!   machine was longer). On real meshes
+//!   Time grows about as `n^1.3` and memory as `n log n`; 100000
+//!   constraints fit within 2 GB with either kernel (`r³`'s systems are
+//!   worse conditioned, `rcond` 5e-14 at 100000, so GMRES needs more
+//!   steps). The dense Cholesky would need 12 `n²` bytes (2.9 GiB at
+//!   16000, 75 GiB at 100000). On real meshes
 //!   (the bunny → Stanford dragon morph, `--points 10000` and `25000`:
 //!   23678 and 48572 constraints, `rcond` ~1e-9) the iteration takes 18
 //!   and 24 steps, 6.8 s and 20 s of CPU, 0.5 and 1.2 GB.
@@ -104,6 +106,13 @@
 //!   The reciprocal condition number
 //!   and the largest residual at the constraints are reported in
 //!   [`FitReport`].
+//! - **Greedy centres** ([`Centres::Greedy`], `--tolerance` on the command
+//!   line): FastRBF's "fit to an accuracy" through a growing subset of
+//!   the constraints, new centres taken worst first but spread over space
+//!   (the [`GreedySettings`] docs). On 1,000,000 constraints of the
+//!   reference case (the `greedy_scale` example, `r² log r`) a tolerance
+//!   of 1e-2 of the normal value is reached at every constraint with
+//!   36582 centres in 7 rounds: 102 s of CPU, 0.73 GB peak.
 //! - **Near-duplicate constraints** (shared mesh vertices) are merged when
 //!   their values agree and rejected with [`RbfError::NearDuplicate`] when
 //!   they contradict ([`DuplicatePolicy`]); **smoothing** `λ` is offered for
@@ -154,7 +163,7 @@
 //!
 //! # Cost
 //! The dense fit is `O(n³)` time and `12 n²` bytes for `n` constraints (the
-//! hierarchical one above 16000: see the solver choice above);
+//! hierarchical one, from 4000: see the solver choice above);
 //! evaluating a slice is `O(n)` per point directly, about `O(log n)` per
 //! point by the [`treecode`] and the [`dual_tree`], and frame meshes
 //! evaluate it only near the surface. At the defaults ([`RbfSettings`]: 400 points per shape,
@@ -219,7 +228,7 @@ pub use interpolant::{Constraint, FitReport, FitSettings, Interpolant};
 pub use kernel::Kernel;
 pub use reconstruct::{ContourSet, ContourSurface, Plane, ReconstructSettings};
 pub use slice::{Slice2, Slice3};
-pub use solve::{Factorization, Solver};
+pub use solve::{Factorization, HIERARCHICAL_MIN, Solver};
 pub use transform::{ContourMorph, RbfMorph, RbfSettings, TransformSettings, lift};
 pub use treecode::Evaluation;
 pub use warp::{

@@ -268,11 +268,10 @@ enum Factor {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[non_exhaustive]
 pub enum Solver {
-    /// The hierarchical solver from 16000 constraints with the thin-plate
-    /// kernel (the default; with `r³` its iteration count grows too fast above
-    /// that size, so `r³` keeps the paths below); otherwise the slab
-    /// solver ([`Factorization::SlabCg`]) when the constraints form two
-    /// groups well apart along some axis (the two shapes of a shape
+    /// The hierarchical solver from [`HIERARCHICAL_MIN`] (4000)
+    /// constraints, both kernels (the default); below that the slab solver
+    /// ([`Factorization::SlabCg`]) when the constraints form two groups
+    /// well apart along some axis (the two shapes of a shape
     /// transformation), with at least 1500 constraints; the dense Cholesky
     /// otherwise, and whenever an iterative solver does not converge.
     #[default]
@@ -280,17 +279,22 @@ pub enum Solver {
     /// Always the dense Cholesky (with its `LBLᵀ` fallback).
     Dense,
     /// The hierarchical solver ([`Factorization::Hierarchical`]), `O(n log n)`
-    /// memory and near-linear time; the default ([`Solver::Auto`]) for the
-    /// thin-plate kernel from 16000 constraints (where the dense matrix needs
-    /// 2 GiB). Falls back to the dense Cholesky when GMRES does
+    /// memory and near-linear time; the default ([`Solver::Auto`]) from
+    /// [`HIERARCHICAL_MIN`] constraints. Falls back to the dense Cholesky when GMRES does
     /// not converge, or fails with [`RbfError::NotConverged`] when the dense
     /// system would not fit in memory.
     Hierarchical,
 }
 
 /// Fewest constraints for which [`Solver::Auto`] uses the hierarchical
-/// solver (thin-plate kernel only).
-const HIERARCHICAL_MIN: usize = 16_000;
+/// solver (both kernels), where it wins in time and memory over the slab
+/// solver: on the sphere → torus reference case it takes as much CPU at
+/// 3000 constraints (0.38 s against 0.39 s of process user time, 67 MB
+/// against 110 MB), 1.7× less at 4000 (0.44 s against 0.73 s, 80 MB
+/// against 174 MB) and 3× less at 8000 (1.00 s against 3.14 s, 128 MB
+/// against 593 MB); at 2000 the slab solver is faster (0.17 s against
+/// 0.22 s). `docs/EXPERIMENTS.md` (issue 21, fourth session).
+pub const HIERARCHICAL_MIN: usize = 4000;
 
 /// The parallelism of the dense kernels (faer): a fixed task count rather
 /// than the pool's thread count, because faer's blocking, and with it the
@@ -313,7 +317,7 @@ pub(crate) fn solve_with(
 ) -> Result<Solution, RbfError> {
     let n = values.len();
     let iterative = match solver {
-        Solver::Auto => n >= HIERARCHICAL_MIN && kernel == Kernel::ThinPlate,
+        Solver::Auto => n >= HIERARCHICAL_MIN,
         Solver::Dense => false,
         Solver::Hierarchical => n > dim + 1,
     };

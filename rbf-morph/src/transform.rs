@@ -105,8 +105,8 @@ fn check_separation(settings: &TransformSettings) -> Result<(), RbfError> {
 }
 
 /// Most surface points per shape for an exact fit: `4 · points` = 100000
-/// constraints, which the hierarchical solver (`Solver::Auto` above 16000
-/// constraints) fits in a few GB.
+/// constraints, which the hierarchical solver (`Solver::Auto` from 4000
+/// constraints) fits in under 2 GB.
 const MOST_POINTS: u64 = 25_000;
 
 /// Most surface points per shape with greedy centres.
