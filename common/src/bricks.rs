@@ -454,7 +454,7 @@ impl Bricks<f32> {
 }
 
 /// The first node of `brick` among `bricks` bricks per axis.
-fn origin_of(bricks: UVec3, brick: usize) -> UVec3 {
+pub(crate) fn origin_of(bricks: UVec3, brick: usize) -> UVec3 {
     let (bx, by) = (bricks.x as usize, bricks.y as usize);
     UVec3::new((brick % bx) as u32, ((brick / bx) % by) as u32, (brick / (bx * by)) as u32) << SHIFT
 }

@@ -3,6 +3,7 @@
 //! the lattice search, the signs found once per region.
 
 use super::{LINK_MARGIN, MeshSdf, Sign};
+use crate::bricks::origin_of as brick_origin;
 use crate::mesh::bvh::{BlockNearest, BlockScratch, LATTICE_BLOCK, Lattice, LatticeHit};
 use crate::mesh::winding::WindingNumber;
 use crate::{BRICK, Bricks, GridError};
@@ -25,12 +26,6 @@ fn local(l: UVec3) -> usize {
 fn offset(n: usize) -> UVec3 {
     let n = n as u32;
     UVec3::new(n & (BRICK - 1), (n >> SHIFT) & (BRICK - 1), n >> (2 * SHIFT))
-}
-
-/// The first node of `brick` among `bricks` bricks per axis.
-fn brick_origin(bricks: UVec3, brick: usize) -> UVec3 {
-    let (bx, by) = (bricks.x as usize, bricks.y as usize);
-    UVec3::new((brick % bx) as u32, ((brick / bx) % by) as u32, (brick / (bx * by)) as u32) * BRICK
 }
 
 /// Union–find over `u32` ids (union by index, path halving).
