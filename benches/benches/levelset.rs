@@ -166,7 +166,8 @@ fn step(c: &mut Criterion) {
 /// peak bytes, the iterations, the stage times and the wall time of that
 /// one run. The lattice is the reference's (padding chosen so the box's
 /// long edges are [-0.5, 0.5]). Criterion then times polygonizing the last
-/// frame (plane by plane, no dense grid).
+/// frame (plane by plane, no dense grid). `ISOMORPH_BENCH_MAX_ITERATIONS`
+/// caps the iterations (the print then says "converged: false").
 fn memory(c: &mut Criterion) {
     let mut group = c.benchmark_group("memory/sphere_torus");
     group.sample_size(10);
@@ -201,16 +202,25 @@ fn memory(c: &mut Criterion) {
 /// The reference morph at `n³` through `LevelSetMorph::new` with sparse
 /// storage, keeping a frame every `keep_every` iterations.
 fn sparse_morph(n: u32, keep_every: usize) -> LevelSetMorph {
+    let defaults = LevelSetSettings::default();
     let settings = LevelSetSettings {
+        max_iterations: max_iterations().unwrap_or(defaults.max_iterations),
         resolution: n,
         // The union of the shapes' boxes is 0.84 across: 0.08 per side makes it [-0.5, 0.5].
         padding: 0.08 / 0.84,
         storage: Storage::Sparse,
         frames: FrameSchedule::EveryIterations(keep_every),
-        ..LevelSetSettings::default()
+        ..defaults
     };
     let (source, target) = (Solid::shape(Shape::sphere(0.3)), Solid::shape(Shape::torus(0.3, 0.12)));
     LevelSetMorph::new(&source, &target, &settings, &Control::new()).unwrap()
+}
+
+/// An iteration cap for [`sparse_morph`] from `ISOMORPH_BENCH_MAX_ITERATIONS`
+/// (e.g. to measure the memory of a 1024³ morph's setup and first
+/// iterations where the whole run would take hours); none when unset.
+fn max_iterations() -> Option<usize> {
+    std::env::var("ISOMORPH_BENCH_MAX_ITERATIONS").ok().and_then(|v| v.parse().ok())
 }
 
 /// The process's peak resident set (`VmHWM`, bytes; 0 where
@@ -261,10 +271,14 @@ fn cli(c: &mut Criterion) {
 /// (`far_field/MESH/exact/N`), exact within the band and closest-point fast
 /// marching beyond (`narrow_band/N`), and exact within the band with only
 /// the side elsewhere (`sign_only/N`, `Bricks::sample_band`, what sparse
-/// storage uses). The band is the sparse field's (`band_width`, 4 voxels);
-/// within it all three give the exact distance (the first two bitwise, the
-/// third up to the rounding of the batch queries), so they differ in time
-/// and memory only. The mesh is `data/bunny.ply`, or the file named by
+/// storage uses: each band brick one block of the lattice search, signs
+/// once per region), and the same band through single values
+/// (`sign_only_by_points/N`, `Bricks::sample_band_by_points`: a tree query
+/// and a winding number per band node, the sparse path before it used the
+/// lattice search). The band is the sparse field's (`band_width`, 4
+/// voxels); within it all four give the exact distance (the first three
+/// bitwise, the last up to the rounding of the batch queries), so they
+/// differ in time and memory only. The mesh is `data/bunny.ply`, or the file named by
 /// `ISOMORPH_BENCH_MESH` (e.g. the dragon, which must not be committed).
 fn far_field(c: &mut Criterion) {
     let mut group = c.benchmark_group("far_field");
@@ -297,6 +311,16 @@ fn far_field(c: &mut Criterion) {
             b.iter(|| {
                 let band =
                     Bricks::sample_band(&*sdf, dims, origin, h, SparseFieldSolver::band_width(h)).unwrap();
+                black_box(band.allocated())
+            })
+        });
+        group.bench_function(BenchmarkId::new(format!("{name}/sign_only_by_points"), n), |b| {
+            let (bounds, sdf, _) = mesh.get_or_insert_with(&mut load);
+            let (dims, origin, h) = lattice_for_box(bounds, n).unwrap();
+            b.iter(|| {
+                let band =
+                    Bricks::sample_band_by_points(&*sdf, dims, origin, h, SparseFieldSolver::band_width(h))
+                        .unwrap();
                 black_box(band.allocated())
             })
         });

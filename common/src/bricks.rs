@@ -326,12 +326,68 @@ impl<T: Copy + PartialEq> IndexMut<usize> for Bricks<T> {
     }
 }
 
+impl<T: Copy + PartialEq + Send + Sync> Bricks<T> {
+    /// Allocates the bricks `list` (ascending brick indices get ascending
+    /// slots), each filled with its background.
+    pub(crate) fn allocate_all(&mut self, list: &[usize]) {
+        self.data.reserve_exact(list.len() * BRICK_NODES);
+        self.owners.reserve_exact(list.len());
+        for &brick in list {
+            self.allocate(brick);
+        }
+    }
+
+    /// Calls `f(brick, values)` for every allocated brick, in parallel.
+    pub(crate) fn par_for_each_brick(&mut self, f: impl Fn(usize, &mut [T]) + Sync + Send) {
+        let Bricks { data, owners, .. } = self;
+        data.par_chunks_mut(BRICK_NODES).zip(owners.par_iter()).for_each(|(chunk, owner)| {
+            if let Some(brick) = owner {
+                f(*brick as usize, chunk);
+            }
+        });
+    }
+
+    /// The slot of allocated `brick` (its index among [`Bricks::brick_values`]'s
+    /// storage), `None` when it is not allocated.
+    pub(crate) fn slot_of(&self, brick: usize) -> Option<usize> {
+        self.is_allocated(brick).then(|| self.table[brick] as usize)
+    }
+
+    /// Number of slots (allocated or released).
+    pub(crate) fn slots(&self) -> usize {
+        self.owners.len()
+    }
+}
+
 impl Bricks<f32> {
     /// Samples the signed distance `field` (world units, positive inside)
     /// on the lattice of `dims` nodes at `origin` with `spacing`, only in
     /// the bricks that come within `band` (world units) of its zero set: a
     /// narrow band, and the side elsewhere (unallocated bricks read
     /// `±band`, their nodes being farther than that).
+    ///
+    /// The field chooses how ([`Field3::band_bricks`]): by default one value
+    /// per brick and one per band node ([`Bricks::sample_band_by_points`]);
+    /// a triangle mesh's distance ([`MeshSdf`](crate::sdf::MeshSdf)) solves
+    /// the band bricks as blocks of its lattice search and finds the signs
+    /// once per region. Either way the nodes within `band` of the surface
+    /// get the values a dense sample of `field` gets, and every other node
+    /// the right side.
+    ///
+    /// # Errors
+    /// As [`Bricks::new`].
+    pub fn sample_band<F: Field3 + ?Sized>(
+        field: &F,
+        dims: UVec3,
+        origin: Vec3,
+        spacing: f32,
+        band: f32,
+    ) -> Result<Self, GridError> {
+        field.band_bricks(dims, origin, spacing, band)
+    }
+
+    /// [`Bricks::sample_band`] through single values: the default of
+    /// [`Field3::band_bricks`], for any field.
     ///
     /// Each brick is judged by one value at its centre: with `|d|` over
     /// `band` plus the brick's half diagonal, no node of the brick lies
@@ -344,7 +400,7 @@ impl Bricks<f32> {
     ///
     /// # Errors
     /// As [`Bricks::new`].
-    pub fn sample_band<F: Field3 + ?Sized>(
+    pub fn sample_band_by_points<F: Field3 + ?Sized>(
         field: &F,
         dims: UVec3,
         origin: Vec3,
@@ -398,7 +454,7 @@ impl Bricks<f32> {
 }
 
 /// The first node of `brick` among `bricks` bricks per axis.
-fn origin_of(bricks: UVec3, brick: usize) -> UVec3 {
+pub(crate) fn origin_of(bricks: UVec3, brick: usize) -> UVec3 {
     let (bx, by) = (bricks.x as usize, bricks.y as usize);
     UVec3::new((brick % bx) as u32, ((brick / bx) % by) as u32, (brick / (bx * by)) as u32) << SHIFT
 }

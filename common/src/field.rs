@@ -70,6 +70,27 @@ pub trait Field3: Sync {
     fn values_on_lattice(&self, dims: UVec3, origin: Vec3, spacing: f32, out: &mut [f32]) {
         crate::grid::values_by_rows(self, dims, origin, spacing, out);
     }
+
+    /// This field sampled in a narrow band of bricks: what
+    /// [`Bricks::sample_band`](crate::Bricks::sample_band) returns (see
+    /// there; meaningful for fields whose value changes by at most the
+    /// distance moved, such as exact signed distances, in world units).
+    /// The default evaluates one value per brick and every node of the
+    /// band bricks ([`Bricks::sample_band_by_points`](crate::Bricks::sample_band_by_points));
+    /// fields that can share work over a brick (a mesh's lattice search)
+    /// override it.
+    ///
+    /// # Errors
+    /// As [`Bricks::new`](crate::Bricks::new).
+    fn band_bricks(
+        &self,
+        dims: UVec3,
+        origin: Vec3,
+        spacing: f32,
+        band: f32,
+    ) -> Result<crate::Bricks<f32>, crate::GridError> {
+        crate::Bricks::sample_band_by_points(self, dims, origin, spacing, band)
+    }
 }
 
 impl<F> Field3 for F
@@ -93,6 +114,15 @@ impl Field3 for Box<dyn Field3 + '_> {
     }
     fn values_on_lattice(&self, dims: UVec3, origin: Vec3, spacing: f32, out: &mut [f32]) {
         (**self).values_on_lattice(dims, origin, spacing, out)
+    }
+    fn band_bricks(
+        &self,
+        dims: UVec3,
+        origin: Vec3,
+        spacing: f32,
+        band: f32,
+    ) -> Result<crate::Bricks<f32>, crate::GridError> {
+        (**self).band_bricks(dims, origin, spacing, band)
     }
     fn bounds(&self) -> Option<Aabb> {
         (**self).bounds()
@@ -121,6 +151,15 @@ impl<F: Field3> Field3 for Bounded<F> {
     }
     fn values_on_lattice(&self, dims: UVec3, origin: Vec3, spacing: f32, out: &mut [f32]) {
         self.field.values_on_lattice(dims, origin, spacing, out)
+    }
+    fn band_bricks(
+        &self,
+        dims: UVec3,
+        origin: Vec3,
+        spacing: f32,
+        band: f32,
+    ) -> Result<crate::Bricks<f32>, crate::GridError> {
+        self.field.band_bricks(dims, origin, spacing, band)
     }
     fn bounds(&self) -> Option<Aabb> {
         Some(self.bounds)

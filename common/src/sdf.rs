@@ -47,6 +47,18 @@
 //! `docs/EXPERIMENTS.md`; bench `mesh_sdf/bunny/128` and
 //! `mesh_sdf/bunny/band/128`).
 //!
+//! # Narrow bands of bricks
+//! [`MeshSdf::sample_band_bricks`] (what [`Bricks::sample_band`] calls for a
+//! mesh, the sparse level set's source) stores the distance only in the
+//! 8³ bricks that come within a band of the surface and the side
+//! elsewhere. Each brick is one block of the lattice search (one tree
+//! query at its centre decides whether it is near), so the band's values
+//! are bitwise those of [`MeshSdf::sample_lattice`]. The signs of a closed
+//! mesh flow as above, across brick faces too, and also from a far brick
+//! (the surface-free ball about its centre holds the whole brick) to its
+//! neighbours: one winding number per region of band nodes and far bricks
+//! so linked, in the manner of OpenVDB's sign flood fill.
+//!
 //! # Scale
 //! Squared `f32` distances overflow for meshes larger than about 10¹⁹ and
 //! underflow for meshes smaller than about 10⁻¹⁹, and the inside tests
@@ -88,10 +100,12 @@ use crate::fast_marching::{FastMarchingError, FastMarchingSettings, Seed, Update
 use crate::grid::lattice_for_box;
 use crate::mesh::bvh::{ClosestPoint, Lattice, TriangleBvh};
 use crate::mesh::winding::{DEFAULT_BETA, WindingNumber};
-use crate::{Aabb, Field3, Grid3, GridError, TriMesh};
+use crate::{Aabb, Bricks, Field3, Grid3, GridError, TriMesh};
 use glam::{UVec3, Vec3};
 use rayon::prelude::*;
 use std::collections::HashMap;
+
+mod band;
 
 /// Errors of [`MeshSdf`] construction and sampling.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -498,7 +512,7 @@ impl MeshSdf {
         let lattice = Lattice { dims, origin, step: Vec3::splat(spacing) };
         match self.volume {
             VolumeMode::Exact => grid.data_mut().copy_from_slice(&self.sample_lattice(&lattice)),
-            VolumeMode::NarrowBand { width } => grid = self.sample_band(&lattice, width)?,
+            VolumeMode::NarrowBand { width } => grid = self.sample_marched(&lattice, width)?,
         }
         Ok(grid)
     }
@@ -506,7 +520,7 @@ impl MeshSdf {
     /// The exact signed distance within `width` of the surface, marched
     /// beyond (closest-point propagation from the band's nearest points);
     /// exact everywhere for a lattice beyond the normalized frame's reach.
-    fn sample_band(&self, world: &Lattice, width: f32) -> Result<Grid3<f32>, SdfError> {
+    fn sample_marched(&self, world: &Lattice, width: f32) -> Result<Grid3<f32>, SdfError> {
         if !(width.is_finite() && width > 0.0) {
             return Err(SdfError::BadBand(width));
         }
@@ -573,6 +587,25 @@ impl Field3 for MeshSdf {
                 None => f32::NAN,
             };
         }
+    }
+
+    /// The exact signed distance at every node ([`MeshSdf::sample_lattice`]).
+    fn values_on_lattice(&self, dims: UVec3, origin: Vec3, spacing: f32, out: &mut [f32]) {
+        let lattice = Lattice { dims, origin, step: Vec3::splat(spacing) };
+        assert_eq!(out.len(), lattice.len(), "values_on_lattice: out does not match the lattice");
+        out.copy_from_slice(&self.sample_lattice(&lattice));
+    }
+
+    /// The band bricks solved as blocks of the lattice search, the signs
+    /// found once per region ([`MeshSdf::sample_band_bricks`]).
+    fn band_bricks(
+        &self,
+        dims: UVec3,
+        origin: Vec3,
+        spacing: f32,
+        band: f32,
+    ) -> Result<Bricks<f32>, GridError> {
+        self.sample_band_bricks(dims, origin, spacing, band)
     }
 
     fn bounds(&self) -> Option<Aabb> {

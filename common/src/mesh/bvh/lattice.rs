@@ -9,6 +9,10 @@ use rayon::prelude::*;
 
 /// Nodes per block edge.
 const BLOCK: u32 = 8;
+/// Nodes per edge of the blocks [`TriangleBvh::nearest_on_lattice`] solves
+/// one at a time (from node 0 along each axis); see
+/// [`TriangleBvh::nearest_in_block`].
+pub const LATTICE_BLOCK: u32 = BLOCK;
 /// Relative slack on the pruning bounds, covering the rounding of the `f32`
 /// distances they compare (far above it, far below any useful tolerance).
 const SLACK: f32 = 1e-5;
@@ -24,6 +28,30 @@ struct Scratch {
     sub_packs: Vec<Pack>,
     /// Nearest slot of the last block centre (a starting bound for the next).
     previous: u32,
+}
+
+/// Per-thread scratch space of [`TriangleBvh::nearest_in_block`] (candidate
+/// lists reused from block to block).
+#[derive(Debug)]
+pub struct BlockScratch(Scratch);
+
+impl Default for BlockScratch {
+    fn default() -> Self {
+        Self(Scratch { previous: Best::NONE, ..Scratch::default() })
+    }
+}
+
+/// What [`TriangleBvh::nearest_in_block`] found about a block.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BlockNearest {
+    /// The block's centre (the lattice's units).
+    pub center: Vec3,
+    /// The exact distance from `center` to the surface: the ball of that
+    /// radius about it holds no surface.
+    pub distance: f32,
+    /// False when every node of the block lies farther than the requested
+    /// `max_distance` from the surface and no node was solved.
+    pub solved: bool,
 }
 
 /// One of the up to eight parts of a block.
@@ -223,7 +251,8 @@ pub struct LatticeHit {
 }
 
 impl LatticeHit {
-    const NONE: Self = Self { distance: f32::NAN, triangle: u32::MAX, slot: u32::MAX };
+    /// No triangle (a node not solved), NaN distance.
+    pub const NONE: Self = Self { distance: f32::NAN, triangle: u32::MAX, slot: u32::MAX };
 }
 
 impl TriangleBvh {
@@ -318,6 +347,31 @@ impl TriangleBvh {
         self.result(p, Best { d2: 0.0, slot: hit.slot })
     }
 
+    /// The nearest triangle of every node of one block of `lattice` (the
+    /// up to 8³ nodes from `lo`, a multiple of [`LATTICE_BLOCK`] per axis:
+    /// one of the blocks [`TriangleBvh::nearest_on_lattice`] solves, with
+    /// bitwise its results), handed to `emit(i, j, k, hit)`; a block whose
+    /// nodes are all farther than `max_distance` is skipped (nothing
+    /// emitted). Returns the block's centre and its exact distance to the
+    /// surface (every node of a skipped block lies within that ball's
+    /// radius minus `max_distance` of the centre), and whether the block
+    /// was solved. Lets a caller solve only the blocks it stores (a brick
+    /// grid), with `scratch` kept per thread. `None` for an empty tree.
+    pub fn nearest_in_block(
+        &self,
+        lattice: &Lattice,
+        lo: UVec3,
+        max_distance: f32,
+        scratch: &mut BlockScratch,
+        emit: impl FnMut(u32, u32, u32, LatticeHit),
+    ) -> Option<BlockNearest> {
+        if self.is_empty() || lo.cmpge(lattice.dims).any() {
+            return None;
+        }
+        let n = (lattice.dims - lo).min(UVec3::splat(BLOCK));
+        Some(self.block(lattice, lo, n, max_distance, &mut scratch.0, emit))
+    }
+
     /// Solves the block of `n` nodes starting at node `lo`, handing each
     /// node's hit to `emit`, using the thread's scratch space; a block whose
     /// nodes are all farther than `max_distance` is left as it is.
@@ -329,7 +383,7 @@ impl TriangleBvh {
         max_distance: f32,
         scratch: &mut Scratch,
         mut emit: impl FnMut(u32, u32, u32, LatticeHit),
-    ) {
+    ) -> BlockNearest {
         let center = lattice.origin + lattice.step * (lo.as_vec3() + (n - UVec3::ONE).as_vec3() * 0.5);
         // The block is split in two along each axis; `span` bounds the
         // distance from the centre to every node of a sub-block through the
@@ -345,8 +399,9 @@ impl TriangleBvh {
         let nearest = self.search(center, start);
         scratch.previous = nearest.slot;
         // Every node is within `span` of the centre: d(x) ≥ d(c) − span.
-        if nearest.d2.sqrt() - span > max_distance * (1.0 + SLACK) + SLACK * span {
-            return;
+        let distance = nearest.d2.sqrt();
+        if distance - span > max_distance * (1.0 + SLACK) + SLACK * span {
+            return BlockNearest { center, distance, solved: false };
         }
         let reach = (nearest.d2.sqrt() + 2.0 * span) * (1.0 + SLACK) + SLACK * span;
         self.gather(center, reach, &mut scratch.candidates);
@@ -402,6 +457,7 @@ impl TriangleBvh {
                 }
             }
         }
+        BlockNearest { center, distance, solved: true }
     }
 
     /// Every triangle within `reach` of `p`, with its exact distance, into

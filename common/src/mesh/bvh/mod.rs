@@ -31,7 +31,7 @@
 
 mod lattice;
 
-pub use lattice::{Lattice, LatticeHit};
+pub use lattice::{BlockNearest, BlockScratch, LATTICE_BLOCK, Lattice, LatticeHit};
 
 use crate::TriMesh;
 use glam::Vec3;
