@@ -11,7 +11,8 @@
 //! exact `f64` values and the distance to the nearest constraint.
 
 use glam::Vec3;
-use isomorph_common::marching_cubes::level_set_mesh;
+use isomorph_common::Grid3;
+use isomorph_common::marching_cubes::{level_set_mesh, marching_cubes};
 use isomorph_common::{Control, Field3, Morph, TriMesh};
 use isomorph_io::inputs::{LoadOptions, load_solid};
 use isomorph_rbf::{Evaluation, RbfMorph, RbfSettings};
@@ -46,15 +47,41 @@ fn main() {
     );
     for &t in &times {
         let slice = morph.slice(t).expect("a slice");
-        for (name, evaluation) in [("auto", Evaluation::Auto), ("direct", Evaluation::Direct)] {
+        let modes = std::env::var("MODES").unwrap_or_else(|_| "sparse,lattice,direct".into());
+        for name in modes.split(',') {
+            let evaluation = if name == "direct" { Evaluation::Direct } else { Evaluation::Auto };
             let field = slice.clone().with_evaluation(evaluation);
-            let start = Instant::now();
-            let mesh = level_set_mesh(&field, &morph.field_bounds(), res, 0.0).expect("a mesh");
+            let (start, cpu0) = (Instant::now(), cpu_seconds());
+            let bounds = morph.field_bounds();
+            let mesh = if name == "lattice" {
+                let grid = Grid3::sample_box(&field, &bounds.expanded(1e-4), res).expect("a grid");
+                let cpu = cpu_seconds() - cpu0;
+                // The lattice values against the exact f64 sum at every
+                // 101st node within 5 of the surface value.
+                let (mut worst, mut count) = (0.0f64, 0);
+                for n in (0..grid.len()).step_by(101) {
+                    let v = grid.data()[n];
+                    if v.abs() < 5.0 {
+                        let c = grid.node_of(n);
+                        let p = grid.position(c.x, c.y, c.z);
+                        let x = [p.x, p.y, p.z, t * morph.separation()].map(f64::from);
+                        worst = worst.max((f64::from(v) - morph.interpolant().value_f64(x)).abs());
+                        count += 1;
+                    }
+                }
+                println!(
+                    "  lattice: {cpu:.1} s CPU; max |lattice − exact f64| {worst:.3e} at {count} nodes within 5 of 0"
+                );
+                marching_cubes(&grid, 0.0)
+            } else {
+                level_set_mesh(&field, &bounds, res, 0.0).expect("a mesh")
+            };
             let parts = components(&mesh);
             let sizes: Vec<usize> = parts.iter().map(Vec::len).collect();
             println!(
-                "t = {t} {name}: {:.1} s, {} vertices, {} components, sizes {:?}",
+                "t = {t} {name}: {:.1} s wall, {:.1} s CPU, {} vertices, {} components, sizes {:?}",
                 start.elapsed().as_secs_f64(),
+                cpu_seconds() - cpu0,
                 mesh.positions.len(),
                 parts.len(),
                 &sizes[..sizes.len().min(12)]
@@ -113,4 +140,13 @@ fn components(mesh: &TriMesh) -> Vec<Vec<usize>> {
     let mut parts: Vec<Vec<usize>> = groups.into_values().collect();
     parts.sort_by_key(|p| std::cmp::Reverse(p.len()));
     parts
+}
+
+/// User + system CPU time of this process so far (from `/proc/self/stat`,
+/// in clock ticks of 1/100 s).
+fn cpu_seconds() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    let fields: Vec<&str> = stat.rsplit(')').next().unwrap_or("").split_whitespace().collect();
+    let ticks = |i: usize| fields.get(i).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
+    (ticks(11) + ticks(12)) / 100.0
 }

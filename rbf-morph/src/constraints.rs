@@ -12,9 +12,12 @@
 //! thin parts. Turk & O'Brien and FastRBF place the normal constraints at a
 //! small offset on purpose; the offset must stay below the local feature
 //! size. So every normal constraint is validated against all input surface
-//! points: its offset is halved (down to `k / 16`) until its own point is
-//! strictly the nearest surface point to it, and a normal constraint that
-//! fails even at `k / 16` is dropped (its boundary constraint stays).
+//! points of the other side (whose normals face away from its own,
+//! `n_j · n_i < 0`; neighbours on the same sheet do not count, so smooth and
+//! convex parts keep the offset `k`): its offset is halved (down to
+//! `k / 16`) until no such point is as near to it as its own point, and a
+//! normal constraint that fails even at `k / 16` is dropped (its boundary
+//! constraint stays).
 
 use crate::error::RbfError;
 use crate::interpolant::Constraint;
@@ -65,8 +68,9 @@ impl Default for SurfaceSettings {
 /// Constraints from surface `points` with **outward** `normals`: for each
 /// selected point a boundary constraint (0) at the point and, after it, a
 /// normal constraint (1) at `point − k_i · normal` (§4.2), where `k_i` is
-/// the offset `k` halved until the point is the nearest of all `points` to
-/// it (see [the module docs](self); dropped below `k / 16`). Normals need
+/// the offset `k` halved until no point of the other side (normal facing
+/// away) is as near to it as its own point (see [the module docs](self);
+/// dropped below `k / 16`). Normals need
 /// not be unit length.
 ///
 /// # Errors
@@ -103,7 +107,7 @@ pub fn surface_constraints(
         }
         units.push(n);
     }
-    let hash = PointHash::new(points, k);
+    let hash = PointHash::new(points, normals, k);
     let offsets: Vec<Option<f32>> =
         chosen.par_iter().zip(&units).map(|(&i, &n)| valid_offset(&hash, i, n, k)).collect();
     let mut out = Vec::with_capacity(2 * chosen.len());
@@ -120,15 +124,15 @@ pub fn surface_constraints(
 /// dropped (down to `k / 16`).
 const OFFSET_HALVINGS: u32 = 4;
 
-/// The largest of `k, k/2, …, k/16` at which `points[i] − k_i · n` has
-/// `points[i]` as its strictly nearest point (other points at the same
-/// position aside), or `None`.
+/// The largest of `k, k/2, …, k/16` at which no point of the other side
+/// (normal facing away from `n`) is as near to `points[i] − k_i · n` as
+/// `points[i]`, or `None`.
 fn valid_offset(hash: &PointHash<'_>, i: usize, n: Vec3, k: f32) -> Option<f32> {
     let origin = hash.points[i];
     (0..=OFFSET_HALVINGS).map(|h| k / (1u32 << h) as f32).find(|&k| {
         let q = origin - k * n;
         let own = q.distance_squared(origin);
-        !hash.any_within(q, own.sqrt(), |p| p != origin && q.distance_squared(p) <= own)
+        !hash.any_within(q, own.sqrt(), |p, normal| normal.dot(n) < 0.0 && q.distance_squared(p) <= own)
     })
 }
 
@@ -136,34 +140,35 @@ fn valid_offset(hash: &PointHash<'_>, i: usize, n: Vec3, k: f32) -> Option<f32> 
 /// for queries within a radius of at most `cell`.
 struct PointHash<'a> {
     points: &'a [Vec3],
+    normals: &'a [Vec3],
     cell: f32,
     buckets: std::collections::HashMap<[i32; 3], Vec<u32>>,
 }
 
 impl<'a> PointHash<'a> {
-    fn new(points: &'a [Vec3], cell: f32) -> Self {
+    fn new(points: &'a [Vec3], normals: &'a [Vec3], cell: f32) -> Self {
         let mut buckets = std::collections::HashMap::<[i32; 3], Vec<u32>>::new();
         for (j, &p) in points.iter().enumerate() {
             buckets.entry(Self::key(p, cell)).or_default().push(j as u32);
         }
-        Self { points, cell, buckets }
+        Self { points, normals, cell, buckets }
     }
 
     fn key(p: Vec3, cell: f32) -> [i32; 3] {
         (p / cell).floor().as_ivec3().to_array()
     }
 
-    /// Whether `test` holds for a point within `radius` (≤ the cell side)
-    /// of `q` or in a cell touching that ball.
-    fn any_within(&self, q: Vec3, radius: f32, test: impl Fn(Vec3) -> bool) -> bool {
+    /// Whether `test(point, normal)` holds for a point within `radius` (≤
+    /// the cell side) of `q` or in a cell touching that ball.
+    fn any_within(&self, q: Vec3, radius: f32, test: impl Fn(Vec3, Vec3) -> bool) -> bool {
         let (lo, hi) =
             (Self::key(q - Vec3::splat(radius), self.cell), Self::key(q + Vec3::splat(radius), self.cell));
         (lo[2]..=hi[2]).any(|z| {
             (lo[1]..=hi[1]).any(|y| {
                 (lo[0]..=hi[0]).any(|x| {
-                    self.buckets
-                        .get(&[x, y, z])
-                        .is_some_and(|b| b.iter().any(|&j| test(self.points[j as usize])))
+                    self.buckets.get(&[x, y, z]).is_some_and(|b| {
+                        b.iter().any(|&j| test(self.points[j as usize], self.normals[j as usize]))
+                    })
                 })
             })
         })

@@ -31,24 +31,26 @@ fn bunny_normal_constraints_are_nearest_their_own_point() {
     let cs = mesh_constraints(&mesh, &SurfaceSettings::default()).unwrap();
     let pairs = pairs(&cs);
     let k = 0.01 * isomorph_common::Aabb::from_points(&mesh.positions).diagonal();
-    // Before the validation 29 of the 1839 normal points were nearer
-    // another vertex than their own; none may be now, and few offsets need
-    // shrinking at all.
+    // Before the validation some normal points were nearer a vertex of the
+    // other side (normal facing away) than their own; none may be now.
+    let normals = mesh.vertex_normals();
     let mut shrunk = 0;
     for &(b, n) in &pairs {
         let own = n.distance_squared(b);
+        let outward = (b - n).normalize();
         let nearest = mesh
             .positions
             .iter()
-            .filter(|&&p| p != b)
-            .map(|p| n.distance_squared(*p))
+            .zip(&normals)
+            .filter(|&(_, m)| m.dot(outward) < 0.0)
+            .map(|(p, _)| n.distance_squared(*p))
             .fold(f32::MAX, f32::min);
-        assert!(nearest > own, "normal point {n} is nearer another vertex than its own {b}");
+        assert!(nearest > own, "normal point {n} is nearer a vertex of the other side than its own {b}");
         assert!(own.sqrt() <= k * 1.0001 && own.sqrt() >= k / 16.0 * 0.999, "offset {} of {k}", own.sqrt());
         shrunk += usize::from(own.sqrt() < 0.99 * k);
     }
     assert!(pairs.len() >= mesh.positions.len() - 5, "{} normal constraints", pairs.len());
-    assert!((1..=60).contains(&shrunk), "{shrunk} offsets shrunk");
+    assert!((1..=30).contains(&shrunk), "{shrunk} offsets shrunk");
 }
 
 #[test]
