@@ -1,6 +1,23 @@
 //! Boundary and normal constraints of a 3D shape from points with normals
 //! (paper §4.2): a boundary constraint `f = 0` at each surface point and a
 //! normal constraint `f = 1` a small distance inward along the normal.
+//!
+//! # Validated offsets
+//! A normal constraint placed `k` inward from a point of a thin part (a
+//! dragon's claw, a fin, the lip of a cup) can land nearer the *opposite*
+//! side of the surface than its own point, or beyond it: the interpolant
+//! then has to climb from 0 to 1 over a fraction of `k` between two
+//! unrelated constraints, which makes the system ill-conditioned (huge,
+//! cancelling weights) and puts spurious sign changes (stray bubbles) near
+//! thin parts. Turk & O'Brien and FastRBF place the normal constraints at a
+//! small offset on purpose; the offset must stay below the local feature
+//! size. So every normal constraint is validated against all input surface
+//! points of the other side (whose normals face away from its own,
+//! `n_j · n_i < 0`; neighbours on the same sheet do not count, so smooth and
+//! convex parts keep the offset `k`): its offset is halved (down to
+//! `k / 16`) until no such point is as near to it as its own point, and a
+//! normal constraint that fails even at `k / 16` is dropped (its boundary
+//! constraint stays).
 
 use crate::error::RbfError;
 use crate::interpolant::Constraint;
@@ -49,9 +66,12 @@ impl Default for SurfaceSettings {
 }
 
 /// Constraints from surface `points` with **outward** `normals`: for each
-/// selected point a boundary constraint (0) at the point and a normal
-/// constraint (1) at `point − k · normal` (§4.2). Normals need not be unit
-/// length.
+/// selected point a boundary constraint (0) at the point and, after it, a
+/// normal constraint (1) at `point − k_i · normal` (§4.2), where `k_i` is
+/// the offset `k` halved until no point of the other side (normal facing
+/// away) is as near to it as its own point (see [the module docs](self);
+/// dropped below `k / 16`). Normals need
+/// not be unit length.
 ///
 /// # Errors
 /// [`RbfError::InvalidInput`] when the lengths differ or a normal is zero or
@@ -79,16 +99,80 @@ pub fn surface_constraints(
         return Err(RbfError::InvalidInput(format!("the normal offset must be positive, got {k}")));
     }
     let chosen = select(points, settings.subsample);
-    let mut out = Vec::with_capacity(2 * chosen.len());
-    for i in chosen {
+    let mut units = Vec::with_capacity(chosen.len());
+    for &i in &chosen {
         let n = normals[i].normalize_or_zero();
         if n == Vec3::ZERO || !n.is_finite() {
             return Err(RbfError::InvalidInput(format!("normal {i} is zero or not finite")));
         }
+        units.push(n);
+    }
+    let hash = PointHash::new(points, normals, k);
+    let offsets: Vec<Option<f32>> =
+        chosen.par_iter().zip(&units).map(|(&i, &n)| valid_offset(&hash, i, n, k)).collect();
+    let mut out = Vec::with_capacity(2 * chosen.len());
+    for ((&i, n), offset) in chosen.iter().zip(units).zip(offsets) {
         out.push(Constraint::new(points[i].to_array(), 0.0));
-        out.push(Constraint::new((points[i] - k * n).to_array(), 1.0));
+        if let Some(k) = offset {
+            out.push(Constraint::new((points[i] - k * n).to_array(), 1.0));
+        }
     }
     Ok(out)
+}
+
+/// Halvings of the normal offset tried before a normal constraint is
+/// dropped (down to `k / 16`).
+const OFFSET_HALVINGS: u32 = 4;
+
+/// The largest of `k, k/2, …, k/16` at which no point of the other side
+/// (normal facing away from `n`) is as near to `points[i] − k_i · n` as
+/// `points[i]`, or `None`.
+fn valid_offset(hash: &PointHash<'_>, i: usize, n: Vec3, k: f32) -> Option<f32> {
+    let origin = hash.points[i];
+    (0..=OFFSET_HALVINGS).map(|h| k / (1u32 << h) as f32).find(|&k| {
+        let q = origin - k * n;
+        let own = q.distance_squared(origin);
+        !hash.any_within(q, own.sqrt(), |p, normal| normal.dot(n) < 0.0 && q.distance_squared(p) <= own)
+    })
+}
+
+/// Points bucketed in cubic cells of side `cell` (a uniform spatial hash),
+/// for queries within a radius of at most `cell`.
+struct PointHash<'a> {
+    points: &'a [Vec3],
+    normals: &'a [Vec3],
+    cell: f32,
+    buckets: std::collections::HashMap<[i32; 3], Vec<u32>>,
+}
+
+impl<'a> PointHash<'a> {
+    fn new(points: &'a [Vec3], normals: &'a [Vec3], cell: f32) -> Self {
+        let mut buckets = std::collections::HashMap::<[i32; 3], Vec<u32>>::new();
+        for (j, &p) in points.iter().enumerate() {
+            buckets.entry(Self::key(p, cell)).or_default().push(j as u32);
+        }
+        Self { points, normals, cell, buckets }
+    }
+
+    fn key(p: Vec3, cell: f32) -> [i32; 3] {
+        (p / cell).floor().as_ivec3().to_array()
+    }
+
+    /// Whether `test(point, normal)` holds for a point within `radius` (≤
+    /// the cell side) of `q` or in a cell touching that ball.
+    fn any_within(&self, q: Vec3, radius: f32, test: impl Fn(Vec3, Vec3) -> bool) -> bool {
+        let (lo, hi) =
+            (Self::key(q - Vec3::splat(radius), self.cell), Self::key(q + Vec3::splat(radius), self.cell));
+        (lo[2]..=hi[2]).any(|z| {
+            (lo[1]..=hi[1]).any(|y| {
+                (lo[0]..=hi[0]).any(|x| {
+                    self.buckets.get(&[x, y, z]).is_some_and(|b| {
+                        b.iter().any(|&j| test(self.points[j as usize], self.normals[j as usize]))
+                    })
+                })
+            })
+        })
+    }
 }
 
 /// Constraints from the vertices of `mesh` and its area-weighted vertex

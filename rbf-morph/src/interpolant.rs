@@ -374,6 +374,13 @@ impl<const D: usize> Interpolant<D> {
         g.map(|v| v * self.scale)
     }
 
+    /// The kernel weights `λ_j` (one per centre, in the order of the
+    /// constraints after merging): their size tells the conditioning
+    /// (cancelling weights of `1e6` need `f64` evaluation).
+    pub fn weights(&self) -> &[f64] {
+        &self.weights
+    }
+
     /// The fit report (conditioning, residual, merges).
     pub fn report(&self) -> &FitReport {
         &self.report

@@ -4,7 +4,8 @@ use crate::dual_tree::Lattice;
 use crate::kernel::{Kernel, eval_r2_f32};
 use crate::treecode::{AUTO_MIN_CENTRES, AUTO_MIN_NODES, AUTO_MIN_POINTS, Evaluation, Treecode};
 use glam::{UVec3, Vec2, Vec3};
-use isomorph_common::{Aabb, Field3, Grid2, GridError};
+use isomorph_common::marching_cubes::{SparseSettings, polygonize, polygonize_near_surface};
+use isomorph_common::{Aabb, Field3, Grid2, GridError, MorphError, TriMesh, lattice_for_box};
 use pulp::{Arch, Simd, WithSimd};
 use rayon::prelude::*;
 use std::sync::OnceLock;
@@ -397,6 +398,32 @@ impl Slice3 {
     pub fn with_evaluation(mut self, evaluation: Evaluation) -> Self {
         self.eval.evaluation = evaluation;
         self
+    }
+
+    /// The mesh of the zero level set on the lattice of
+    /// [`Grid3::sample_box`](isomorph_common::Grid3::sample_box)`(bounds, res)`
+    /// (outward oriented, positive inside).
+    ///
+    /// When the slice evaluates that lattice by the
+    /// [`dual_tree`](crate::dual_tree) (many centres, see [`Evaluation`]),
+    /// the whole lattice is evaluated and polygonized: the dual tree's cost
+    /// is dominated by the far field, shared by all nodes, so the whole
+    /// lattice costs less than the scattered near-surface nodes through the
+    /// treecode, its error is smaller (see `docs/EXPERIMENTS.md`), and no
+    /// sign is inferred. Otherwise the direct sum is taken only near the
+    /// surface ([`level_set_mesh`](isomorph_common::marching_cubes::level_set_mesh)),
+    /// which gives the same mesh as the whole lattice.
+    ///
+    /// # Errors
+    /// As [`Grid3::sample_box`](isomorph_common::Grid3::sample_box) (bad box,
+    /// `res < 2`, a lattice too large for memory).
+    pub fn polygonize(&self, bounds: &Aabb, res: u32) -> Result<TriMesh, MorphError> {
+        let (dims, _, _) = lattice_for_box(bounds, res)?;
+        if self.eval.lattice_by_tree(dims.element_product() as usize) {
+            Ok(polygonize(self, bounds, res, 0.0)?)
+        } else {
+            polygonize_near_surface(self, bounds, res, 0.0, &SparseSettings::default()).map(|(mesh, _)| mesh)
+        }
     }
 }
 

@@ -11,7 +11,9 @@ use crate::slice::{Slice2, Slice3};
 use glam::{UVec2, Vec2, Vec3};
 use isomorph_common::MorphError;
 use isomorph_common::marching_squares::{Polyline2, marching_squares};
-use isomorph_common::{Aabb, Control, Frame, Grid2, Morph, MorphReport, Outcome, Residual, Solid, Stages};
+use isomorph_common::{
+    Aabb, Control, Frame, Grid2, Morph, MorphReport, Outcome, Residual, Solid, Stages, TriMesh,
+};
 use isomorph_common::{check, check_time};
 
 /// Settings of a shape transformation.
@@ -379,8 +381,10 @@ impl RbfMorph {
 }
 
 /// Frames are slices of the 4D implicit in world space (identity transform);
-/// [`Morph::frame_mesh`] is the default near-surface polygonizer, which
-/// evaluates the `O(n)` slice only in blocks the surface crosses.
+/// [`Morph::frame_mesh`] is [`Slice3::polygonize`] over the field bounds
+/// (grown by `1e-4` as the default polygonizer grows them): the whole
+/// lattice by the dual tree for many centres, the near-surface direct sum
+/// for few.
 impl Morph for RbfMorph {
     type Field = Slice3;
     type Error = RbfError;
@@ -403,6 +407,10 @@ impl Morph for RbfMorph {
 
     fn report(&self) -> &MorphReport {
         &self.report
+    }
+
+    fn frame_mesh(&self, t: f32, res: u32) -> Result<TriMesh, RbfError> {
+        Ok(self.slice(t)?.polygonize(&self.bounds.expanded(1e-4), res)?)
     }
 }
 
