@@ -44,7 +44,7 @@ fn assert_converged_genus_0_to_1(m: &TsplineMorph, metrics: &[MeshMetrics]) {
 /// `n_T` 60): one component in every level set, and the genus changes
 /// once, from 0 to 1, when the hole opens.
 #[test]
-#[ignore = "77 steps on a depth-5 T-mesh and 78 level sets meshed: 30 s CPU in the release profile (4 min wall on the loaded 2-core machine), more in the test profile; run with --release -- --ignored"]
+#[ignore = "63 steps on a depth-5 T-mesh and 64 level sets meshed: 23 s CPU in the release profile (2–4 min wall on the loaded 2-core machine), more in the test profile; run with --release -- --ignored"]
 fn bunny_becomes_a_petal_torus_in_one_piece() {
     let (bunny, torus) = shapes();
     let m = morph(&bunny, &torus, &demo::example1_settings(), &Control::new()).unwrap();

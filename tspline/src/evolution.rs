@@ -309,7 +309,8 @@ fn evolve_on_pool<D: Fn(DVec3) -> f64 + Sync + Send>(
         }
         let speeds: Vec<f64> =
             samples.iter().zip(&d_b).map(|(s, &d)| speed(settings.speed, d, s, h_min)).collect();
-        let (cdot, nonzeros, far_rows) = velocity(&spline, &samples, &speeds, h_min, settings, &mut symbolic)?;
+        let (cdot, nonzeros, far_rows) =
+            velocity(&spline, &samples, &speeds, h_min, settings, &mut symbolic)?;
         let max_speed = speeds.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let dt = if max_speed > 0.0 { (h / max_speed).min(1.0) } else { 1.0 };
         let c: Vec<f64> = spline.coefficients().iter().zip(&cdot).map(|(c, d)| c + dt * d).collect();
@@ -450,7 +451,13 @@ fn velocity(
 /// whole finest cells (at least one): a leaf within it may be entered by
 /// the next step, and a row there would hold the front back. The rows are
 /// constraints: their weight does not scale the Tikhonov term.
-fn far_field_rows(spline: &TSpline, samples: &[Sample], h_step: f64, weight: f64, blocks: &mut [LeafRows]) -> usize {
+fn far_field_rows(
+    spline: &TSpline,
+    samples: &[Sample],
+    h_step: f64,
+    weight: f64,
+    blocks: &mut [LeafRows],
+) -> usize {
     let mesh = spline.mesh();
     let c = spline.coefficients();
     let reach = (h_step / mesh.finest_cell()).ceil().max(1.0) as i64;

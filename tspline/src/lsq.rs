@@ -284,7 +284,8 @@ mod tests {
             with_constraints[leaf].push_constraint(&r, 1e3, value);
             with_rows[leaf].push(&r, 1e3, value);
         }
-        let (y, _) = solve(&mesh, &with_constraints, 1e-2, &reference, "test", &mut Default::default()).unwrap();
+        let (y, _) =
+            solve(&mesh, &with_constraints, 1e-2, &reference, "test", &mut Default::default()).unwrap();
         let (z, _) = solve(&mesh, &with_rows, 1e-2, &reference, "test", &mut Default::default()).unwrap();
         let diff = |a: &[f64]| a.iter().zip(&x).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
         let scale = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
