@@ -123,10 +123,10 @@ pub struct MethodArgs {
     /// lets narrow features open).
     #[arg(long, help_heading = "T-spline (Yang & Jüttler)", default_value_t = TsplineSettings::default().evolve.distance_weight)]
     pub distance_weight: f64,
-    /// Weight of the far-field rows ḟ = 0 in octree leaves without a zero,
-    /// against the velocity rows' total of 1 (0 to 1e6; they stop new
-    /// pieces of surface from appearing away from the front; the paper's
-    /// Example 3 converges with 0.1).
+    /// Weight of the far-field rows ḟ = 0 in octree leaves without a zero
+    /// and out of the front's reach, against the velocity rows' total of 1
+    /// (0 to 1e6; 0 turns them off; they stop new pieces of surface from
+    /// appearing away from the front).
     #[arg(long, help_heading = "T-spline (Yang & Jüttler)", default_value_t = TsplineSettings::default().evolve.far_field_weight)]
     pub far_field_weight: f64,
     /// Leave out the projection frames (§4.3) at both ends: the sequence

@@ -374,6 +374,8 @@ const SETTINGS: &[(&str, &[Method])] = &[
     ("projection_frames", &[Method::Tspline]),
     ("sampler", &[Method::Tspline]),
     ("sample_edge", &[Method::Tspline]),
+    ("stall_steps", &[Method::Tspline]),
+    ("far_field_weight", &[Method::Tspline]),
     ("links", &[Method::Blobtree]),
 ];
 
@@ -580,6 +582,12 @@ fn apply_settings(
                     == "marching-triangulation"
             }
             "sample_edge" => sample_edge = number(&name, v, "a number", (0.05f64, 4.0))?,
+            "stall_steps" => {
+                s.tspline.evolve.stall_steps = number(&name, v, "an integer", (1usize, 1_000_000_000))?
+            }
+            "far_field_weight" => {
+                s.tspline.evolve.far_field_weight = number(&name, v, "a number", (0.0f64, 1e6))?
+            }
             "links" => {
                 let path: PathBuf =
                     v.extract().map_err(|_| setting_error(py, &name, "expected a file path"))?;
@@ -644,6 +652,8 @@ fn default_of<'py>(py: Python<'py>, name: &str, s: &Settings, method: Method) ->
         }
         "sampler" => "marching-cubes".into_pyobject(py)?.into_any(),
         "sample_edge" => DEFAULT_SAMPLE_EDGE.into_pyobject(py)?.into_any(),
+        "stall_steps" => s.tspline.evolve.stall_steps.into_pyobject(py)?.into_any(),
+        "far_field_weight" => s.tspline.evolve.far_field_weight.into_pyobject(py)?.into_any(),
         "links" => py.None().into_bound(py),
         _ => py.None().into_bound(py),
     })

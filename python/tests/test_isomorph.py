@@ -168,6 +168,18 @@ def test_tspline_sampler_reaches_the_evolution():
         isomorph.morph("sphere", "torus", method="tspline", sampler="random")
 
 
+def test_tspline_stall_and_far_field_settings_reach_the_evolution():
+    d = isomorph.defaults("tspline")
+    assert d["stall_steps"] >= 1 and d["far_field_weight"] > 0
+    m = isomorph.morph("sphere", "torus", method="tspline", stall_steps=3, far_field_weight=0.5, max_steps=2)
+    assert m.report["details"]["stall_steps"] == 3
+    assert m.report["details"]["far_field_weight"] == 0.5
+    with pytest.raises(ValueError, match="stall_steps"):
+        isomorph.morph("sphere", "torus", method="tspline", stall_steps=0)
+    with pytest.raises(ValueError, match="far_field_weight"):
+        isomorph.morph("sphere", "torus", method="tspline", far_field_weight=-1)
+
+
 def test_unknown_setting_is_a_value_error_naming_it():
     with pytest.raises(ValueError, match="bogus"):
         isomorph.morph("sphere", "torus", method="rbf", bogus=1)

@@ -44,7 +44,7 @@ fn assert_converged_genus_0_to_1(m: &TsplineMorph, metrics: &[MeshMetrics]) {
 /// `n_T` 60): one component in every level set, and the genus changes
 /// once, from 0 to 1, when the hole opens.
 #[test]
-#[ignore = "77 steps on a depth-5 T-mesh and 78 level sets meshed: 30 s CPU in the release profile (4 min wall on the loaded 2-core machine), more in the test profile; run with --release -- --ignored"]
+#[ignore = "63 steps on a depth-5 T-mesh and 64 level sets meshed: 23 s CPU in the release profile (2–4 min wall on the loaded 2-core machine), more in the test profile; run with --release -- --ignored"]
 fn bunny_becomes_a_petal_torus_in_one_piece() {
     let (bunny, torus) = shapes();
     let m = morph(&bunny, &torus, &demo::example1_settings(), &Control::new()).unwrap();
@@ -67,8 +67,12 @@ fn bunny_becomes_a_petal_torus_in_one_piece() {
 
 /// The quick variant at depth 4 (2094 coefficients), eq. 8: the ears are
 /// about one cell thick there, and a sliver of an ear's tip pinches off for
-/// a level set or two (measured 3.4e-6 of the volume), so this asserts
-/// that the pieces other than the body stay under 1e-4 of its volume.
+/// a level set or two, so this asserts that the pieces other than the body
+/// stay under 1e-4 of its volume. On depth-4 cells the births of new pieces
+/// where the hole opens (`EvolveSettings::far_field_weight`) are one to
+/// two cells from the front, within the far-field rows' clearance, so this
+/// variant damps the velocity instead: Tikhonov weight 0.7 (default 0.01;
+/// with it, pieces of up to 8e-3 of the volume in 12 of 38 level sets).
 #[test]
 fn bunny_becomes_a_petal_torus_at_depth_4() {
     let (bunny, torus) = shapes();
@@ -76,6 +80,7 @@ fn bunny_becomes_a_petal_torus_at_depth_4() {
     settings.tmesh.max_depth = 4;
     settings.evolve.speed = Speed::Paper;
     settings.evolve.max_steps = 80;
+    settings.evolve.tikhonov = 0.7;
     let m = morph(&bunny, &torus, &settings, &Control::new()).unwrap();
     let meshes = level_sets(&m);
     let metrics: Vec<_> = meshes.iter().map(TriMesh::metrics).collect();

@@ -22,10 +22,6 @@ fn example3_settings() -> TsplineSettings {
     s.target_adaptation = Some(Refinement { tolerance: 0.02, max_rounds: 2 });
     s.evolve.speed = Speed::Robust { v_max: 0.2, beta_cells: 0.5 };
     s.evolve.max_steps = 150;
-    // Measured with these settings before the far-field weight's default
-    // became 100 (for Example 1's births): at 100 this run ends after 93
-    // steps unconverged (two-sided RMS 0.0164 from the target).
-    s.evolve.far_field_weight = 0.1;
     s
 }
 

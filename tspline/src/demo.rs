@@ -16,8 +16,9 @@ use std::f32::consts::TAU;
 /// eq. 8 stalls this growth) and a step of a quarter of a depth-3 cell
 /// (0.0625 domain units). With the default half cell, one step carries the
 /// surface across the holes' mouths and leaves six lens-shaped caps outside
-/// the cube's faces for one level set; at a quarter cell every level set is
-/// one piece without cavities.
+/// the cube's faces for one level set; at a quarter cell every level set has
+/// one outer piece (the holes open from inside: one level set holds a
+/// cavity, which the metrics report as a void).
 pub fn holed_cube_settings() -> TsplineSettings {
     let mut s = TsplineSettings::default();
     s.tmesh.max_depth = 3;

@@ -21,6 +21,9 @@ pub(crate) struct LeafRows {
     pub rows: Vec<f64>,
     pub weights: Vec<f64>,
     pub rhs: Vec<f64>,
+    /// `Σ w ‖a‖²` of the rows pushed by [`LeafRows::push_constraint`]: their
+    /// part of the normal matrix's trace, left out of the Tikhonov scale.
+    pub constraint_trace: f64,
 }
 
 impl LeafRows {
@@ -34,6 +37,15 @@ impl LeafRows {
         self.rows.extend_from_slice(entries);
         self.weights.push(weight);
         self.rhs.push(rhs);
+    }
+
+    /// Appends a constraint row: as [`LeafRows::push`], but its weight is
+    /// left out of the mean diagonal that scales the Tikhonov term, so that
+    /// strong constraints do not also strengthen the regularization of the
+    /// data rows.
+    pub fn push_constraint(&mut self, entries: &[f64], weight: f64, rhs: f64) {
+        self.push(entries, weight, rhs);
+        self.constraint_trace += weight * entries.iter().map(|a| a * a).sum::<f64>();
     }
 
     /// Number of rows.
@@ -178,7 +190,9 @@ pub(crate) fn solve(
             },
         )
         .collect();
-    let mean_diag = columns.iter().map(|(_, v, _)| v[0]).sum::<f64>() / n.max(1) as f64;
+    let constraints: f64 = blocks.iter().map(|b| b.constraint_trace).sum();
+    let trace = columns.iter().map(|(_, v, _)| v[0]).sum::<f64>();
+    let mean_diag = (trace - constraints).max(0.0) / n.max(1) as f64;
     let omega = tikhonov * if mean_diag > 0.0 { mean_diag } else { 1.0 };
     let mut col_ptr = Vec::with_capacity(n + 1);
     let mut row_idx = Vec::new();
@@ -248,6 +262,35 @@ mod tests {
         let (_, full) = solve(&mesh, &blocks(&mesh, 0.0), 1e-3, &reference, "test", &mut warm).unwrap();
         let (_, part) = solve(&mesh, &sparse, 1e-3, &reference, "test", &mut warm).unwrap();
         assert_eq!(full.nonzeros, part.nonzeros);
+    }
+
+    #[test]
+    fn constraint_rows_do_not_scale_the_tikhonov_term() {
+        let mesh = TMesh::uniform(2).unwrap();
+        let reference = vec![0.0; mesh.anchor_count()];
+        let data = blocks(&mesh, 0.0);
+        let (x, _) = solve(&mesh, &data, 1e-2, &reference, "test", &mut Default::default()).unwrap();
+        // Strong rows that the data solution already satisfies: as
+        // constraints they leave the solution as it is; as data rows they
+        // raise the mean diagonal, and with it the damping, a thousandfold.
+        let (mut with_constraints, mut with_rows) = (data.clone(), data);
+        let mut local = crate::basis::LocalBasis::default();
+        let (mut r, mut dr) = (Vec::new(), Vec::new());
+        for leaf in 0..mesh.leaf_count() {
+            let (lo, hi) = mesh.leaf_box(leaf);
+            local.at(&mesh, lo + 0.35 * (hi - lo));
+            assert!(local.rational(&mut r, &mut dr));
+            let value: f64 = mesh.leaf_anchors(leaf).iter().zip(&r).map(|(&i, a)| a * x[i as usize]).sum();
+            with_constraints[leaf].push_constraint(&r, 1e3, value);
+            with_rows[leaf].push(&r, 1e3, value);
+        }
+        let (y, _) =
+            solve(&mesh, &with_constraints, 1e-2, &reference, "test", &mut Default::default()).unwrap();
+        let (z, _) = solve(&mesh, &with_rows, 1e-2, &reference, "test", &mut Default::default()).unwrap();
+        let diff = |a: &[f64]| a.iter().zip(&x).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        let scale = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(diff(&y) < 1e-6 * scale, "constraints moved the solution by {}", diff(&y));
+        assert!(diff(&z) > 1e-2 * scale, "data rows changed it by only {}", diff(&z));
     }
 
     #[test]

@@ -617,7 +617,9 @@ fn report(
         .with_detail("frames", frames.len())
         .with_detail("mesher", settings.mesher.describe())
         .with_detail("sampler", settings.evolve.sampler.describe())
-        .with_detail("first_step_samples", evolution.steps.first().map_or(0, |s| s.samples));
+        .with_detail("first_step_samples", evolution.steps.first().map_or(0, |s| s.samples))
+        .with_detail("stall_steps", settings.evolve.stall_steps)
+        .with_detail("far_field_weight", settings.evolve.far_field_weight);
     let steps = evolution.steps.len();
     let warning = match evolution.outcome {
         Stop::Vanished => Some("the zero set vanished during the evolution".to_string()),

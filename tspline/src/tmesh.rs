@@ -263,7 +263,6 @@ impl TMesh {
     }
 
     /// Finest lattice cells per axis.
-    #[cfg(test)]
     pub(crate) fn resolution(&self) -> i64 {
         self.res
     }
@@ -284,12 +283,30 @@ impl TMesh {
         (lo, lo + DVec3::splat(self.lattice_len(l.size)))
     }
 
+    /// The finest lattice cell `[x, y, z]` containing `p` (clamped into the
+    /// domain; index `(z · res + y) · res + x`).
+    pub(crate) fn cell_of(&self, p: DVec3) -> [i64; 3] {
+        let q = (p + DVec3::ONE) * 0.5 * self.res as f64;
+        let idx = |v: f64| -> i64 { if v.is_nan() { 0 } else { (v.floor() as i64).clamp(0, self.res - 1) } };
+        [idx(q.x), idx(q.y), idx(q.z)]
+    }
+
+    /// The indices `(z · res + y) · res + x` of the finest lattice cells
+    /// that leaf `leaf` covers.
+    pub(crate) fn leaf_cells(&self, leaf: usize) -> impl Iterator<Item = usize> + '_ {
+        let l = self.leaves[leaf];
+        let res = self.res;
+        (l.min[2]..l.min[2] + l.size).flat_map(move |z| {
+            (l.min[1]..l.min[1] + l.size).flat_map(move |y| {
+                (l.min[0]..l.min[0] + l.size).map(move |x| ((z * res + y) * res + x) as usize)
+            })
+        })
+    }
+
     /// The leaf containing `p` (clamped into the domain; half-open cells,
     /// the upper domain faces belong to the last cells).
     pub(crate) fn locate(&self, p: DVec3) -> usize {
-        let q = (p + DVec3::ONE) * 0.5 * self.res as f64;
-        let idx = |v: f64| -> i64 { if v.is_nan() { 0 } else { (v.floor() as i64).clamp(0, self.res - 1) } };
-        self.lookup_cell([idx(q.x), idx(q.y), idx(q.z)])
+        self.lookup_cell(self.cell_of(p))
     }
 
     fn lookup_cell(&self, c: [i64; 3]) -> usize {
