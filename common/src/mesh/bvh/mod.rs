@@ -234,6 +234,51 @@ impl TriangleBvh {
         });
     }
 
+    /// The largest squared distance from any point of `points` to the mesh
+    /// (the directed sampled Hausdorff distance, squared): the same figure
+    /// as the largest [`ClosestPoint::distance_squared`] of
+    /// [`TriangleBvh::closest_many`], for a fraction of its work. A point
+    /// only needs its exact distance when it may raise the maximum: its
+    /// search stops at the first triangle nearer than the largest distance
+    /// found so far (Taha & Hanbury's early break), and starts from its
+    /// predecessor's triangle, which in a coherent order (a mesh's vertices,
+    /// [`surface_samples`](crate::mesh::distance::surface_samples)) is
+    /// usually near enough already. Parallel over fixed chunks sharing the
+    /// running maximum; the result does not depend on the thread count or
+    /// the order. Non-finite points are skipped; `None` for an empty tree or
+    /// no finite point.
+    pub fn farthest_distance_squared(&self, points: &[Vec3]) -> Option<f32> {
+        use std::sync::atomic::{AtomicU32, Ordering};
+        if self.is_empty() {
+            return None;
+        }
+        // Non-negative f32s order as their bit patterns.
+        let running = AtomicU32::new(0);
+        let any = std::sync::atomic::AtomicBool::new(false);
+        points.par_chunks(CHUNK).for_each(|ps| {
+            let mut previous = Best::NONE;
+            for &p in ps {
+                if !p.is_finite() {
+                    continue;
+                }
+                let floor = f32::from_bits(running.load(Ordering::Relaxed));
+                let start = if previous == Best::NONE {
+                    Best::bound(f32::INFINITY)
+                } else {
+                    Best { d2: closest_on_triangle(p, &self.tris[previous as usize]).d2, slot: previous }
+                };
+                let best = if start.d2 < floor { start } else { self.search_until(p, start, floor) };
+                previous = best.slot;
+                any.store(true, Ordering::Relaxed);
+                if best.d2 >= floor {
+                    // The search ran to the end: `best.d2` is the exact distance.
+                    running.fetch_max(best.d2.to_bits(), Ordering::Relaxed);
+                }
+            }
+        });
+        any.into_inner().then(|| f32::from_bits(running.into_inner()))
+    }
+
     fn result(&self, p: Vec3, best: Best) -> Option<ClosestPoint> {
         if best.slot == Best::NONE {
             return None;
@@ -249,7 +294,15 @@ impl TriangleBvh {
 
     /// Ordered descent from the root, improving on `best`; nothing for a
     /// non-finite `p`.
-    fn search(&self, p: Vec3, mut best: Best) -> Best {
+    fn search(&self, p: Vec3, best: Best) -> Best {
+        self.search_until(p, best, f32::NEG_INFINITY)
+    }
+
+    /// [`Self::search`] that returns as soon as it finds a triangle at a
+    /// squared distance below `enough` (then the result is an upper bound
+    /// under `enough`, not the nearest); exact otherwise.
+    #[inline(always)]
+    fn search_until(&self, p: Vec3, mut best: Best, enough: f32) -> Best {
         if !p.is_finite() {
             return Best::bound(-1.0);
         }
@@ -273,6 +326,9 @@ impl TriangleBvh {
                     let d2 = closest_on_triangle(p, t).d2;
                     if d2 <= best.d2 {
                         best = Best { d2, slot: slot as u32 };
+                        if d2 < enough {
+                            return best;
+                        }
                     }
                 }
             } else {
@@ -735,6 +791,27 @@ mod tests {
                 check(&mesh, p, o);
             }
         }
+    }
+
+    #[test]
+    fn farthest_is_the_largest_closest_distance() {
+        let mesh = torus(3.0, 1.0, 40, 20);
+        let bvh = TriangleBvh::new(&mesh);
+        let other = bunny();
+        // The bunny's vertices (a coherent order) and a scatter, with a
+        // non-finite point that must be skipped.
+        let mut points: Vec<Vec3> = other.positions.iter().map(|&p| p * 4.0).collect();
+        points.extend((0..500).map(|i| Vec3::new((i % 7) as f32, (i % 11) as f32 - 5.0, (i % 5) as f32)));
+        points.insert(100, Vec3::NAN);
+        let mut out = vec![None; points.len()];
+        bvh.closest_many(&points, &mut out);
+        let want = out.iter().flatten().map(|c| c.distance_squared).fold(0.0, f32::max);
+        assert!(want > 1.0, "the scatter reaches away from the torus: {want}");
+        assert_eq!(bvh.farthest_distance_squared(&points), Some(want));
+        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        assert_eq!(one.install(|| bvh.farthest_distance_squared(&points)), Some(want));
+        assert_eq!(bvh.farthest_distance_squared(&[Vec3::NAN]), None);
+        assert_eq!(TriangleBvh::default().farthest_distance_squared(&points), None);
     }
 
     /// Times 128³ queries over the bunny's box padded by 10 % per side, in
