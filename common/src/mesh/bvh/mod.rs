@@ -181,8 +181,9 @@ impl TriangleBvh {
         }
         let corners: Vec<[Vec3; 3]> = (0..n).map(|t| mesh.corners(t)).collect();
         let builder = Builder::new(&corners);
-        let tris = builder.order.iter().map(|&t| Tri::new(corners[t as usize])).collect();
-        Self { nodes: builder.nodes, tris, ids: builder.order }
+        let ids: Vec<u32> = builder.order().collect();
+        let tris = ids.iter().map(|&t| Tri::new(corners[t as usize])).collect();
+        Self { nodes: builder.nodes, tris, ids }
     }
 
     /// Number of triangles indexed.
@@ -407,146 +408,194 @@ fn closest_on_triangle(p: Vec3, t: &Tri) -> OnTriangle {
     best
 }
 
-/// Top-down binned-SAH construction state.
+/// A triangle during the build: its bounding box and index.
+#[derive(Debug, Clone, Copy)]
+struct Item {
+    lo: Vec3,
+    hi: Vec3,
+    id: u32,
+}
+
+impl Item {
+    /// Twice the centroid of the box (the factor 2 cancels in binning).
+    #[inline(always)]
+    fn centroid2(&self) -> Vec3 {
+        self.lo + self.hi
+    }
+}
+
+/// A box `(min, max)`; empty as `(+∞, −∞)`.
+type Bounds = (Vec3, Vec3);
+
+const EMPTY: Bounds = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+
+/// `b` grown by the box `[lo, hi]`.
+#[inline(always)]
+fn grow((min, max): Bounds, lo: Vec3, hi: Vec3) -> Bounds {
+    (min.min(lo), max.max(hi))
+}
+
+/// A chosen split of a node: the position in `items`, the children's boxes
+/// and the bounds of their (doubled) centroids.
+struct Split {
+    mid: usize,
+    boxes: [Bounds; 2],
+    centroids: [Bounds; 2],
+}
+
+/// Top-down binned-SAH construction state. The items are kept in the
+/// order they are partitioned into (so that every pass reads memory in
+/// sequence), and each split hands its children their boxes (from its
+/// bins) and centroid bounds (from its partition pass): one binning pass
+/// for all three axes and one partition pass per node.
 struct Builder {
-    /// Per-triangle bounding box; non-finite ones (from non-finite vertices,
-    /// which a validated mesh does not have) are replaced by the origin so
-    /// that binning stays well defined.
-    boxes: Vec<(Vec3, Vec3)>,
-    /// Triangle indices, partitioned into leaf order.
-    order: Vec<u32>,
+    /// Per-triangle boxes, partitioned into leaf order; non-finite ones
+    /// (from non-finite vertices, which a validated mesh does not have) are
+    /// replaced by the origin so that binning stays well defined.
+    items: Vec<Item>,
     nodes: Vec<Node>,
 }
 
 impl Builder {
     fn new(corners: &[[Vec3; 3]]) -> Self {
-        let boxes = corners
+        let items: Vec<Item> = corners
             .iter()
-            .map(|&[a, b, c]| {
+            .enumerate()
+            .map(|(id, &[a, b, c])| {
                 let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
-                if lo.is_finite() && hi.is_finite() { (lo, hi) } else { (Vec3::ZERO, Vec3::ZERO) }
+                let (lo, hi) =
+                    if lo.is_finite() && hi.is_finite() { (lo, hi) } else { (Vec3::ZERO, Vec3::ZERO) };
+                Item { lo, hi, id: id as u32 }
             })
             .collect();
-        let n = corners.len();
-        let mut builder = Self {
-            boxes,
-            order: (0..n as u32).collect(),
-            nodes: Vec::with_capacity(2 * n.div_ceil(MAX_LEAF)),
-        };
-        builder.nodes.push(builder.leaf(0, n));
-        builder.split(0, 0);
+        let n = items.len();
+        let mut builder = Self { items, nodes: Vec::with_capacity(2 * n.div_ceil(MAX_LEAF)) };
+        let (boxes, centroids) = builder.bounds(0, n);
+        builder.nodes.push(Node { min: boxes.0, first: 0, max: boxes.1, count: n as u32 });
+        builder.split(0, 0, centroids);
         builder
     }
 
-    /// Twice the centroid of triangle `t`'s box (the factor 2 cancels in binning).
-    #[inline]
-    fn centroid2(&self, t: u32) -> Vec3 {
-        let (lo, hi) = self.boxes[t as usize];
-        lo + hi
+    /// The triangles' original indices in leaf order.
+    fn order(&self) -> impl Iterator<Item = u32> + '_ {
+        self.items.iter().map(|i| i.id)
     }
 
-    /// Bounds of `order[start..end]`: of the triangle boxes, or with
-    /// `centroids` of the (doubled) centroids.
-    fn bounds(&self, start: usize, end: usize, centroids: bool) -> (Vec3, Vec3) {
-        self.order[start..end].iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(min, max), &t| {
-            let (lo, hi) = self.boxes[t as usize];
-            if centroids { (min.min(lo + hi), max.max(lo + hi)) } else { (min.min(lo), max.max(hi)) }
+    /// Bounds of `items[start..end]`: of the boxes and of the (doubled)
+    /// centroids.
+    fn bounds(&self, start: usize, end: usize) -> (Bounds, Bounds) {
+        self.items[start..end].iter().fold((EMPTY, EMPTY), |(b, c), t| {
+            let c2 = t.centroid2();
+            (grow(b, t.lo, t.hi), grow(c, c2, c2))
         })
     }
 
-    /// A leaf node over `order[start..end]`.
-    fn leaf(&self, start: usize, end: usize) -> Node {
-        let (min, max) = self.bounds(start, end, false);
-        Node { min, first: start as u32, max, count: (end - start) as u32 }
-    }
-
-    /// Splits the leaf `index` recursively while that pays off.
-    fn split(&mut self, index: usize, depth: usize) {
+    /// Splits the leaf `index`, whose centroids have the bounds
+    /// `centroids`, recursively while that pays off.
+    fn split(&mut self, index: usize, depth: usize, centroids: Bounds) {
         let node = self.nodes[index];
         let (start, end) = (node.first as usize, (node.first + node.count) as usize);
         if end - start <= 1 {
             return;
         }
-        let mid = match self.sah_split(start, end, depth, half_area(node.min, node.max)) {
-            Some(mid) => mid,
+        let split = match self.sah_split(start, end, depth, half_area(node.min, node.max), centroids) {
+            Some(split) => split,
             None if end - start <= MAX_LEAF => return,
-            None => self.median_split(start, end),
+            None => {
+                let mid = self.median_split(start, end, centroids);
+                let ((lb, lc), (rb, rc)) = (self.bounds(start, mid), self.bounds(mid, end));
+                Split { mid, boxes: [lb, rb], centroids: [lc, rc] }
+            }
         };
+        let Split { mid, boxes: [lb, rb], centroids: [lc, rc] } = split;
         let left = self.nodes.len();
-        let (l, r) = (self.leaf(start, mid), self.leaf(mid, end));
-        self.nodes.extend([l, r]);
+        self.nodes.extend([
+            Node { min: lb.0, first: start as u32, max: lb.1, count: (mid - start) as u32 },
+            Node { min: rb.0, first: mid as u32, max: rb.1, count: (end - mid) as u32 },
+        ]);
         self.nodes[index].first = left as u32;
         self.nodes[index].count = 0;
-        self.split(left, depth + 1);
-        self.split(left + 1, depth + 1);
+        self.split(left, depth + 1, lc);
+        self.split(left + 1, depth + 1, rc);
     }
 
-    /// Partitions `order[start..end]` (a node of half-area `area`) at the
-    /// cheapest binned SAH plane and returns the split position. `None` when a
-    /// leaf is cheaper (only for at most [`MAX_LEAF`] triangles), no plane
-    /// separates the centroids, or the tree is too deep for SAH.
-    fn sah_split(&mut self, start: usize, end: usize, depth: usize, area: f32) -> Option<usize> {
+    /// Partitions `items[start..end]` (a node of half-area `area` whose
+    /// centroids have the bounds `(cmin, cmax)`) at the cheapest binned SAH
+    /// plane. `None` when a leaf is cheaper (only for at most [`MAX_LEAF`]
+    /// triangles), no plane separates the centroids, or the tree is too
+    /// deep for SAH.
+    fn sah_split(
+        &mut self,
+        start: usize,
+        end: usize,
+        depth: usize,
+        area: f32,
+        (cmin, cmax): Bounds,
+    ) -> Option<Split> {
         let n = end - start;
         if depth >= SAH_DEPTH {
             return None;
         }
-        let (cmin, cmax) = self.bounds(start, end, true);
         let extent = cmax - cmin;
-        let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, last bin on the left)
-        for axis in 0..3 {
-            if extent[axis] <= 0.0 || extent[axis].is_nan() {
-                continue;
+        let usable = [0, 1, 2].map(|axis| extent[axis] > 0.0 && !extent[axis].is_nan());
+        let scale = Vec3::from_array(
+            [0, 1, 2].map(|axis| if usable[axis] { BINS as f32 / extent[axis] } else { 0.0 }),
+        );
+        // All three axes' bins in one pass.
+        let mut bins = [[(EMPTY, 0usize); BINS]; 3];
+        for t in &self.items[start..end] {
+            let c2 = t.centroid2();
+            for axis in 0..3 {
+                let bin = &mut bins[axis][bin_of(c2[axis], cmin[axis], scale[axis])];
+                *bin = (grow(bin.0, t.lo, t.hi), bin.1 + 1);
             }
-            let scale = BINS as f32 / extent[axis];
-            let mut bins = [(Vec3::INFINITY, Vec3::NEG_INFINITY, 0usize); BINS];
-            for &t in &self.order[start..end] {
-                let bin = &mut bins[bin_of(self.centroid2(t)[axis], cmin[axis], scale)];
-                let (lo, hi) = self.boxes[t as usize];
-                *bin = (bin.0.min(lo), bin.1.max(hi), bin.2 + 1);
-            }
+        }
+        // (cost, axis, last bin on the left, left box, right box)
+        let mut best: Option<(f32, usize, usize, Bounds, Bounds)> = None;
+        for axis in (0..3).filter(|&axis| usable[axis]) {
+            let bins = &bins[axis];
             // Cost of "bins[..=i] | bins[i + 1..]" from a suffix and a prefix sweep.
-            let mut right_cost = [0f32; BINS];
-            let mut acc = (Vec3::INFINITY, Vec3::NEG_INFINITY, 0);
+            let mut right = [(0f32, EMPTY); BINS];
+            let mut acc = (EMPTY, 0);
             for i in (1..BINS).rev() {
-                acc = (acc.0.min(bins[i].0), acc.1.max(bins[i].1), acc.2 + bins[i].2);
-                right_cost[i - 1] = half_area(acc.0, acc.1) * acc.2 as f32;
+                acc = (grow(acc.0, bins[i].0.0, bins[i].0.1), acc.1 + bins[i].1);
+                right[i - 1] = (half_area(acc.0.0, acc.0.1) * acc.1 as f32, acc.0);
             }
-            let mut acc = (Vec3::INFINITY, Vec3::NEG_INFINITY, 0);
+            let mut acc = (EMPTY, 0);
             for i in 0..BINS - 1 {
-                acc = (acc.0.min(bins[i].0), acc.1.max(bins[i].1), acc.2 + bins[i].2);
-                let cost = half_area(acc.0, acc.1) * acc.2 as f32 + right_cost[i];
-                if acc.2 > 0 && acc.2 < n && best.is_none_or(|(c, ..)| cost < c) {
-                    best = Some((cost, axis, i));
+                acc = (grow(acc.0, bins[i].0.0, bins[i].0.1), acc.1 + bins[i].1);
+                let cost = half_area(acc.0.0, acc.0.1) * acc.1 as f32 + right[i].0;
+                if acc.1 > 0 && acc.1 < n && best.is_none_or(|(c, ..)| cost < c) {
+                    best = Some((cost, axis, i, acc.0, right[i].1));
                 }
             }
         }
-        let (cost, axis, last) = best?;
+        let (cost, axis, last, left_box, right_box) = best?;
         // Splitting costs one box test (≈ one triangle test) per visit.
         if n <= MAX_LEAF && area + cost >= area * n as f32 {
             return None;
         }
-        let scale = BINS as f32 / extent[axis];
-        let mut mid = start;
+        let (mut mid, mut centroids) = (start, [EMPTY, EMPTY]);
         for i in start..end {
-            if bin_of(self.centroid2(self.order[i])[axis], cmin[axis], scale) <= last {
-                self.order.swap(i, mid);
+            let c2 = self.items[i].centroid2();
+            if bin_of(c2[axis], cmin[axis], scale[axis]) <= last {
+                self.items.swap(i, mid);
                 mid += 1;
+                centroids[0] = grow(centroids[0], c2, c2);
+            } else {
+                centroids[1] = grow(centroids[1], c2, c2);
             }
         }
-        Some(mid)
+        Some(Split { mid, boxes: [left_box, right_box], centroids })
     }
 
-    /// Halves `order[start..end]` at the centroid median of the widest axis.
-    fn median_split(&mut self, start: usize, end: usize) -> usize {
-        let (cmin, cmax) = self.bounds(start, end, true);
+    /// Halves `items[start..end]` (centroid bounds `(cmin, cmax)`) at the
+    /// centroid median of the widest axis.
+    fn median_split(&mut self, start: usize, end: usize, (cmin, cmax): Bounds) -> usize {
         let axis = (cmax - cmin).max_position();
         let mid = (start + end) / 2;
-        let boxes = &self.boxes;
-        let key = |t: &u32| {
-            let (lo, hi) = boxes[*t as usize];
-            lo[axis] + hi[axis]
-        };
-        self.order[start..end].select_nth_unstable_by(mid - start, |a, b| key(a).total_cmp(&key(b)));
+        let key = |t: &Item| t.lo[axis] + t.hi[axis];
+        self.items[start..end].select_nth_unstable_by(mid - start, |a, b| key(a).total_cmp(&key(b)));
         mid
     }
 }
