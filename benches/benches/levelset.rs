@@ -237,7 +237,8 @@ fn peak_rss() -> usize {
 /// for the endpoint distances ([`ExportSettings::with_inputs`]), both distance
 /// volumes, the evolution keeping frames within the default budget
 /// ([`FRAME_BUDGET`](isomorph_levelset::FRAME_BUDGET)), and the 8 frames
-/// polygonized, measured and written with the contact sheet and report.
+/// polygonized, measured and written with the contact sheet and report
+/// (no `preview.gif`: the reference command passes `--no-preview`).
 fn cli(c: &mut Criterion) {
     let mut group = c.benchmark_group("cli/sphere_torus");
     group.sample_size(10).measurement_time(Duration::from_secs(45));
@@ -255,6 +256,7 @@ fn cli(c: &mut Criterion) {
                 frames: 8,
                 resolution: res,
                 out_dir: out.clone(),
+                preview: false,
                 ..ExportSettings::default()
             }
             .with_inputs(&source, &target, &control)

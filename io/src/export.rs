@@ -510,7 +510,7 @@ fn export_on_pool<M: Morph + ?Sized>(
                 .into_par_iter()
                 .map(|i| {
                     let (a, b) = (indexes[i - 1].as_ref()?, indexes[i].as_ref()?);
-                    a.distance_to(b, settings.step_samples).ok().map(|d| d.hausdorff)
+                    a.hausdorff_to(b, settings.step_samples).ok()
                 })
                 .collect::<Vec<Option<f32>>>()
         },

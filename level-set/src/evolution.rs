@@ -83,7 +83,7 @@ pub struct EvolveSettings {
     pub max_time_step: f32,
     /// How far (voxels) the fastest front moves per iteration, which sets
     /// the time step far from the target (in `(0, ½]`; default
-    /// [`FRONT_STEP`](crate::FRONT_STEP), eq. 24's ⅓).
+    /// [`FRONT_STEP`](crate::FRONT_STEP), ½; eq. 24 has ⅓).
     pub front_step: f32,
     /// Which intermediate frames to keep (the first and last always are).
     pub frames: FrameSchedule,
@@ -137,14 +137,26 @@ impl Default for EvolveSettings {
 }
 
 /// A finished level-set evolution: the kept frames and how it went. As a
-/// [`Morph`], `frame(t)` is the embedding after iteration `i = round(t·I)`
-/// of the `I` iterations run: the kept frame of that iteration when there
-/// is one (always for `t = 0` and `t = 1`), otherwise the values of the
-/// two kept frames bracketing `i` interpolated linearly in iterations
-/// (each frame's band values, `±1.5` voxels elsewhere; the interpolated
-/// zero set lies between the two frames' surfaces). It is placed by the
-/// interpolated transform `T(x, i/I)` (Breen eq. 25–26; see
-/// [`Placement`]).
+/// [`Morph`], `frame(t)` is the embedding where the surface has made the
+/// share `t` of its whole motion ([`LevelSetMorph::travel`]: the
+/// cumulative RMS change per iteration at the surface, in voxels): the
+/// kept frame at that travel when there is one (always for `t = 0` and
+/// `t = 1`), otherwise the values of the two kept frames bracketing it
+/// interpolated linearly in travel (each frame's band values, `±1.5`
+/// voxels elsewhere; the interpolated zero set lies between the two
+/// frames' surfaces). It is placed by the interpolated transform `T(x, t)`
+/// (Breen eq. 25–26; see [`Placement`]).
+///
+/// Frames are placed by travel, not by iteration or by evolution time
+/// (eq. 17's `t`), because both of those are dominated by the run's tail:
+/// the last iterations move the surface by thousandths of a voxel each,
+/// at the time-step cap of 1, and how many of them run depends on when
+/// the stopping test fires, which shifted every in-between frame of two
+/// runs converging to the same surface (a sphere as a mesh and as a
+/// `.npy` volume, `tests/tests/volumes.rs`). The travel of the tail is
+/// negligible, so a frame's place depends on how far the surface has come,
+/// as an animator expects: frames evenly spaced in `t` are about evenly
+/// spaced in motion.
 #[derive(Debug, Clone)]
 pub struct LevelSetMorph {
     frames: Vec<BandFrame>,
@@ -153,6 +165,8 @@ pub struct LevelSetMorph {
     spacing: f32,
     placement: Placement,
     stats: Vec<StepStats>,
+    /// [`LevelSetMorph::travel`]: one entry per iteration and the start.
+    travel: Vec<f64>,
     converged: bool,
     world: Aabb,
     report: MorphReport,
@@ -421,7 +435,25 @@ fn run(
         .with_warnings(overlap.warning());
     let field = Aabb::new(origin, origin + (dims - UVec3::ONE).as_vec3() * spacing);
     let world = placed_box(&field, &placement);
-    Ok(LevelSetMorph { frames, dims, origin, spacing, placement, stats, converged, world, report })
+    let travel = cumulative_travel(&stats);
+    Ok(LevelSetMorph { frames, dims, origin, spacing, placement, stats, travel, converged, world, report })
+}
+
+/// The surface's cumulative motion after each iteration (entry 0 the
+/// start): the running sum of [`StepStats::rms_change`] (voxels; a
+/// non-finite change counts as none), non-decreasing.
+fn cumulative_travel(stats: &[StepStats]) -> Vec<f64> {
+    let mut travel = Vec::with_capacity(stats.len() + 1);
+    let mut sum = 0.0;
+    travel.push(sum);
+    for s in stats {
+        let change = f64::from(s.rms_change);
+        if change.is_finite() && change > 0.0 {
+            sum += change;
+        }
+        travel.push(sum);
+    }
+    travel
 }
 
 /// A world box containing `field` placed by `T(·, α)` for every `α`: for
@@ -532,26 +564,41 @@ impl LevelSetMorph {
         Ok(Grid3::from_vec(self.dims, self.origin, self.spacing, data)?)
     }
 
-    /// The iteration shown at morph time `t`, `round(t·I)`.
-    fn iteration_at(&self, t: f32) -> usize {
-        (t * self.last_iteration() as f32).round() as usize
+    /// The surface's travel after each iteration (entry `i` after `i`
+    /// iterations, entry 0 the start): the cumulative sum of
+    /// [`StepStats::rms_change`], in voxels. Morph time `t` shows the
+    /// embedding at travel `t × travel.last()` (see [`LevelSetMorph`]).
+    pub fn travel(&self) -> &[f64] {
+        &self.travel
     }
 
-    /// Iterations run (the last kept frame's).
-    fn last_iteration(&self) -> usize {
-        self.frames.last().map_or(0, |f| f.iteration)
+    /// The travel (voxels) at which kept frame `n` was captured.
+    fn frame_travel(&self, n: usize) -> f64 {
+        let i = self.frames[n].iteration;
+        self.travel.get(i).or(self.travel.last()).copied().unwrap_or(0.0)
     }
 
-    /// The kept frames `(a, b)` bracketing `iteration` and the weight of
-    /// `b`: `(n, n, 0)` when frame `n` is that iteration's.
-    fn bracket(&self, iteration: usize) -> (usize, usize, f32) {
-        let b = self.frames.partition_point(|f| f.iteration < iteration).min(self.frames.len() - 1);
-        let ib = self.frames[b].iteration;
-        if ib <= iteration || b == 0 {
+    /// The kept frames `(a, b)` bracketing morph time `t` (in `[0, 1]`) and
+    /// the weight of `b`: `(n, n, 0)` when frame `n` is at that travel.
+    fn bracket(&self, t: f32) -> (usize, usize, f32) {
+        let last = self.frames.len() - 1;
+        if t >= 1.0 {
+            return (last, last, 0.0);
+        }
+        let end = self.frame_travel(last);
+        let at = f64::from(t) * end;
+        // The first kept frame at or past `at` (the travel never decreases).
+        let (mut b, mut hi) = (0, last);
+        while b < hi {
+            let mid = (b + hi) / 2;
+            if self.frame_travel(mid) < at { b = mid + 1 } else { hi = mid }
+        }
+        let tb = self.frame_travel(b);
+        if tb <= at || b == 0 {
             return (b, b, 0.0);
         }
-        let ia = self.frames[b - 1].iteration;
-        (b - 1, b, (iteration - ia) as f32 / (ib - ia) as f32)
+        let ta = self.frame_travel(b - 1);
+        (b - 1, b, ((at - ta) / (tb - ta)) as f32)
     }
 
     /// The embedding (world units) of nodes `start .. start + out.len()` at
@@ -564,11 +611,6 @@ impl LevelSetMorph {
             out.iter_mut().zip(&later).for_each(|(v, l)| *v = (1.0 - w) * *v + w * l);
         }
         out.iter_mut().for_each(|v| *v *= self.spacing);
-    }
-
-    /// The placement parameter `α = i/I` of iteration `i`.
-    fn alpha(&self, iteration: usize) -> f32 {
-        iteration as f32 / self.last_iteration().max(1) as f32
     }
 
     /// Breen's `T(x, α)` placing the kept frames.
@@ -591,9 +633,9 @@ impl Morph for LevelSetMorph {
     }
 
     fn frame(&self, t: f32) -> Result<Frame<Grid3<f32>>, LevelSetError> {
-        let i = self.iteration_at(check_time(t)?);
-        let field = self.grid_at(self.bracket(i))?;
-        Ok(Frame { field, iso: 0.0, transform: self.placement.affine_at(self.alpha(i)) })
+        let t = check_time(t)?;
+        let field = self.grid_at(self.bracket(t))?;
+        Ok(Frame { field, iso: 0.0, transform: self.placement.affine_at(t) })
     }
 
     /// The evolution lattice's box (source space).
@@ -610,10 +652,10 @@ impl Morph for LevelSetMorph {
     }
 
     /// Marching cubes directly on the frame's lattice (`res` ignored: the
-    /// resolution is the evolution's), placed by `T(x, i/I)`.
+    /// resolution is the evolution's), placed by `T(x, t)`.
     fn frame_mesh(&self, t: f32, _res: u32) -> Result<TriMesh, LevelSetError> {
-        let i = self.iteration_at(check_time(t)?);
-        let bracket = self.bracket(i);
+        let t = check_time(t)?;
+        let bracket = self.bracket(t);
         // Rebuilt plane by plane: the same mesh as marching cubes of
         // `frame(t)`'s grid, without the dense grid.
         let plane_len = (self.dims.x * self.dims.y) as usize;
@@ -622,13 +664,13 @@ impl Morph for LevelSetMorph {
             self.fill(bracket, k * plane_len, &mut values);
             Cow::Owned(values)
         });
-        self.placement.apply(&mut mesh, self.alpha(i));
+        self.placement.apply(&mut mesh, t);
         Ok(mesh)
     }
 
-    /// `T(·, i/I)`'s affine part, without making the frame.
+    /// `T(·, t)`'s affine part, without making the frame.
     fn world_transform(&self, t: f32) -> Result<Affine3A, LevelSetError> {
-        Ok(self.placement.affine_at(self.alpha(self.iteration_at(check_time(t)?))))
+        Ok(self.placement.affine_at(check_time(t)?))
     }
 
     /// Each point's field point `x` (`T(x, α) = p`, [`Placement::unplace`])
@@ -636,7 +678,7 @@ impl Morph for LevelSetMorph {
     /// (affine parts only) would read the inputs' colours where the frame
     /// lies, not where its surface came from.
     fn ends_of(&self, t: f32, points: &[Vec3]) -> Result<[Vec<Vec3>; 2], LevelSetError> {
-        let alpha = self.alpha(self.iteration_at(check_time(t)?));
+        let alpha = check_time(t)?;
         let Placement::Warp(warp) = &self.placement else {
             // An affine placement: two maps, computed once.
             let back = self.placement.affine_at(alpha).inverse();

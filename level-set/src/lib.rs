@@ -24,9 +24,10 @@
 //! [`FrameSchedule`] says ([`LevelSetMorph::new`] keeps at most
 //! `2 × FRAME_BUDGET + 2`, [`FRAME_BUDGET`], whatever the iteration count);
 //! the result is a [`LevelSetMorph`], an [`isomorph_common::Morph`], whose
-//! frame at time `t` is that of iteration `round(t·I)`, interpolated
-//! between the two kept frames around it when it was not kept, and
-//! polygonized plane by plane (no dense grid).
+//! frame at time `t` is where the surface has made the share `t` of its
+//! whole motion ([`LevelSetMorph::travel`]), interpolated between the two
+//! kept frames around it when it was not kept, and polygonized plane by
+//! plane (no dense grid).
 //!
 //! [`LevelSetMorph::new`] stores sparsely from [`SPARSE_FROM`] nodes up
 //! ([`Storage`]): the source's distance in a narrow band of bricks and its

@@ -15,7 +15,7 @@
 //!    limited second-order correction); the up-wind change (eq. 23) is
 //!    computed.
 //! 2. The changes are applied with one time step (the fastest front moving
-//!    [`StepParams::front_step`] voxels, ⅓ by eq. 24, and at most half a
+//!    [`StepParams::front_step`] voxels, ½ by default (⅓ by eq. 24), and at most half a
 //!    voxel of change); active points leaving `[−0.55, 0.55]` go on the
 //!    status lists `S±1`. An active point does not leave upwards while a
 //!    neighbour leaves downwards in the same iteration (and vice versa),

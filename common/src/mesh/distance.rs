@@ -183,6 +183,30 @@ impl IndexedSurface {
         Ok(outward.both_ways(self.sums(&self.rescaled(there, other.scale))))
     }
 
+    /// The two-sided sampled Hausdorff distance between this surface and
+    /// `other` (world units): [`IndexedSurface::distance_to`]'s `hausdorff`
+    /// (the same samples), without the mean, so that each sample only needs
+    /// its exact distance when it may be the largest
+    /// ([`TriangleBvh::farthest_distance_squared`]): several times faster.
+    ///
+    /// # Errors
+    /// As [`IndexedSurface::distance_to`].
+    pub fn hausdorff_to(&self, other: &IndexedSurface, samples: usize) -> Result<f32, DistanceError> {
+        let here =
+            surface_samples(&self.mesh, samples).ok_or(DistanceError::EmptySurface { which: "first" })?;
+        let there =
+            surface_samples(&other.mesh, samples).ok_or(DistanceError::EmptySurface { which: "second" })?;
+        let farthest = |index: &IndexedSurface, points: Vec<Vec3>| {
+            let d2 = index.bvh.farthest_distance_squared(&points).unwrap_or(0.0);
+            f64::from(d2.max(0.0)).sqrt() / f64::from(index.scale)
+        };
+        let (outward, inward) = rayon::join(
+            || farthest(other, other.rescaled(here, self.scale)),
+            || farthest(self, self.rescaled(there, other.scale)),
+        );
+        Ok(outward.max(inward) as f32)
+    }
+
     /// Two-sided distance between this surface and a reference surface that
     /// is known by points on it (`reference_points`, world units: e.g.
     /// [`surface_samples`] of its mesh) and by its own unsigned distance
@@ -286,6 +310,27 @@ mod tests {
                 assert!((got / f64::from(want) - 1.0).abs() < tolerance, "× {factor:e}: {d:?} vs {unit:?}");
             }
         }
+    }
+
+    #[test]
+    fn hausdorff_alone_equals_the_full_measure() {
+        let box_ = Aabb::cube(0.5);
+        let a = sphere(0.2, 40);
+        let torus = polygonize(&Shape::torus(0.25, 0.08), &box_, 48, 0.0).unwrap();
+        let mut far = a.clone();
+        far.append(&a.transformed(&glam::Affine3A::from_translation(Vec3::new(0.9, 0.0, 0.0))));
+        for (x, y) in [(&a, &torus), (&torus, &a), (&a, &far), (&far, &torus), (&a, &a)] {
+            let (x, y) = (IndexedSurface::new(x, &box_).unwrap(), IndexedSurface::new(y, &box_).unwrap());
+            for samples in [0, 1000] {
+                let full = x.distance_to(&y, samples).unwrap().hausdorff;
+                let alone = x.hausdorff_to(&y, samples).unwrap();
+                assert_eq!(alone, full, "{samples} samples");
+            }
+        }
+        let empty = TriMesh::new(vec![], vec![]).unwrap();
+        let e = IndexedSurface::new(&empty, &box_).unwrap();
+        let s = IndexedSurface::new(&a, &box_).unwrap();
+        assert!(matches!(s.hausdorff_to(&e, 10), Err(DistanceError::EmptySurface { which: "second" })));
     }
 
     #[test]

@@ -181,8 +181,9 @@ impl TriangleBvh {
         }
         let corners: Vec<[Vec3; 3]> = (0..n).map(|t| mesh.corners(t)).collect();
         let builder = Builder::new(&corners);
-        let tris = builder.order.iter().map(|&t| Tri::new(corners[t as usize])).collect();
-        Self { nodes: builder.nodes, tris, ids: builder.order }
+        let ids: Vec<u32> = builder.order().collect();
+        let tris = ids.iter().map(|&t| Tri::new(corners[t as usize])).collect();
+        Self { nodes: builder.nodes, tris, ids }
     }
 
     /// Number of triangles indexed.
@@ -234,6 +235,51 @@ impl TriangleBvh {
         });
     }
 
+    /// The largest squared distance from any point of `points` to the mesh
+    /// (the directed sampled Hausdorff distance, squared): the same figure
+    /// as the largest [`ClosestPoint::distance_squared`] of
+    /// [`TriangleBvh::closest_many`], for a fraction of its work. A point
+    /// only needs its exact distance when it may raise the maximum: its
+    /// search stops at the first triangle nearer than the largest distance
+    /// found so far (Taha & Hanbury's early break), and starts from its
+    /// predecessor's triangle, which in a coherent order (a mesh's vertices,
+    /// [`surface_samples`](crate::mesh::distance::surface_samples)) is
+    /// usually near enough already. Parallel over fixed chunks sharing the
+    /// running maximum; the result does not depend on the thread count or
+    /// the order. Non-finite points are skipped; `None` for an empty tree or
+    /// no finite point.
+    pub fn farthest_distance_squared(&self, points: &[Vec3]) -> Option<f32> {
+        use std::sync::atomic::{AtomicU32, Ordering};
+        if self.is_empty() {
+            return None;
+        }
+        // Non-negative f32s order as their bit patterns.
+        let running = AtomicU32::new(0);
+        let any = std::sync::atomic::AtomicBool::new(false);
+        points.par_chunks(CHUNK).for_each(|ps| {
+            let mut previous = Best::NONE;
+            for &p in ps {
+                if !p.is_finite() {
+                    continue;
+                }
+                let floor = f32::from_bits(running.load(Ordering::Relaxed));
+                let start = if previous == Best::NONE {
+                    Best::bound(f32::INFINITY)
+                } else {
+                    Best { d2: closest_on_triangle(p, &self.tris[previous as usize]).d2, slot: previous }
+                };
+                let best = if start.d2 < floor { start } else { self.search_until(p, start, floor) };
+                previous = best.slot;
+                any.store(true, Ordering::Relaxed);
+                if best.d2 >= floor {
+                    // The search ran to the end: `best.d2` is the exact distance.
+                    running.fetch_max(best.d2.to_bits(), Ordering::Relaxed);
+                }
+            }
+        });
+        any.into_inner().then(|| f32::from_bits(running.into_inner()))
+    }
+
     fn result(&self, p: Vec3, best: Best) -> Option<ClosestPoint> {
         if best.slot == Best::NONE {
             return None;
@@ -249,7 +295,15 @@ impl TriangleBvh {
 
     /// Ordered descent from the root, improving on `best`; nothing for a
     /// non-finite `p`.
-    fn search(&self, p: Vec3, mut best: Best) -> Best {
+    fn search(&self, p: Vec3, best: Best) -> Best {
+        self.search_until(p, best, f32::NEG_INFINITY)
+    }
+
+    /// [`Self::search`] that returns as soon as it finds a triangle at a
+    /// squared distance below `enough` (then the result is an upper bound
+    /// under `enough`, not the nearest); exact otherwise.
+    #[inline(always)]
+    fn search_until(&self, p: Vec3, mut best: Best, enough: f32) -> Best {
         if !p.is_finite() {
             return Best::bound(-1.0);
         }
@@ -273,6 +327,9 @@ impl TriangleBvh {
                     let d2 = closest_on_triangle(p, t).d2;
                     if d2 <= best.d2 {
                         best = Best { d2, slot: slot as u32 };
+                        if d2 < enough {
+                            return best;
+                        }
                     }
                 }
             } else {
@@ -351,146 +408,194 @@ fn closest_on_triangle(p: Vec3, t: &Tri) -> OnTriangle {
     best
 }
 
-/// Top-down binned-SAH construction state.
+/// A triangle during the build: its bounding box and index.
+#[derive(Debug, Clone, Copy)]
+struct Item {
+    lo: Vec3,
+    hi: Vec3,
+    id: u32,
+}
+
+impl Item {
+    /// Twice the centroid of the box (the factor 2 cancels in binning).
+    #[inline(always)]
+    fn centroid2(&self) -> Vec3 {
+        self.lo + self.hi
+    }
+}
+
+/// A box `(min, max)`; empty as `(+∞, −∞)`.
+type Bounds = (Vec3, Vec3);
+
+const EMPTY: Bounds = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+
+/// `b` grown by the box `[lo, hi]`.
+#[inline(always)]
+fn grow((min, max): Bounds, lo: Vec3, hi: Vec3) -> Bounds {
+    (min.min(lo), max.max(hi))
+}
+
+/// A chosen split of a node: the position in `items`, the children's boxes
+/// and the bounds of their (doubled) centroids.
+struct Split {
+    mid: usize,
+    boxes: [Bounds; 2],
+    centroids: [Bounds; 2],
+}
+
+/// Top-down binned-SAH construction state. The items are kept in the
+/// order they are partitioned into (so that every pass reads memory in
+/// sequence), and each split hands its children their boxes (from its
+/// bins) and centroid bounds (from its partition pass): one binning pass
+/// for all three axes and one partition pass per node.
 struct Builder {
-    /// Per-triangle bounding box; non-finite ones (from non-finite vertices,
-    /// which a validated mesh does not have) are replaced by the origin so
-    /// that binning stays well defined.
-    boxes: Vec<(Vec3, Vec3)>,
-    /// Triangle indices, partitioned into leaf order.
-    order: Vec<u32>,
+    /// Per-triangle boxes, partitioned into leaf order; non-finite ones
+    /// (from non-finite vertices, which a validated mesh does not have) are
+    /// replaced by the origin so that binning stays well defined.
+    items: Vec<Item>,
     nodes: Vec<Node>,
 }
 
 impl Builder {
     fn new(corners: &[[Vec3; 3]]) -> Self {
-        let boxes = corners
+        let items: Vec<Item> = corners
             .iter()
-            .map(|&[a, b, c]| {
+            .enumerate()
+            .map(|(id, &[a, b, c])| {
                 let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
-                if lo.is_finite() && hi.is_finite() { (lo, hi) } else { (Vec3::ZERO, Vec3::ZERO) }
+                let (lo, hi) =
+                    if lo.is_finite() && hi.is_finite() { (lo, hi) } else { (Vec3::ZERO, Vec3::ZERO) };
+                Item { lo, hi, id: id as u32 }
             })
             .collect();
-        let n = corners.len();
-        let mut builder = Self {
-            boxes,
-            order: (0..n as u32).collect(),
-            nodes: Vec::with_capacity(2 * n.div_ceil(MAX_LEAF)),
-        };
-        builder.nodes.push(builder.leaf(0, n));
-        builder.split(0, 0);
+        let n = items.len();
+        let mut builder = Self { items, nodes: Vec::with_capacity(2 * n.div_ceil(MAX_LEAF)) };
+        let (boxes, centroids) = builder.bounds(0, n);
+        builder.nodes.push(Node { min: boxes.0, first: 0, max: boxes.1, count: n as u32 });
+        builder.split(0, 0, centroids);
         builder
     }
 
-    /// Twice the centroid of triangle `t`'s box (the factor 2 cancels in binning).
-    #[inline]
-    fn centroid2(&self, t: u32) -> Vec3 {
-        let (lo, hi) = self.boxes[t as usize];
-        lo + hi
+    /// The triangles' original indices in leaf order.
+    fn order(&self) -> impl Iterator<Item = u32> + '_ {
+        self.items.iter().map(|i| i.id)
     }
 
-    /// Bounds of `order[start..end]`: of the triangle boxes, or with
-    /// `centroids` of the (doubled) centroids.
-    fn bounds(&self, start: usize, end: usize, centroids: bool) -> (Vec3, Vec3) {
-        self.order[start..end].iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(min, max), &t| {
-            let (lo, hi) = self.boxes[t as usize];
-            if centroids { (min.min(lo + hi), max.max(lo + hi)) } else { (min.min(lo), max.max(hi)) }
+    /// Bounds of `items[start..end]`: of the boxes and of the (doubled)
+    /// centroids.
+    fn bounds(&self, start: usize, end: usize) -> (Bounds, Bounds) {
+        self.items[start..end].iter().fold((EMPTY, EMPTY), |(b, c), t| {
+            let c2 = t.centroid2();
+            (grow(b, t.lo, t.hi), grow(c, c2, c2))
         })
     }
 
-    /// A leaf node over `order[start..end]`.
-    fn leaf(&self, start: usize, end: usize) -> Node {
-        let (min, max) = self.bounds(start, end, false);
-        Node { min, first: start as u32, max, count: (end - start) as u32 }
-    }
-
-    /// Splits the leaf `index` recursively while that pays off.
-    fn split(&mut self, index: usize, depth: usize) {
+    /// Splits the leaf `index`, whose centroids have the bounds
+    /// `centroids`, recursively while that pays off.
+    fn split(&mut self, index: usize, depth: usize, centroids: Bounds) {
         let node = self.nodes[index];
         let (start, end) = (node.first as usize, (node.first + node.count) as usize);
         if end - start <= 1 {
             return;
         }
-        let mid = match self.sah_split(start, end, depth, half_area(node.min, node.max)) {
-            Some(mid) => mid,
+        let split = match self.sah_split(start, end, depth, half_area(node.min, node.max), centroids) {
+            Some(split) => split,
             None if end - start <= MAX_LEAF => return,
-            None => self.median_split(start, end),
+            None => {
+                let mid = self.median_split(start, end, centroids);
+                let ((lb, lc), (rb, rc)) = (self.bounds(start, mid), self.bounds(mid, end));
+                Split { mid, boxes: [lb, rb], centroids: [lc, rc] }
+            }
         };
+        let Split { mid, boxes: [lb, rb], centroids: [lc, rc] } = split;
         let left = self.nodes.len();
-        let (l, r) = (self.leaf(start, mid), self.leaf(mid, end));
-        self.nodes.extend([l, r]);
+        self.nodes.extend([
+            Node { min: lb.0, first: start as u32, max: lb.1, count: (mid - start) as u32 },
+            Node { min: rb.0, first: mid as u32, max: rb.1, count: (end - mid) as u32 },
+        ]);
         self.nodes[index].first = left as u32;
         self.nodes[index].count = 0;
-        self.split(left, depth + 1);
-        self.split(left + 1, depth + 1);
+        self.split(left, depth + 1, lc);
+        self.split(left + 1, depth + 1, rc);
     }
 
-    /// Partitions `order[start..end]` (a node of half-area `area`) at the
-    /// cheapest binned SAH plane and returns the split position. `None` when a
-    /// leaf is cheaper (only for at most [`MAX_LEAF`] triangles), no plane
-    /// separates the centroids, or the tree is too deep for SAH.
-    fn sah_split(&mut self, start: usize, end: usize, depth: usize, area: f32) -> Option<usize> {
+    /// Partitions `items[start..end]` (a node of half-area `area` whose
+    /// centroids have the bounds `(cmin, cmax)`) at the cheapest binned SAH
+    /// plane. `None` when a leaf is cheaper (only for at most [`MAX_LEAF`]
+    /// triangles), no plane separates the centroids, or the tree is too
+    /// deep for SAH.
+    fn sah_split(
+        &mut self,
+        start: usize,
+        end: usize,
+        depth: usize,
+        area: f32,
+        (cmin, cmax): Bounds,
+    ) -> Option<Split> {
         let n = end - start;
         if depth >= SAH_DEPTH {
             return None;
         }
-        let (cmin, cmax) = self.bounds(start, end, true);
         let extent = cmax - cmin;
-        let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, last bin on the left)
-        for axis in 0..3 {
-            if extent[axis] <= 0.0 || extent[axis].is_nan() {
-                continue;
+        let usable = [0, 1, 2].map(|axis| extent[axis] > 0.0 && !extent[axis].is_nan());
+        let scale = Vec3::from_array(
+            [0, 1, 2].map(|axis| if usable[axis] { BINS as f32 / extent[axis] } else { 0.0 }),
+        );
+        // All three axes' bins in one pass.
+        let mut bins = [[(EMPTY, 0usize); BINS]; 3];
+        for t in &self.items[start..end] {
+            let c2 = t.centroid2();
+            for axis in 0..3 {
+                let bin = &mut bins[axis][bin_of(c2[axis], cmin[axis], scale[axis])];
+                *bin = (grow(bin.0, t.lo, t.hi), bin.1 + 1);
             }
-            let scale = BINS as f32 / extent[axis];
-            let mut bins = [(Vec3::INFINITY, Vec3::NEG_INFINITY, 0usize); BINS];
-            for &t in &self.order[start..end] {
-                let bin = &mut bins[bin_of(self.centroid2(t)[axis], cmin[axis], scale)];
-                let (lo, hi) = self.boxes[t as usize];
-                *bin = (bin.0.min(lo), bin.1.max(hi), bin.2 + 1);
-            }
+        }
+        // (cost, axis, last bin on the left, left box, right box)
+        let mut best: Option<(f32, usize, usize, Bounds, Bounds)> = None;
+        for axis in (0..3).filter(|&axis| usable[axis]) {
+            let bins = &bins[axis];
             // Cost of "bins[..=i] | bins[i + 1..]" from a suffix and a prefix sweep.
-            let mut right_cost = [0f32; BINS];
-            let mut acc = (Vec3::INFINITY, Vec3::NEG_INFINITY, 0);
+            let mut right = [(0f32, EMPTY); BINS];
+            let mut acc = (EMPTY, 0);
             for i in (1..BINS).rev() {
-                acc = (acc.0.min(bins[i].0), acc.1.max(bins[i].1), acc.2 + bins[i].2);
-                right_cost[i - 1] = half_area(acc.0, acc.1) * acc.2 as f32;
+                acc = (grow(acc.0, bins[i].0.0, bins[i].0.1), acc.1 + bins[i].1);
+                right[i - 1] = (half_area(acc.0.0, acc.0.1) * acc.1 as f32, acc.0);
             }
-            let mut acc = (Vec3::INFINITY, Vec3::NEG_INFINITY, 0);
+            let mut acc = (EMPTY, 0);
             for i in 0..BINS - 1 {
-                acc = (acc.0.min(bins[i].0), acc.1.max(bins[i].1), acc.2 + bins[i].2);
-                let cost = half_area(acc.0, acc.1) * acc.2 as f32 + right_cost[i];
-                if acc.2 > 0 && acc.2 < n && best.is_none_or(|(c, ..)| cost < c) {
-                    best = Some((cost, axis, i));
+                acc = (grow(acc.0, bins[i].0.0, bins[i].0.1), acc.1 + bins[i].1);
+                let cost = half_area(acc.0.0, acc.0.1) * acc.1 as f32 + right[i].0;
+                if acc.1 > 0 && acc.1 < n && best.is_none_or(|(c, ..)| cost < c) {
+                    best = Some((cost, axis, i, acc.0, right[i].1));
                 }
             }
         }
-        let (cost, axis, last) = best?;
+        let (cost, axis, last, left_box, right_box) = best?;
         // Splitting costs one box test (≈ one triangle test) per visit.
         if n <= MAX_LEAF && area + cost >= area * n as f32 {
             return None;
         }
-        let scale = BINS as f32 / extent[axis];
-        let mut mid = start;
+        let (mut mid, mut centroids) = (start, [EMPTY, EMPTY]);
         for i in start..end {
-            if bin_of(self.centroid2(self.order[i])[axis], cmin[axis], scale) <= last {
-                self.order.swap(i, mid);
+            let c2 = self.items[i].centroid2();
+            if bin_of(c2[axis], cmin[axis], scale[axis]) <= last {
+                self.items.swap(i, mid);
                 mid += 1;
+                centroids[0] = grow(centroids[0], c2, c2);
+            } else {
+                centroids[1] = grow(centroids[1], c2, c2);
             }
         }
-        Some(mid)
+        Some(Split { mid, boxes: [left_box, right_box], centroids })
     }
 
-    /// Halves `order[start..end]` at the centroid median of the widest axis.
-    fn median_split(&mut self, start: usize, end: usize) -> usize {
-        let (cmin, cmax) = self.bounds(start, end, true);
+    /// Halves `items[start..end]` (centroid bounds `(cmin, cmax)`) at the
+    /// centroid median of the widest axis.
+    fn median_split(&mut self, start: usize, end: usize, (cmin, cmax): Bounds) -> usize {
         let axis = (cmax - cmin).max_position();
         let mid = (start + end) / 2;
-        let boxes = &self.boxes;
-        let key = |t: &u32| {
-            let (lo, hi) = boxes[*t as usize];
-            lo[axis] + hi[axis]
-        };
-        self.order[start..end].select_nth_unstable_by(mid - start, |a, b| key(a).total_cmp(&key(b)));
+        let key = |t: &Item| t.lo[axis] + t.hi[axis];
+        self.items[start..end].select_nth_unstable_by(mid - start, |a, b| key(a).total_cmp(&key(b)));
         mid
     }
 }
@@ -735,6 +840,27 @@ mod tests {
                 check(&mesh, p, o);
             }
         }
+    }
+
+    #[test]
+    fn farthest_is_the_largest_closest_distance() {
+        let mesh = torus(3.0, 1.0, 40, 20);
+        let bvh = TriangleBvh::new(&mesh);
+        let other = bunny();
+        // The bunny's vertices (a coherent order) and a scatter, with a
+        // non-finite point that must be skipped.
+        let mut points: Vec<Vec3> = other.positions.iter().map(|&p| p * 4.0).collect();
+        points.extend((0..500).map(|i| Vec3::new((i % 7) as f32, (i % 11) as f32 - 5.0, (i % 5) as f32)));
+        points.insert(100, Vec3::NAN);
+        let mut out = vec![None; points.len()];
+        bvh.closest_many(&points, &mut out);
+        let want = out.iter().flatten().map(|c| c.distance_squared).fold(0.0, f32::max);
+        assert!(want > 1.0, "the scatter reaches away from the torus: {want}");
+        assert_eq!(bvh.farthest_distance_squared(&points), Some(want));
+        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        assert_eq!(one.install(|| bvh.farthest_distance_squared(&points)), Some(want));
+        assert_eq!(bvh.farthest_distance_squared(&[Vec3::NAN]), None);
+        assert_eq!(TriangleBvh::default().farthest_distance_squared(&points), None);
     }
 
     /// Times 128³ queries over the bunny's box padded by 10 % per side, in
