@@ -2,12 +2,12 @@
 //! `t = 0` and those of shape B at `t = t_max` in one higher dimension, one
 //! variational interpolation, and the in-between shapes as slices.
 
-use crate::Kernel;
 use crate::constraints::{NormalOffset, Subsample, SurfaceSettings, mesh_constraints};
 use crate::error::RbfError;
 use crate::greedy::{Centres, GreedySettings};
 use crate::interpolant::{Constraint, FitSettings, Interpolant};
 use crate::slice::{Slice2, Slice3};
+use crate::{Factorization, Kernel};
 use glam::{UVec2, Vec2, Vec3};
 use isomorph_common::MorphError;
 use isomorph_common::marching_squares::{Polyline2, marching_squares};
@@ -332,9 +332,15 @@ impl RbfMorph {
             Some(g) if g.converged => Outcome::Converged,
             Some(_) => Outcome::IterationCap,
         };
+        // The dense factorizations hold the n × n matrix and its factor; the
+        // iterative solvers' working memory is not estimated here.
+        let peak = match fit.factorization {
+            Factorization::Cholesky | Factorization::Lblt => Some(12 * n * n),
+            _ => None,
+        };
         let mut report = MorphReport::new("rbf", outcome)
             .with_rcond(fit.rcond)
-            .with_memory(n * (4 + 1) * size_of::<f64>(), Some(12 * n * n))
+            .with_memory(n * (4 + 1) * size_of::<f64>(), peak)
             .with_detail("constraints", n)
             .with_detail("merged", fit.merged)
             .with_detail("factorization", format!("{:?}", fit.factorization).as_str());
