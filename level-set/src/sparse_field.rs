@@ -218,6 +218,51 @@ impl SparseFieldSolver {
     }
 }
 
+/// The active set of the values `value(n)` (voxel units, positive inside):
+/// for every lattice edge the zero set crosses, the end closer to it, and
+/// every node within [`ACTIVE_MAX`] of it.
+fn active_nodes(lattice: &Lattice, value: &(impl Fn(usize) -> f32 + Sync)) -> Vec<u32> {
+    (0..lattice.len())
+        .into_par_iter()
+        .filter(|&n| {
+            let (un, inside) = (value(n), value(n) > 0.0);
+            lattice.neighbours(n).iter().flatten().any(|&m| {
+                let um = value(m);
+                (um > 0.0) != inside && (un.abs() <= um.abs() || un.abs() <= ACTIVE_MAX)
+            })
+        })
+        .map(|n| n as u32)
+        .collect()
+}
+
+/// The nodes of `value` (voxel units, positive inside) that share a side
+/// with none of their face neighbours, sorted, each with its value mirrored
+/// to their side. Each such node or one of its neighbours is in `active`
+/// (of every edge the zero set crosses, the end nearer to it is), so only
+/// those are looked at.
+fn one_node_islands(
+    lattice: &Lattice,
+    value: &(impl Fn(usize) -> f32 + Sync),
+    active: &[u32],
+) -> Vec<(usize, f32)> {
+    let mut near: Vec<usize> = active
+        .par_iter()
+        .flat_map_iter(|&n| {
+            let n = n as usize;
+            std::iter::once(n).chain(lattice.neighbours(n).into_iter().flatten())
+        })
+        .collect();
+    near.par_sort_unstable();
+    near.dedup();
+    near.into_par_iter()
+        .filter_map(|n| {
+            let inside = value(n) > 0.0;
+            let alone = lattice.neighbours(n).into_iter().flatten().all(|m| (value(m) > 0.0) != inside);
+            alone.then(|| (n, if inside { -value(n) } else { (-value(n)).max(f32::MIN_POSITIVE) }))
+        })
+        .collect()
+}
+
 impl<U: NodeStore<f32>, S: NodeStore<i8>> SparseFieldSolver<U, S> {
     /// Builds the active set and layers from the source's signed distance
     /// grid (world units, positive inside), keeping the embedding in `U`
@@ -240,22 +285,36 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> SparseFieldSolver<U, S> {
 
     /// The solver for the source values `value(n)` (voxel units, positive
     /// inside) on a lattice of `dims` nodes (at least 3 per axis).
+    ///
+    /// The source starts free of one-node islands, as every step keeps it
+    /// ([`Self::dissolve_islands`]): a node that none of its face neighbours
+    /// shares a side with (a source feature thinner than a voxel sampled at
+    /// one node, which marching cubes would show as a separate speck in the
+    /// first frame) takes their side, its value mirrored; unless that would
+    /// leave no surface at all (a source smaller than a voxel).
     fn build(dims: UVec3, value: impl Fn(usize) -> f32 + Sync) -> Result<Self, LevelSetError> {
         let lattice = Lattice::new(dims);
-        let active: Vec<u32> = (0..lattice.len())
-            .into_par_iter()
-            .filter(|&n| {
-                let (un, inside) = (value(n), value(n) > 0.0);
-                lattice.neighbours(n).iter().flatten().any(|&m| {
-                    let um = value(m);
-                    (um > 0.0) != inside && (un.abs() <= um.abs() || un.abs() <= ACTIVE_MAX)
-                })
-            })
-            .map(|n| n as u32)
-            .collect();
+        let mut active = active_nodes(&lattice, &value);
         if active.is_empty() {
             return Err(LevelSetError::NoSurface("source"));
         }
+        let mut islands = one_node_islands(&lattice, &value, &active);
+        if !islands.is_empty() {
+            let mirrored = |n: usize| match islands.binary_search_by_key(&n, |i| i.0) {
+                Ok(k) => islands[k].1,
+                Err(_) => value(n),
+            };
+            let without = active_nodes(&lattice, &mirrored);
+            if without.is_empty() {
+                islands.clear();
+            } else {
+                active = without;
+            }
+        }
+        let value = |n: usize| match islands.binary_search_by_key(&n, |i| i.0) {
+            Ok(k) => islands[k].1,
+            Err(_) => value(n),
+        };
         let inside = |n: usize| value(n) > 0.0;
         let reach = LAYERS as u32;
         let mut u = U::by_side(dims, inside, &active, reach, [-FAR_VALUE, FAR_VALUE])?;
@@ -1001,6 +1060,42 @@ mod tests {
         let grid = Grid3::from_vec(source.dims(), source.origin(), h, u).unwrap();
         let mesh = isomorph_common::marching_cubes::marching_cubes(&grid, 0.0);
         assert_eq!(mesh.metrics().components, 1);
+    }
+
+    /// A source feature thinner than a voxel, sampled at single nodes (the
+    /// same diagonal sheet, now in the source outside its body: its nodes
+    /// touch along edges only), starts on the body's side, so the first frame is the body's one component; a source
+    /// smaller than a voxel (one node inside) is kept rather than lost.
+    #[test]
+    fn the_source_starts_without_one_node_islands() {
+        let n = 32u32;
+        let bounds = Aabb::cube(0.5);
+        let probe = Grid3::sample_box(&Shape::sphere(0.2), &bounds, n).unwrap();
+        let h = probe.spacing();
+        let node = UVec3::new(24, 16, 16);
+        let speck = probe.position(node.x, node.y, node.z);
+        let normal = Vec3::ONE.normalize();
+        let sheet =
+            move |p: Vec3| (0.3 * h - normal.dot(p - speck).abs()).min(2.0 * h - (p - speck).length());
+        let body = Shape::sphere(0.2);
+        let source = Grid3::sample_box(&move |p: Vec3| body.value(p).max(sheet(p)), &bounds, n).unwrap();
+        let index = source.index(node.x, node.y, node.z);
+        assert!(source.data()[index] > 0.0, "the sheet's node is inside the source");
+        let grid_of = |solver: &SparseFieldSolver| {
+            let u: Vec<f32> = dense(&solver.u, source.len()).iter().map(|v| v * h).collect();
+            Grid3::from_vec(source.dims(), source.origin(), h, u).unwrap()
+        };
+        let raw = isomorph_common::marching_cubes::marching_cubes(&source, 0.0);
+        assert!(raw.metrics().components > 1, "the sampled source has specks");
+        let solver = SparseFieldSolver::new(&source).unwrap();
+        assert!(solver.u[index] <= 0.0, "the speck's node starts outside: {}", solver.u[index]);
+        let start = isomorph_common::marching_cubes::marching_cubes(&grid_of(&solver), 0.0);
+        assert_eq!(start.metrics().components, 1);
+        let mut dot = vec![-h; source.len()];
+        dot[index] = 0.5 * h;
+        let dot = Grid3::from_vec(source.dims(), source.origin(), h, dot).unwrap();
+        let solver = SparseFieldSolver::new(&dot).unwrap();
+        assert!(solver.u[index] > 0.0 && solver.active_len() > 0);
     }
 
     #[test]
