@@ -535,6 +535,15 @@ fn export_on_pool<M: Morph + ?Sized>(
             ));
         }
     }
+    let ends = [
+        ("first", "source", &settings.source_reference, frames.first()),
+        ("last", "target", &settings.target_reference, frames.last()),
+    ];
+    for (which, input, reference, frame) in ends {
+        if let (Some(reference), Some(frame)) = (reference, frame) {
+            warnings.extend(extra_pieces_warning(which, input, reference, frame));
+        }
+    }
     let report = Report {
         method: morph.method().to_string(),
         resolution: settings.resolution,
@@ -551,6 +560,27 @@ fn export_on_pool<M: Morph + ?Sized>(
     let json = serde_json::to_string_pretty(&report).expect("report serializes");
     std::fs::write(&path, json).map_err(|source| ExportError::Io { path, source })?;
     Ok(Exported { report, meshes })
+}
+
+/// A warning when the end frame `frame` (`which`: "first" or "last") has
+/// more outer shells than its input's surface `reference` (`input`:
+/// "source" or "target"): pieces the input does not have, specks of the
+/// method or parts the grid splits. Only more shells than the input count:
+/// an open input's patch soup has a component per patch.
+fn extra_pieces_warning(
+    which: &str,
+    input: &str,
+    reference: &TriMesh,
+    frame: &FrameReport,
+) -> Option<String> {
+    let m = reference.metrics();
+    let (shells, expected) = (frame.components - frame.voids, m.components - m.voids);
+    (shells > expected).then(|| {
+        format!(
+            "the {which} frame has {shells} separate pieces where the {input} has {expected}: \
+             the extra ones are not in the {input} (specks of the method or pieces the grid splits)"
+        )
+    })
 }
 
 /// The inputs' surfaces to measure the end frames against
@@ -592,4 +622,43 @@ pub fn frame_tiles(
         }
     }
     times.par_iter().zip(meshes).map(|(t, m)| (render(m, &settings), format!("t = {t:.2}"))).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use isomorph_common::mesh::primitives::uv_sphere;
+
+    fn frame_of(components: usize, voids: usize) -> FrameReport {
+        FrameReport {
+            t: 1.0,
+            file: String::new(),
+            vertices: 0,
+            triangles: 0,
+            components,
+            voids,
+            genus: Some(0),
+            area: 1.0,
+            volume: 1.0,
+            seconds: 0.0,
+            step_from_previous: None,
+        }
+    }
+
+    /// More outer shells than the input is reported (the 25,000-point RBF
+    /// dragon's last frame had 4 where the mesh has 1); as many, or fewer
+    /// than an input of several pieces (an open patch soup), is not; voids
+    /// are not shells.
+    #[test]
+    fn end_frames_with_more_pieces_than_their_input_are_reported() {
+        let one = uv_sphere(Vec3::ZERO, 0.3, 12, 16);
+        let warning = extra_pieces_warning("last", "target", &one, &frame_of(4, 0)).unwrap();
+        assert!(warning.contains("4 separate pieces where the target has 1"), "{warning}");
+        assert_eq!(extra_pieces_warning("last", "target", &one, &frame_of(1, 0)), None);
+        assert_eq!(extra_pieces_warning("first", "source", &one, &frame_of(2, 1)), None);
+        let mut two = one.clone();
+        two.append(&uv_sphere(Vec3::X, 0.3, 12, 16));
+        assert_eq!(extra_pieces_warning("last", "target", &two, &frame_of(2, 0)), None);
+        assert!(extra_pieces_warning("last", "target", &two, &frame_of(3, 0)).is_some());
+    }
 }
