@@ -4,6 +4,7 @@ and compare. Resolutions are small (32-40) to keep the suite quick."""
 
 import _thread
 import json
+import signal
 import threading
 import time
 
@@ -224,6 +225,10 @@ def test_keyboard_interrupt_cancels_the_build():
     # _thread.interrupt_main() raises the SIGINT handler's KeyboardInterrupt
     # in the main thread at its next signal check, as Ctrl-C does. The build
     # (level set at 200^3) lasts seconds, far longer than the 0.1 s delay.
+    # Python's own Ctrl-C handler is installed for the test: a process
+    # started in the background by a non-interactive shell inherits SIGINT
+    # ignored, and interrupt_main() then does nothing.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     timer = threading.Timer(0.1, _thread.interrupt_main)
     start = time.monotonic()
     timer.start()
@@ -233,6 +238,7 @@ def test_keyboard_interrupt_cancels_the_build():
         elapsed = time.monotonic() - start
     finally:
         timer.cancel()
+        signal.signal(signal.SIGINT, previous)
     # Cancelled through the contract: the call returns long before the build would end.
     assert elapsed < 30
 
