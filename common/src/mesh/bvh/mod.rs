@@ -637,17 +637,18 @@ mod tests {
     fn check(mesh: &TriMesh, p: Vec3, got: Option<ClosestPoint>) {
         let (want, _) = brute_force(mesh, p).expect("non-empty mesh");
         let got = got.expect("a finite query on a non-empty mesh has an answer");
-        let diff = (got.distance_squared - want).abs();
+        let [a, b, c] = mesh.corners(got.triangle as usize);
+        // Rounding of a distance is relative to the coordinates' magnitude,
+        // not to the distance (a BVH and brute force may round differently).
+        let scale = 1.0 + a.abs().max(b.abs()).max(c.abs()).max(p.abs()).max_element();
+        let diff = (got.distance_squared.sqrt() - want.sqrt()).abs();
         assert!(
-            diff <= 1e-6 * want + 1e-12,
-            "at {p}: expected d² {want}, got {}, difference {diff}",
+            diff <= 1e-6 * scale,
+            "at {p}: expected d² {want}, got {}, distance difference {diff}",
             got.distance_squared
         );
-        let [a, b, c] = mesh.corners(got.triangle as usize);
         let w = got.barycentric;
         assert!(w.min_element() >= 0.0 && (w.element_sum() - 1.0).abs() < 1e-5, "barycentric {w}");
-        // Rounding of the point is relative to the coordinates' magnitude.
-        let scale = 1.0 + a.abs().max(b.abs()).max(c.abs()).max(p.abs()).max_element();
         let off_triangle = (w.x * a + w.y * b + w.z * c - got.point).length();
         assert!(off_triangle <= 1e-5 * scale, "point {} is {off_triangle} off its triangle", got.point);
         let (d, reported) = ((p - got.point).length(), got.distance_squared.sqrt());
