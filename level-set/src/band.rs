@@ -85,25 +85,26 @@ impl BandFrame {
         let band = merge(&merge(&a, &b, by_node), &c, by_node);
         let inside = |n: usize| u[n] > 0.0;
         let nx = lattice.dims()[0];
+        // Both scans in parallel (ordered collects keep node order).
         let within: Vec<u32> = band
-            .iter()
+            .par_iter()
             .map(|&(n, _)| n as usize)
             .filter(|&n| n % nx != 0 && inside(n) != inside(n - 1))
             .map(|n| n as u32)
             .collect();
-        // Row starts `(0, j, k)` against the node before, `(nx − 1, j − 1, k)`
-        // or `(nx − 1, ny − 1, k − 1)`: read by coordinates.
+        // Row starts `(0, j, k)` (row `r = k ny + j`) against the node
+        // before, `(nx − 1, j − 1, k)` or `(nx − 1, ny − 1, k − 1)`: read by
+        // coordinates.
         let [_, ny, nz] = lattice.dims();
         let inside_at = |n: usize, c: [usize; 3]| u.at(n, c) > 0.0;
-        let across: Vec<u32> = (0..nz)
-            .flat_map(|k| (0..ny).map(move |j| (j, k)))
-            .skip(1)
-            .filter(|&(j, k)| {
-                let n = (k * ny + j) * nx;
+        let across: Vec<u32> = (1..ny * nz)
+            .into_par_iter()
+            .filter(|&r| {
+                let (j, k) = (r % ny, r / ny);
                 let before = if j > 0 { [nx - 1, j - 1, k] } else { [nx - 1, ny - 1, k - 1] };
-                inside_at(n, [0, j, k]) != inside_at(n - 1, before)
+                inside_at(r * nx, [0, j, k]) != inside_at(r * nx - 1, before)
             })
-            .map(|(j, k)| ((k * ny + j) * nx) as u32)
+            .map(|r| (r * nx) as u32)
             .collect();
         let flips = merge(&within, &across, |&n| n);
         let first_inside = u[0] > 0.0;

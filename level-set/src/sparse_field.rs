@@ -410,11 +410,10 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> SparseFieldSolver<U, S> {
         let active = std::mem::take(&mut self.layers[slot(0)]);
         // The new values first: whether a point may leave reads its neighbours'.
         let mut before = std::mem::take(&mut self.before);
-        before.clear();
+        let u = &self.u;
+        active.par_iter().map(|&n| u[n as usize]).collect_into_vec(&mut before);
         for (&n, &(rate, _, _)) in active.iter().zip(&self.rates) {
-            let n = n as usize;
-            before.push(self.u[n]);
-            self.u[n] += dt * rate;
+            self.u[n as usize] += dt * rate;
         }
         self.dissolve_islands(&active, &before);
         let mut leaving = std::mem::take(&mut self.leaving);
@@ -826,8 +825,11 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> Solver for SparseFieldSolver<U, S> {
 
     fn step(&mut self, speed: &SpeedGrid, params: &StepParams) -> StepStats {
         self.compute_rates(speed, params.curvature);
-        let max_gamma = self.rates.iter().fold(0.0f32, |m, r| m.max(r.1.abs()));
-        let max_rate = self.rates.iter().fold(0.0f32, |m, r| m.max(r.0.abs()));
+        let (max_rate, max_gamma) = self
+            .rates
+            .par_iter()
+            .map(|r| (r.0.abs(), r.1.abs()))
+            .reduce(|| (0.0, 0.0), |a, b| (a.0.max(b.0), a.1.max(b.1)));
         let mut dt = stable_time_step(max_gamma, params);
         if max_rate > 0.0 {
             dt = dt.min(ACTIVE_MAX / max_rate);
