@@ -228,12 +228,19 @@ pub fn run(args: &MorphArgs, matches: &ArgMatches) -> anyhow::Result<()> {
 pub fn morph(method: Method, io: &Io, settings: &Settings, out: &Path) -> anyhow::Result<Report> {
     let (control, bar) = progress::control(method.name(), io.threads.map(|n| n as usize))?;
     let inputs = io.inputs(method)?;
-    let morph = build(method, &inputs.0, &inputs.1, settings, &control)
-        .with_context(|| format!("the {} morph failed", method.name()))?;
+    // The export's references (the inputs' surfaces, polygonized) are made
+    // while the morph is built: the method's serial parts leave a core idle.
+    let (morph, export) = std::thread::scope(|scope| {
+        let export = scope.spawn(|| io.export(out.to_path_buf(), &inputs, &control));
+        let morph = build(method, &inputs.0, &inputs.1, settings, &control);
+        let export = export.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        (morph, export)
+    });
+    let morph = morph.with_context(|| format!("the {} morph failed", method.name()))?;
     for warning in &morph.report().warnings {
         bar.suspend(|| eprintln!("warning: {warning}"));
     }
-    let export = io.export(out.to_path_buf(), &inputs, &control)?;
+    let export = export?;
     let exported = export_sequence(&*morph, &export, &control);
     bar.finish_and_clear();
     let report = exported.with_context(|| format!("cannot export the frames to {}", out.display()))?.report;

@@ -473,20 +473,6 @@ fn export_on_pool<M: Morph + ?Sized>(
         let mut file = std::io::BufWriter::new(std::fs::File::create(&path).map_err(io_error)?);
         write_usda(&meshes, &usd, &mut file).and_then(|()| file.flush()).map_err(io_error)?;
     }
-    if settings.contact_sheet || settings.preview {
-        control.check()?;
-        control.progress("contact sheet", None, String::new);
-        let times: Vec<f32> = frames.iter().map(|f| f.t).collect();
-        let tiles = frame_tiles(&times, &meshes, &settings.render);
-        if settings.contact_sheet {
-            contact_sheet(&tiles, settings.sheet_columns).write_png(dir.join("contact_sheet.png"))?;
-        }
-        if settings.preview {
-            let images: Vec<Image> = tiles.into_iter().map(|(image, _)| image).collect();
-            write_gif(&images, PREVIEW_DELAY, dir.join("preview.gif"))?;
-        }
-    }
-
     control.check()?;
     control.progress("metrics", None, String::new);
     let voxel = world_voxel(&morph.world_bounds(), settings.resolution);
@@ -502,25 +488,45 @@ fn export_on_pool<M: Morph + ?Sized>(
         };
         Some(EndpointDistance::new(d.ok()?, voxel))
     };
-    // The steps and both endpoints at once, so that every core stays busy
-    // (an endpoint's reference mesh is the largest of all).
-    let (steps, (source, target)) = rayon::join(
-        || {
-            (1..total)
-                .into_par_iter()
-                .map(|i| {
-                    let (a, b) = (indexes[i - 1].as_ref()?, indexes[i].as_ref()?);
-                    a.hausdorff_to(b, settings.step_samples).ok()
-                })
-                .collect::<Vec<Option<f32>>>()
-        },
+    // The end frames' pieces against their inputs' (an input's metrics are
+    // serial work on the largest meshes).
+    let piece_warnings = || -> Vec<String> {
+        let ends = [
+            ("first", "source", &settings.source_reference, frames.first()),
+            ("last", "target", &settings.target_reference, frames.last()),
+        ];
+        ends.into_par_iter()
+            .filter_map(|(which, input, reference, frame)| {
+                extra_pieces_warning(which, input, reference.as_ref()?, frame?)
+            })
+            .collect()
+    };
+    // The pictures, the steps, both endpoints and the pieces at once, so
+    // that every core stays busy (writing the pictures is serial, an
+    // endpoint's reference mesh is the largest of all).
+    let ((pictures, pieces), (steps, (source, target))) = rayon::join(
+        || rayon::join(|| write_pictures(&frames, &meshes, settings, control), piece_warnings),
         || {
             rayon::join(
-                || endpoint(&settings.source_reference, &settings.source_solid, &indexes[0]),
-                || endpoint(&settings.target_reference, &settings.target_solid, &indexes[total - 1]),
+                || {
+                    (1..total)
+                        .into_par_iter()
+                        .map(|i| {
+                            let (a, b) = (indexes[i - 1].as_ref()?, indexes[i].as_ref()?);
+                            a.hausdorff_to(b, settings.step_samples).ok()
+                        })
+                        .collect::<Vec<Option<f32>>>()
+                },
+                || {
+                    rayon::join(
+                        || endpoint(&settings.source_reference, &settings.source_solid, &indexes[0]),
+                        || endpoint(&settings.target_reference, &settings.target_solid, &indexes[total - 1]),
+                    )
+                },
             )
         },
     );
+    pictures?;
     for (frame, step) in frames.iter_mut().skip(1).zip(&steps) {
         frame.step_from_previous = *step;
     }
@@ -535,15 +541,7 @@ fn export_on_pool<M: Morph + ?Sized>(
             ));
         }
     }
-    let ends = [
-        ("first", "source", &settings.source_reference, frames.first()),
-        ("last", "target", &settings.target_reference, frames.last()),
-    ];
-    for (which, input, reference, frame) in ends {
-        if let (Some(reference), Some(frame)) = (reference, frame) {
-            warnings.extend(extra_pieces_warning(which, input, reference, frame));
-        }
-    }
+    warnings.extend(pieces);
     let report = Report {
         method: morph.method().to_string(),
         resolution: settings.resolution,
@@ -560,6 +558,33 @@ fn export_on_pool<M: Morph + ?Sized>(
     let json = serde_json::to_string_pretty(&report).expect("report serializes");
     std::fs::write(&path, json).map_err(|source| ExportError::Io { path, source })?;
     Ok(Exported { report, meshes })
+}
+
+/// Renders the frames (`meshes`, at the times of `frames`) and writes
+/// `contact_sheet.png` and `preview.gif` into `settings.out_dir`, as
+/// `settings` ask.
+fn write_pictures(
+    frames: &[FrameReport],
+    meshes: &[TriMesh],
+    settings: &ExportSettings,
+    control: &Control,
+) -> Result<(), ExportError> {
+    if !(settings.contact_sheet || settings.preview) {
+        return Ok(());
+    }
+    control.check()?;
+    control.progress("contact sheet", None, String::new);
+    let times: Vec<f32> = frames.iter().map(|f| f.t).collect();
+    let tiles = frame_tiles(&times, meshes, &settings.render);
+    let dir = &settings.out_dir;
+    if settings.contact_sheet {
+        contact_sheet(&tiles, settings.sheet_columns).write_png(dir.join("contact_sheet.png"))?;
+    }
+    if settings.preview {
+        let images: Vec<Image> = tiles.into_iter().map(|(image, _)| image).collect();
+        write_gif(&images, PREVIEW_DELAY, dir.join("preview.gif"))?;
+    }
+    Ok(())
 }
 
 /// A warning when the end frame `frame` (`which`: "first" or "last") has
