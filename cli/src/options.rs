@@ -96,6 +96,12 @@ pub struct MethodArgs {
     /// The evolution speed.
     #[arg(long, help_heading = "T-spline (Yang & Jüttler)", value_enum, default_value_t = SpeedArg::Robust)]
     pub speed: SpeedArg,
+    /// Curvature weight β of the robust speed (`--speed robust`), in finest
+    /// T-mesh cells: v = clamp(d_B, ±0.2) + β h (1 − λ) κ (0 to 10; higher
+    /// smooths the in-between shapes more and slows growth into thin target
+    /// parts) [default: the library's, 1].
+    #[arg(long, help_heading = "T-spline (Yang & Jüttler)", value_parser = parse_beta_cells)]
+    pub beta_cells: Option<f64>,
     /// Largest number of surface samples per octree cell.
     #[arg(long, help_heading = "T-spline (Yang & Jüttler)", default_value_t = TsplineSettings::default().tmesh.max_samples_per_cell)]
     pub nt: usize,
@@ -233,6 +239,7 @@ const OWNERS: &[(&str, &[Method])] = &[
     ("landmarks", &[Method::Warp, Method::Rbf, Method::LevelSet]),
     ("control_spacing", &[Method::Warp]),
     ("speed", &[Method::Tspline]),
+    ("beta_cells", &[Method::Tspline]),
     ("nt", &[Method::Tspline]),
     ("depth", &[Method::Tspline]),
     ("min_depth", &[Method::Tspline]),
@@ -358,10 +365,11 @@ impl MethodArgs {
         };
         t.evolve.step = self.step;
         t.margin = self.margin;
-        t.evolve.speed = match self.speed {
-            SpeedArg::Paper => Speed::Paper,
-            SpeedArg::Distance => Speed::Distance,
-            SpeedArg::Robust => TsplineSettings::default().evolve.speed,
+        t.evolve.speed = match (self.speed, self.beta_cells) {
+            (SpeedArg::Robust, beta) => Speed::robust(beta.unwrap_or(Speed::ROBUST_BETA_CELLS)),
+            (_, Some(_)) => bail!("--beta-cells is the robust speed's: give it with --speed robust"),
+            (SpeedArg::Paper, None) => Speed::Paper,
+            (SpeedArg::Distance, None) => Speed::Distance,
         };
         t.fit.refinement = self
             .refine
@@ -459,6 +467,16 @@ fn parse_align(s: &str) -> Result<AlignArg, String> {
 fn parse_weight(s: &str) -> Result<f32, String> {
     let w: f32 = s.parse().map_err(|e| format!("{e}"))?;
     if (0.0..=100.0).contains(&w) { Ok(w) } else { Err(format!("{w} is not in [0, 100]")) }
+}
+
+/// Accepts a finite robust-speed curvature weight in `[0, 10]` finest cells.
+fn parse_beta_cells(s: &str) -> Result<f64, String> {
+    let b: f64 = s.parse().map_err(|e| format!("{e}"))?;
+    if (0.0..=Speed::MAX_BETA_CELLS).contains(&b) {
+        Ok(b)
+    } else {
+        Err(format!("{b} is not in [0, {}] finest cells", Speed::MAX_BETA_CELLS))
+    }
 }
 
 /// How a BlobTree morph uses its `--via` shapes.

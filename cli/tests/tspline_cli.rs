@@ -1,6 +1,7 @@
 //! The T-spline method from the command line: `--align auto|none|MAP.json`
 //! (paper §4.2, frames placed by eq. 11), its knobs (minimum depth, sample
-//! spacing, step cap, distance-field weight, projection frames), their range
+//! spacing, step cap, distance-field weight, the robust speed's β,
+//! projection frames), their range
 //! errors, and the paper speed's stall printed as a warning.
 
 mod common;
@@ -122,6 +123,8 @@ fn tspline_knobs_reach_the_settings_and_bad_values_name_their_range() {
         "20",
         "--far-field-weight",
         "10",
+        "--beta-cells",
+        "0.25",
         "--no-projection-frames",
     ];
     let out = dir.join("knobs");
@@ -134,6 +137,7 @@ fn tspline_knobs_reach_the_settings_and_bad_values_name_their_range() {
     assert_eq!(m["details"]["level_sets"], 4, "{m}");
     // A uniform depth-3 T-mesh: 9³ coefficients.
     assert_eq!(m["details"]["coefficients"], 729, "{m}");
+    assert_eq!(m["details"]["speed"], "robust (v_max 0.2, beta 0.25 finest cells)", "{m}");
     let warnings = format!("{}", m["warnings"]);
     assert!(warnings.contains("step cap (3)"), "{warnings}");
 
@@ -165,6 +169,15 @@ fn tspline_knobs_reach_the_settings_and_bad_values_name_their_range() {
     assert!(err.contains("far_field_weight = -1"), "{err}");
     let err = run(&["--stall-steps", "0"]);
     assert!(err.contains("stall_steps = 0") && err.contains(">= 1"), "{err}");
+    let err = run(&["--beta-cells", "11"]);
+    assert!(err.contains("--beta-cells") && err.contains("[0, 10]"), "{err}");
+    let err = run(&["--speed", "paper", "--beta-cells", "0.5"]);
+    assert!(err.contains("--beta-cells") && err.contains("--speed robust"), "{err}");
+    // The help states the range and the library's default.
+    let help = String::from_utf8(isomorph(&["morph", "--help"]).stdout).unwrap();
+    let help = help.split_whitespace().collect::<Vec<_>>().join(" ");
+    let default = format!("[default: the library's, {}]", isomorph_tspline::Speed::ROBUST_BETA_CELLS);
+    assert!(help.contains("(0 to 10;") && help.contains(&default), "{help}");
     // The knobs belong to the T-spline method.
     let o = morph("level-set", "sphere", "torus", &["--max-steps", "3"]);
     let err = stderr(&o);

@@ -368,6 +368,7 @@ const SETTINGS: &[(&str, &[Method])] = &[
     ("step", &[Method::Tspline]),
     ("margin", &[Method::Tspline]),
     ("speed", &[Method::Tspline]),
+    ("beta_cells", &[Method::Tspline]),
     ("max_steps", &[Method::Tspline]),
     ("refine", &[Method::Tspline]),
     ("refine_rounds", &[Method::Tspline]),
@@ -453,6 +454,7 @@ fn apply_settings(
     let mut refine_rounds = 3usize;
     let mut triangulation_samples = false;
     let mut sample_edge = DEFAULT_SAMPLE_EDGE;
+    let mut beta_cells = None;
     for (key, value) in kwargs.iter() {
         let name: String = key.extract()?;
         let Some((_, owners)) = SETTINGS.iter().find(|(n, _)| *n == name) else {
@@ -570,6 +572,7 @@ fn apply_settings(
                     _ => TsplineSettings::default().evolve.speed,
                 }
             }
+            "beta_cells" => beta_cells = Some(number(&name, v, "a number", (0.0f64, Speed::MAX_BETA_CELLS))?),
             "max_steps" => s.tspline.evolve.max_steps = number(&name, v, "an integer", (1usize, 10_000_000))?,
             "refine" => refine = optional(v, |v| number(&name, v, "a number", (f64::MIN_POSITIVE, 1e3)))?,
             "refine_rounds" => refine_rounds = number(&name, v, "an integer", (1usize, 1000))?,
@@ -599,6 +602,12 @@ fn apply_settings(
         }
     }
     s.tspline.fit.refinement = refine.map(|tolerance| Refinement { tolerance, max_rounds: refine_rounds });
+    if let Some(beta) = beta_cells {
+        if !matches!(s.tspline.evolve.speed, Speed::Robust { .. }) {
+            return Err(setting_error(py, "beta_cells", "is the robust speed's: give it with speed='robust'"));
+        }
+        s.tspline.evolve.speed = Speed::robust(beta);
+    }
     if triangulation_samples {
         s.tspline.evolve.sampler = Sampler::MarchingTriangulation { edge_cells: sample_edge };
     }
@@ -644,6 +653,10 @@ fn default_of<'py>(py: Python<'py>, name: &str, s: &Settings, method: Method) ->
         "step" => s.tspline.evolve.step.into_pyobject(py)?.into_any(),
         "margin" => s.tspline.margin.into_pyobject(py)?.into_any(),
         "speed" => "robust".into_pyobject(py)?.into_any(),
+        "beta_cells" => match s.tspline.evolve.speed {
+            Speed::Robust { beta_cells, .. } => beta_cells.into_pyobject(py)?.into_any(),
+            _ => py.None().into_bound(py),
+        },
         "max_steps" => s.tspline.evolve.max_steps.into_pyobject(py)?.into_any(),
         "refine" => py.None().into_bound(py),
         "refine_rounds" => 3usize.into_pyobject(py)?.into_any(),

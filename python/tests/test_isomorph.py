@@ -181,6 +181,16 @@ def test_tspline_stall_and_far_field_settings_reach_the_evolution():
         isomorph.morph("sphere", "torus", method="tspline", far_field_weight=-1)
 
 
+def test_tspline_beta_cells_reaches_the_robust_speed():
+    assert isomorph.defaults("tspline")["beta_cells"] > 0
+    m = isomorph.morph("sphere", "torus", method="tspline", beta_cells=0.25, max_steps=2)
+    assert m.report["details"]["speed"] == "robust (v_max 0.2, beta 0.25 finest cells)"
+    with pytest.raises(ValueError, match="beta_cells"):
+        isomorph.morph("sphere", "torus", method="tspline", beta_cells=11)
+    with pytest.raises(ValueError, match="beta_cells"):
+        isomorph.morph("sphere", "torus", method="tspline", speed="paper", beta_cells=0.5)
+
+
 def test_unknown_setting_is_a_value_error_naming_it():
     with pytest.raises(ValueError, match="bogus"):
         isomorph.morph("sphere", "torus", method="rbf", bogus=1)

@@ -82,6 +82,36 @@ pub enum Speed {
     },
 }
 
+impl Speed {
+    /// The robust speed's default largest distance speed `v_max` (domain
+    /// units per unit time).
+    pub const ROBUST_V_MAX: f64 = 0.2;
+    /// The robust speed's default curvature weight `β`, in finest cells.
+    pub const ROBUST_BETA_CELLS: f64 = 1.0;
+    /// The largest valid `β` in finest cells: the clamped curvature term
+    /// `β h κ` is then up to 10 domain units per unit time, fifty times
+    /// [`Speed::ROBUST_V_MAX`], and the distance term no longer steers.
+    pub const MAX_BETA_CELLS: f64 = 10.0;
+
+    /// [`Speed::Robust`] with the default `v_max` and curvature weight
+    /// `beta_cells` (finest cells, 0 to [`Speed::MAX_BETA_CELLS`]).
+    pub fn robust(beta_cells: f64) -> Self {
+        Speed::Robust { v_max: Self::ROBUST_V_MAX, beta_cells }
+    }
+
+    /// A short description for reports, e.g. `robust (v_max 0.2, beta 0.5
+    /// finest cells)`.
+    pub fn describe(&self) -> String {
+        match self {
+            Speed::Paper => "paper (eq. 8)".to_string(),
+            Speed::Distance => "distance".to_string(),
+            Speed::Robust { v_max, beta_cells } => {
+                format!("robust (v_max {v_max}, beta {beta_cells} finest cells)")
+            }
+        }
+    }
+}
+
 /// Settings of the evolution.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EvolveSettings {
@@ -172,7 +202,7 @@ impl EvolveSettings {
         }
         if let Speed::Robust { v_max, beta_cells: beta } = self.speed {
             check_range("v_max", v_max, 1e-9, 1e6, "> 0")?;
-            check_range("beta_cells", beta, 0.0, 1e6, ">= 0")?;
+            check_range("beta_cells", beta, 0.0, Speed::MAX_BETA_CELLS, "0..=10 finest cells")?;
         }
         Ok(())
     }

@@ -122,7 +122,7 @@ impl Default for TsplineSettings {
             tmesh: TMeshSettings { max_depth: 3, ..TMeshSettings::default() },
             fit: FitSettings::default(),
             evolve: EvolveSettings {
-                speed: crate::Speed::Robust { v_max: 0.2, beta_cells: 1.0 },
+                speed: crate::Speed::robust(crate::Speed::ROBUST_BETA_CELLS),
                 ..EvolveSettings::default()
             },
             align: Align::None,
@@ -616,6 +616,7 @@ fn report(
         .with_detail("level_sets", evolution.frames.len())
         .with_detail("frames", frames.len())
         .with_detail("mesher", settings.mesher.describe())
+        .with_detail("speed", settings.evolve.speed.describe())
         .with_detail("sampler", settings.evolve.sampler.describe())
         .with_detail("first_step_samples", evolution.steps.first().map_or(0, |s| s.samples))
         .with_detail("stall_steps", settings.evolve.stall_steps)
