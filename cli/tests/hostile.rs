@@ -93,6 +93,37 @@ fn a_dense_system_over_the_memory_limit_is_an_error_naming_the_option() {
 }
 
 #[test]
+fn the_hierarchical_solver_over_the_memory_limit_is_an_error_before_it_fits() {
+    let dir = scratch("memory-hierarchical");
+    // 2500 points per shape give 10000 constraints: the hierarchical
+    // solver, whose H-matrix, preconditioner and GMRES basis need some
+    // 100 MiB; it checks them against the limit before allocating them.
+    let o = isomorph(&[
+        "--max-memory",
+        "64M",
+        "morph",
+        "--method",
+        "rbf",
+        "--points",
+        "2500",
+        "--source",
+        "sphere",
+        "--target",
+        "torus",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{err}");
+    assert!(err.contains("the hierarchical solver of") && err.contains("constraints needs"), "{err}");
+    assert!(err.contains("over the memory limit of 64.0 MiB") && err.contains("--max-memory"), "{err}");
+    assert!(err.contains("fewer constraints"), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(!dir.join("frame_000.ply").exists(), "frames written");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn user_numbers_that_would_wrap_or_mislead_are_refused() {
     let dir = scratch("numbers");
     let out = dir.join("warp");

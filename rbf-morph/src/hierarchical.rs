@@ -42,9 +42,9 @@
 //! would not fit in memory.
 
 use crate::error::RbfError;
-use crate::hmatrix::{ClusterTree, HMatrix, LEAF, dot};
+use crate::hmatrix::{BlockPlan, ClusterTree, HMatrix, LEAF, PARTS, dot};
 use crate::kernel::Kernel;
-use crate::solve::{Factorization, PolyQr, Solution, build_projected, hager_inverse_norm};
+use crate::solve::{Factorization, PolyQr, Solution, build_projected, hager_inverse_norm, over_limit};
 use faer::{MatMut, Par};
 use rayon::prelude::*;
 
@@ -81,6 +81,10 @@ const BACKWARD_ERROR: f64 = f64::EPSILON / 2.0;
 const RESTART: usize = 50;
 /// GMRES iterations before giving up.
 const MAX_ITERATIONS: usize = 300;
+/// Length-`n` f64 vectors besides the GMRES basis, counted in the memory
+/// check: the H-matrix product's [`PARTS`] accumulators and at most 16
+/// working vectors (right-hand sides, residuals, weights, values).
+const PARTS_AND_WORK: usize = PARTS + 16;
 
 /// Knobs of the iteration (the constants above, overridable in tests).
 #[derive(Debug, Clone, Copy)]
@@ -96,11 +100,20 @@ pub(crate) struct Settings {
     /// dense system fits in memory); otherwise fail with
     /// [`RbfError::NotConverged`].
     pub dense_fallback: bool,
+    /// The most bytes the solver's data may take (the process-wide limit,
+    /// `isomorph_common::memory_limit`, unless a test sets its own).
+    pub memory_limit: usize,
 }
 
 impl Default for Settings {
     fn default() -> Self {
-        Self { aca: None, tolerance: TOLERANCE, max_iterations: MAX_ITERATIONS, dense_fallback: true }
+        Self {
+            aca: None,
+            tolerance: TOLERANCE,
+            max_iterations: MAX_ITERATIONS,
+            dense_fallback: true,
+            memory_limit: isomorph_common::memory_limit(),
+        }
     }
 }
 
@@ -119,6 +132,14 @@ pub struct IterativeFailure {
 /// Solves the interpolation system for `positions` (row-major `n × dim`,
 /// normalized) and `values`; `Ok(Err(_))` when GMRES did not converge (or
 /// a local problem could not be factored).
+///
+/// The memory is checked against the limit
+/// (`isomorph_common::set_memory_limit`) before it is allocated: the near
+/// (dense) blocks, the preconditioner's factors and its largest transient
+/// matrix, and the GMRES basis are known from the cluster tree; the far
+/// blocks' ranks are not, so their bytes are counted as ACA makes them and
+/// the build stops with the memory-limit error when the total would pass
+/// the limit.
 pub(crate) fn solve(
     positions: &[f64],
     dim: usize,
@@ -131,7 +152,20 @@ pub(crate) fn solve(
     let tree = ClusterTree::new(positions, dim, LEAF);
     let qr = PolyQr::new(&tree.points, dim)?;
     let m = qr.m;
-    let h = HMatrix::new(&tree, kernel, smoothing, settings.aca.unwrap_or_else(|| aca_tolerance(kernel)));
+    let plan = BlockPlan::new(&tree);
+    let schwarz = SchwarzPlan::new(&tree);
+    // The GMRES basis (flexible: both `V` and `Z`) and the working vectors
+    // (the product's accumulators among them).
+    let vectors = n.saturating_mul(size_of::<f64>()).saturating_mul(2 * RESTART + 1 + PARTS_AND_WORK);
+    let fixed = schwarz.bytes(dim).saturating_add(vectors);
+    let limit = settings.memory_limit;
+    let over = |bytes: usize| over_limit(format!("the hierarchical solver of {n} constraints"), bytes, limit);
+    if fixed.saturating_add(plan.near_bytes) > limit {
+        return Err(over(fixed.saturating_add(plan.near_bytes)));
+    }
+    let eps = settings.aca.unwrap_or_else(|| aca_tolerance(kernel));
+    let h = HMatrix::new(&tree, plan, kernel, smoothing, eps, limit - fixed)
+        .map_err(|blocks| over(fixed.saturating_add(blocks)))?;
     let mut g: Vec<f64> = tree.order.iter().map(|&i| values[i]).collect();
     qr.apply_qt(&mut g);
     let g2 = g[m..].to_vec();
@@ -143,7 +177,7 @@ pub(crate) fn solve(
         qr.apply_qt(&mut phi_d);
         out.copy_from_slice(&phi_d[m..]);
     };
-    let Some(preconditioner) = Schwarz::new(&tree, kernel, smoothing) else {
+    let Some(preconditioner) = Schwarz::new(&tree, schwarz, kernel, smoothing) else {
         return Ok(Err(IterativeFailure { iterations: 0, residual: 1.0 }));
     };
     let apply_m = |r: &[f64], out: &mut [f64]| {
@@ -181,6 +215,7 @@ pub(crate) fn solve(
         x.copy_from_slice(&out);
     });
     let rcond = 1.0 / (norm_b * inv_norm);
+    let bytes = h.bytes() + preconditioner.bytes() + vectors;
     let mut weights = vec![0.0; n];
     let mut centre_values = vec![0.0; n];
     for (i, &input) in tree.order.iter().enumerate() {
@@ -194,7 +229,7 @@ pub(crate) fn solve(
     Ok(Ok(Solution {
         weights,
         poly: c,
-        factorization: Factorization::Hierarchical { iterations },
+        factorization: Factorization::Hierarchical { iterations, bytes },
         rcond,
         centre_values: Some(centre_values),
         fallback: None,
@@ -213,14 +248,16 @@ struct Local {
 
 impl Local {
     /// Factors the interpolation problem on the points `idx`, with a
-    /// polynomial over the coordinates they span; `None` if it is not
-    /// positive definite.
+    /// polynomial over the coordinates they span, in `work` (the dense
+    /// matrix, reused from one subdomain to the next on a thread); `None`
+    /// if it is not positive definite.
     fn new(
         tree: &ClusterTree,
         idx: Vec<usize>,
         inner: usize,
         kernel: Kernel,
         smoothing: f64,
+        work: &mut Vec<f64>,
     ) -> Option<Self> {
         let dim = tree.dim;
         let n = idx.len();
@@ -245,12 +282,26 @@ impl Local {
         if n <= m {
             return None;
         }
-        let mut a = vec![0.0; n * n];
-        build_projected(&mut a, &pos, dim, kernel, smoothing, &qr);
-        let am = MatMut::from_column_major_slice_mut(&mut a, n, n);
-        let l = crate::slab::cholesky(am.as_ref().submatrix(m, m, n - m, n - m), Par::Seq)?;
-        drop(a);
-        Some(Self { idx, inner, qr, l: PackedCholesky::new(l.as_ref()) })
+        work.clear();
+        work.resize(n * n, 0.0);
+        build_projected(work, &pos, dim, kernel, smoothing, &qr);
+        let mut b = MatMut::from_column_major_slice_mut(work, n, n).submatrix_mut(m, m, n - m, n - m);
+        if !crate::slab::cholesky_in_place(b.as_mut(), Par::Seq) {
+            return None;
+        }
+        Some(Self { idx, inner, qr, l: PackedCholesky::new(b.as_ref()) })
+    }
+
+    /// Bytes of the indices, the polynomial QR and the packed factor.
+    fn bytes(&self) -> usize {
+        let n = self.idx.len();
+        n * size_of::<usize>() + PolyQr::bytes_bound(n, self.qr.m) + self.l.l.len() * size_of::<f32>()
+    }
+
+    /// An upper bound of [`Local::bytes`] for `n` points in `dim`
+    /// dimensions.
+    fn bytes_bound(n: usize, dim: usize) -> usize {
+        n * size_of::<usize>() + PolyQr::bytes_bound(n, dim + 1) + n * (n + 1) / 2 * size_of::<f32>()
     }
 
     /// The local weights fitting the residual `r` (full, tree order) at
@@ -302,17 +353,16 @@ impl PackedCholesky {
     }
 }
 
-/// The two-level overlapping Schwarz preconditioner (module docs).
-struct Schwarz {
-    locals: Vec<Local>,
-    coarse: Local,
-    n: usize,
+/// The subdomains of the Schwarz preconditioner before they are factored:
+/// each one's points (its own first) and own count, and the coarse points.
+struct SchwarzPlan {
+    locals: Vec<(Vec<usize>, usize)>,
+    coarse: Vec<usize>,
 }
 
-impl Schwarz {
-    /// Builds and factors the subdomains of `tree`; `None` if a local
-    /// problem cannot be factored.
-    fn new(tree: &ClusterTree, kernel: Kernel, smoothing: f64) -> Option<Self> {
+impl SchwarzPlan {
+    /// The subdomains of `tree` (module docs).
+    fn new(tree: &ClusterTree) -> Self {
         let mut roots = Vec::new();
         let mut stack = vec![0usize];
         while let Some(s) = stack.pop() {
@@ -331,17 +381,50 @@ impl Schwarz {
             let len = node.range.len();
             let take = per.min(len);
             coarse_idx.extend((0..take).map(|j| node.range.start + j * len / take));
-            locals_idx.push((s, neighbourhood(tree, s)));
+            locals_idx.push((neighbourhood(tree, s), len));
         }
+        Self { locals: locals_idx, coarse: coarse_idx }
+    }
+
+    /// An upper bound of the bytes of the factored preconditioner, and of
+    /// the transient dense matrices it is made from (the coarse one, made
+    /// first, and one local one per thread).
+    fn bytes(&self, dim: usize) -> usize {
+        let threads = rayon::current_num_threads();
+        let largest = self.locals.iter().map(|l| l.0.len()).max().unwrap_or(0);
+        let transient = |len: usize| 2 * len * len * size_of::<f64>();
+        let kept: usize = self.locals.iter().map(|l| Local::bytes_bound(l.0.len(), dim)).sum();
+        let coarse = self.coarse.len();
+        kept + Local::bytes_bound(coarse, dim) + transient(coarse).max(threads * transient(largest))
+    }
+}
+
+/// The two-level overlapping Schwarz preconditioner (module docs).
+struct Schwarz {
+    locals: Vec<Local>,
+    coarse: Local,
+    n: usize,
+}
+
+impl Schwarz {
+    /// Factors the subdomains of `plan` (of `tree`); `None` if a local
+    /// problem cannot be factored.
+    fn new(tree: &ClusterTree, plan: SchwarzPlan, kernel: Kernel, smoothing: f64) -> Option<Self> {
         // The coarse problem first: its dense matrix (the largest) is then
         // freed before the local factors are made.
-        let inner = coarse_idx.len();
-        let coarse = Local::new(tree, coarse_idx, inner, kernel, smoothing)?;
-        let locals: Option<Vec<Local>> = locals_idx
+        let inner = plan.coarse.len();
+        let coarse = Local::new(tree, plan.coarse, inner, kernel, smoothing, &mut Vec::new())?;
+        let locals: Option<Vec<Local>> = plan
+            .locals
             .into_par_iter()
-            .map(|(s, idx)| Local::new(tree, idx, tree.nodes[s].range.len(), kernel, smoothing))
+            .map_init(Vec::new, |work, (idx, inner)| Local::new(tree, idx, inner, kernel, smoothing, work))
             .collect();
         Some(Self { locals: locals?, coarse, n: tree.order.len() })
+    }
+
+    /// Bytes of the factors and indices.
+    fn bytes(&self) -> usize {
+        self.locals.iter().chain([&self.coarse]).map(Local::bytes).sum()
     }
 
     /// The weights (tree order) of the preconditioned residual `r`: the
@@ -552,6 +635,39 @@ mod tests {
     }
 
     #[test]
+    fn memory_over_the_limit_is_an_error_before_it_is_allocated() {
+        let cs = sphere_torus(2000);
+        let fit = fit_with(&cs, Solver::Hierarchical, &Settings::default()).unwrap();
+        let Factorization::Hierarchical { bytes, .. } = fit.report().factorization else {
+            panic!("{:?}", fit.report().factorization);
+        };
+        // The H-matrix (at least its near blocks), the factors and the
+        // basis: more than 100 vectors of n f64, less than the dense
+        // solver's 12 n² bytes (at 2000 constraints most blocks are near).
+        let n = cs.len();
+        assert!(bytes > 100 * 8 * n && bytes < 12 * n * n, "{bytes} bytes");
+        // The check counts what the report says plus the transients (the
+        // coarse problem's two dense matrices, 36 MB here): within 4×.
+        let ok = Settings { memory_limit: 4 * bytes, dense_fallback: false, ..Settings::default() };
+        assert!(fit_with(&cs, Solver::Hierarchical, &ok).is_ok());
+        // Over the limit: the memory-limit error, whether the fixed part is
+        // already over (1 MB) or the far blocks take it over (the
+        // reported bytes less one far block's worth).
+        for limit in [1 << 20, bytes - 1000] {
+            let settings = Settings { memory_limit: limit, dense_fallback: false, ..Settings::default() };
+            let err = fit_with(&cs, Solver::Hierarchical, &settings).unwrap_err();
+            let RbfError::Morph(isomorph_common::MorphError::Memory(e)) = &err else {
+                panic!("limit {limit}: {err}");
+            };
+            assert_eq!(e.limit, limit);
+            assert!(e.requested > limit, "{e:?}");
+            let text = err.to_string();
+            assert!(text.contains(&format!("the hierarchical solver of {n} constraints")), "{text}");
+            assert!(text.contains("fewer constraints"), "{text}");
+        }
+    }
+
+    #[test]
     fn results_do_not_depend_on_the_thread_count() {
         let cs = sphere_torus(2000);
         let fit = |threads: usize| {
@@ -581,7 +697,7 @@ mod tests {
         let fast = Interpolant::fit(cs, &fast).unwrap();
         let dense = FitSettings { solver: Solver::Dense, ..FitSettings::default().with_kernel(kernel) };
         let dense = Interpolant::fit(cs, &dense).unwrap();
-        let Factorization::Hierarchical { iterations } = fast.report().factorization else {
+        let Factorization::Hierarchical { iterations, .. } = fast.report().factorization else {
             panic!("{kernel:?}: not hierarchical: {:?}", fast.report().factorization);
         };
         let mut worst = 0.0f64;

@@ -14,8 +14,8 @@
 //! shape transformation) there are `O(n)` blocks of bounded rank, so storage
 //! and a product `Φx` cost `O(n log n)`.
 //!
-//! Storage: the terms of each low-rank block are kept in f64, f32 or
-//! 16-bit integers (with a scale per term), each term in the most compact
+//! Storage: the terms of each low-rank block are kept in f64, or as 32-
+//! or 16-bit integers (with a scale per term), each term in the most compact
 //! form whose rounding error fits the block's tolerance (see [`aca`]):
 //! most of ACA's terms are many orders of magnitude below the block's
 //! norm and need few digits.
@@ -32,6 +32,7 @@
 use crate::kernel::Kernel;
 use rayon::prelude::*;
 use std::ops::Range;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Most points in a leaf cluster.
 pub(crate) const LEAF: usize = 48;
@@ -39,7 +40,7 @@ pub(crate) const LEAF: usize = 48;
 const ETA: f64 = 3.0;
 /// Product accumulators of [`HMatrix::matvec`]: a fixed count, so that the
 /// summation order does not depend on the number of threads.
-const PARTS: usize = 16;
+pub(crate) const PARTS: usize = 16;
 
 /// One cluster: a contiguous range of the renumbered points and its
 /// bounding box.
@@ -176,37 +177,73 @@ enum Block {
 
 /// The factors of a low-rank block `U Vᵀ`, term by term (`U` is
 /// `rank × rows`, `V` likewise): the leading terms in f64, then smaller
-/// ones in f32, the smallest as 16-bit integers times a scale per term —
-/// each as compact as its share of the block's tolerance allows (see
-/// [`aca`]).
+/// ones as 32-bit integers, the smallest as 16-bit integers, each integer
+/// term times a scale — each as compact as its share of the block's
+/// tolerance allows (see [`aca`]).
 struct LowRank {
     u: Vec<f64>,
     v: Vec<f64>,
-    u32: Vec<f32>,
-    v32: Vec<f32>,
-    u16: Vec<i16>,
-    v16: Vec<i16>,
-    /// The scale of each 16-bit term: `u_k v_kᵀ ≈ scale_k q_u q_vᵀ`.
-    scale16: Vec<f64>,
+    i32: Quantized<i32>,
+    i16: Quantized<i16>,
 }
 
 impl LowRank {
     /// Stored factor entries (all precisions).
     fn len(&self) -> usize {
-        self.u.len() + self.v.len() + self.u32.len() + self.v32.len() + self.u16.len() + self.v16.len()
+        self.u.len() + self.v.len() + self.i32.len() + self.i16.len()
+    }
+}
+
+/// Terms `u_k v_kᵀ ≈ scale_k q_u q_vᵀ` with `q_u`, `q_v` integers of type
+/// `T` (`U` is `rank × rows`, `V` likewise).
+struct Quantized<T> {
+    u: Vec<T>,
+    v: Vec<T>,
+    scale: Vec<f64>,
+}
+
+impl<T> Quantized<T> {
+    /// Stored integer entries.
+    fn len(&self) -> usize {
+        self.u.len() + self.v.len()
+    }
+
+    /// Bytes stored.
+    fn bytes(&self) -> usize {
+        self.len() * size_of::<T>() + self.scale.len() * size_of::<f64>()
+    }
+}
+
+/// An integer type that terms are quantized to: `x ≈ s q`, the largest
+/// entry of `x` at `±MAX`.
+trait Level: Copy + Into<f64> {
+    /// The largest magnitude.
+    const MAX: f64;
+    /// `v` (at most `MAX` in magnitude) rounded to the nearest integer.
+    fn round(v: f64) -> Self;
+}
+
+impl Level for i16 {
+    const MAX: f64 = i16::MAX as f64;
+    fn round(v: f64) -> Self {
+        v.round() as i16
+    }
+}
+
+impl Level for i32 {
+    const MAX: f64 = i32::MAX as f64;
+    fn round(v: f64) -> Self {
+        v.round() as i32
     }
 }
 
 impl Block {
     /// Bytes stored.
-    #[cfg(test)]
     fn bytes(&self) -> usize {
         match self {
             Block::Dense { a, .. } => a.len() * size_of::<f64>(),
             Block::LowRank { f, .. } => {
-                (f.u.len() + f.v.len() + f.scale16.len()) * size_of::<f64>()
-                    + (f.u32.len() + f.v32.len()) * size_of::<f32>()
-                    + (f.u16.len() + f.v16.len()) * size_of::<i16>()
+                (f.u.len() + f.v.len()) * size_of::<f64>() + f.i32.bytes() + f.i16.bytes()
             }
         }
     }
@@ -227,10 +264,9 @@ impl Block {
                 }
             }
             Block::LowRank { rows, cols, f } => {
-                let one = std::iter::repeat(1.0);
-                apply_terms(&f.u, &f.v, one.clone(), rows, cols, x, y);
-                apply_terms(&f.u32, &f.v32, one, rows, cols, x, y);
-                apply_terms(&f.u16, &f.v16, f.scale16.iter().copied(), rows, cols, x, y);
+                apply_terms(&f.u, &f.v, std::iter::repeat(1.0), rows, cols, x, y);
+                apply_terms(&f.i32.u, &f.i32.v, f.i32.scale.iter().copied(), rows, cols, x, y);
+                apply_terms(&f.i16.u, &f.i16.v, f.i16.scale.iter().copied(), rows, cols, x, y);
             }
         }
     }
@@ -264,6 +300,30 @@ fn apply_terms<T: Copy + Into<f64>>(
     }
 }
 
+/// The block structure of a cluster tree's H-matrix before any entry is
+/// computed: the cluster pairs of the lower triangle and the bytes of the
+/// near-field (dense) ones, so that the memory can be checked first.
+pub(crate) struct BlockPlan {
+    /// `(s, t, admissible)` for each block.
+    pairs: Vec<(usize, usize, bool)>,
+    /// Bytes of the inadmissible (dense, f64) blocks: exact.
+    pub near_bytes: usize,
+}
+
+impl BlockPlan {
+    /// The blocks of `tree`'s H-matrix.
+    pub fn new(tree: &ClusterTree) -> Self {
+        let mut pairs = Vec::new();
+        block_pairs(tree, 0, 0, &mut pairs);
+        let near_bytes = pairs
+            .iter()
+            .filter(|p| !p.2)
+            .map(|&(s, t, _)| tree.nodes[s].range.len() * tree.nodes[t].range.len() * size_of::<f64>())
+            .sum();
+        Self { pairs, near_bytes }
+    }
+}
+
 /// The symmetric matrix `Φ + λI` of a cluster tree's points as an H-matrix
 /// (see the module docs).
 pub(crate) struct HMatrix {
@@ -274,19 +334,40 @@ pub(crate) struct HMatrix {
 }
 
 impl HMatrix {
-    /// Builds `Φ + λI` for the points of `tree`, compressing admissible
-    /// blocks by ACA to the relative tolerance `eps`.
-    pub fn new(tree: &ClusterTree, kernel: Kernel, smoothing: f64, eps: f64) -> Self {
-        let mut pairs = Vec::new();
-        block_pairs(tree, 0, 0, &mut pairs);
+    /// Builds `Φ + λI` for the points of `tree` with the blocks of `plan`,
+    /// compressing admissible blocks by ACA to the relative tolerance
+    /// `eps`; `Err(bytes)` as soon as the blocks would take more than
+    /// `budget` bytes (the admissible blocks' ranks are not known before
+    /// ACA, so their bytes are counted as they are made; `bytes` is the
+    /// count when it went over). Whether it fails depends only on the
+    /// total, not on the order in which the threads make the blocks.
+    pub fn new(
+        tree: &ClusterTree,
+        plan: BlockPlan,
+        kernel: Kernel,
+        smoothing: f64,
+        eps: f64,
+        budget: usize,
+    ) -> Result<Self, usize> {
+        if plan.near_bytes > budget {
+            return Err(plan.near_bytes);
+        }
         let rms = rms_entry(tree, kernel);
-        let blocks: Vec<Block> = pairs
+        let used = AtomicUsize::new(plan.near_bytes);
+        let blocks: Option<Vec<Block>> = plan
+            .pairs
             .into_par_iter()
-            .map(|(s, t, admissible)| {
+            .map_init(AcaWork::default, |work, (s, t, admissible)| {
+                if admissible && used.load(Ordering::Relaxed) > budget {
+                    return None;
+                }
                 let (rows, cols) = (tree.nodes[s].range.clone(), tree.nodes[t].range.clone());
-                let low_rank =
-                    if admissible { aca(tree, kernel, rows.clone(), cols.clone(), eps, rms) } else { None };
-                match low_rank {
+                let low_rank = if admissible {
+                    aca(tree, kernel, rows.clone(), cols.clone(), eps, rms, work)
+                } else {
+                    None
+                };
+                let block = match low_rank {
                     Some(f) => Block::LowRank { rows, cols, f: Box::new(f) },
                     None => {
                         let mut a = dense_block(tree, kernel, rows.clone(), cols.clone());
@@ -297,9 +378,15 @@ impl HMatrix {
                         }
                         Block::Dense { rows, cols, a }
                     }
-                }
+                };
+                let bytes = block.bytes();
+                let over = admissible && used.fetch_add(bytes, Ordering::Relaxed) + bytes > budget;
+                (!over).then_some(block)
             })
             .collect();
+        let Some(blocks) = blocks else {
+            return Err(used.into_inner());
+        };
         let total: usize = blocks.iter().map(Block::cost).sum();
         let mut parts = Vec::with_capacity(PARTS);
         let (mut start, mut acc) = (0, 0);
@@ -311,11 +398,10 @@ impl HMatrix {
             }
         }
         parts.push(start..blocks.len());
-        Self { blocks, parts, n: tree.order.len() }
+        Ok(Self { blocks, parts, n: tree.order.len() })
     }
 
     /// Bytes stored in the blocks.
-    #[cfg(test)]
     pub fn bytes(&self) -> usize {
         self.blocks.iter().map(Block::bytes).sum::<usize>()
     }
@@ -400,6 +486,22 @@ fn kernel_row(tree: &ClusterTree, kernel: Kernel, x: &[f64], cols: Range<usize>,
 /// ACA's factors grow by this many terms at a time.
 const GROW: usize = 8;
 
+/// ACA's working vectors, reused from block to block on a thread: the
+/// factors in f64 and the term norms, the current row and column, the
+/// rows used. Reusing them (rather than allocating and freeing factors of
+/// tens of MB per block) keeps the allocator from scattering freed pieces
+/// between the stored blocks, which had cost some 300 MB of resident
+/// memory at 100000 constraints.
+#[derive(Default)]
+struct AcaWork {
+    u: Vec<f64>,
+    v: Vec<f64>,
+    terms: Vec<f64>,
+    row: Vec<f64>,
+    col: Vec<f64>,
+    used: Vec<bool>,
+}
+
 /// Pairs sampled by [`rms_entry`].
 const SAMPLES: usize = 1 << 16;
 
@@ -434,12 +536,13 @@ fn rms_entry(tree: &ClusterTree, kernel: Kernel) -> f64 {
 /// The terms are then stored as compactly as the tolerance allows: from
 /// the last (smallest) one backwards, as 16-bit integers times a scale
 /// while the sum of their exact rounding errors stays within half the
-/// tolerance, then in f32 while the total stays within the tolerance
-/// (rounding both factors of a term to f32, unit roundoff `2⁻²⁴`, changes
-/// it by at most `(2 · 2⁻²⁴ + 2⁻⁴⁸) ‖u_k‖ ‖v_k‖ ≤ 2⁻²³ ‖u_k‖ ‖v_k‖` in the
-/// Frobenius norm), the rest in f64. So a block's error stays within twice
-/// its tolerance. ACA's terms shrink roughly geometrically to `ε` of the
+/// tolerance, then as 32-bit integers times a scale while the total stays
+/// within the tolerance, the rest in f64. So a block's error stays within
+/// twice its tolerance. (32-bit integers scaled to the largest entry are
+/// at least as accurate in norm as f32 for terms of up to 65536 entries,
+/// and far more for ACA's smooth, flat terms, so more terms leave f64.) ACA's terms shrink roughly geometrically to `ε` of the
 /// block's norm, and most of them are far below it.
+#[allow(clippy::too_many_arguments)]
 fn aca(
     tree: &ClusterTree,
     kernel: Kernel,
@@ -447,70 +550,88 @@ fn aca(
     cols: Range<usize>,
     eps: f64,
     rms: f64,
+    work: &mut AcaWork,
 ) -> Option<LowRank> {
     let (m, n) = (rows.len(), cols.len());
     let floor2 = rms * rms * (m * n) as f64;
-    let (u, v, terms, norm2) = aca_terms(tree, kernel, rows, cols, eps * eps * floor2, eps)?;
+    let norm2 = aca_terms(tree, kernel, rows, cols, eps * eps * floor2, eps, work)?;
+    let (u, v) = (&work.u[..], &work.v[..]);
     let budget = eps * norm2.max(floor2).sqrt();
     let mut spent = 0.0;
-    let mut j16 = terms.len();
-    let mut quantized = Vec::new();
-    while j16 > 0 {
-        let k = j16 - 1;
-        let (uk, vk) = (&u[k * m..(k + 1) * m], &v[k * n..(k + 1) * n]);
-        let ((qu, su, eu), (qv, sv, ev)) = (quantize(uk), quantize(vk));
-        // ‖s q_u q_vᵀ − u vᵀ‖_F ≤ e_u ‖v‖ + ‖u‖ e_v + e_u e_v.
-        let error = eu * dot(vk, vk).sqrt() + dot(uk, uk).sqrt() * ev + eu * ev;
-        if spent + error > 0.5 * budget {
-            break;
-        }
-        spent += error;
-        quantized.push((qu, qv, su * sv));
-        j16 = k;
-    }
-    let mut j32 = j16;
-    while j32 > 0 && spent + f64::from(f32::EPSILON) * terms[j32 - 1] <= budget {
-        spent += f64::from(f32::EPSILON) * terms[j32 - 1];
-        j32 -= 1;
-    }
-    quantized.reverse();
-    let to_f32 = |a: &[f64]| a.iter().map(|&x| x as f32).collect();
-    let (u32, v32) = (to_f32(&u[j32 * m..j16 * m]), to_f32(&v[j32 * n..j16 * n]));
-    let head = |mut a: Vec<f64>, len: usize| {
-        a.truncate(len);
-        a.shrink_to_fit();
-        a
-    };
+    let j16 = quantizable::<i16>(u, v, (m, n), work.terms.len(), &mut spent, 0.5 * budget);
+    let j32 = quantizable::<i32>(u, v, (m, n), j16, &mut spent, budget);
+    let rank = work.terms.len();
     Some(LowRank {
-        u32,
-        v32,
-        u16: quantized.iter().flat_map(|q| q.0.iter().copied()).collect(),
-        v16: quantized.iter().flat_map(|q| q.1.iter().copied()).collect(),
-        scale16: quantized.iter().map(|q| q.2).collect(),
-        u: head(u, j32 * m),
-        v: head(v, j32 * n),
+        i32: quantized(u, v, (m, n), j32..j16),
+        i16: quantized(u, v, (m, n), j16..rank),
+        u: u[..j32 * m].to_vec(),
+        v: v[..j32 * n].to_vec(),
     })
 }
 
-/// `x` as 16-bit integers `q` and a scale `s` (`x ≈ s q`, the largest
-/// entry at ±32767), with the exact error `‖s q − x‖₂`.
-fn quantize(x: &[f64]) -> (Vec<i16>, f64, f64) {
-    let largest = x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-    if largest == 0.0 {
-        return (vec![0; x.len()], 0.0, 0.0);
+/// The first of the terms of `U` (`rank × m`) and `V` (`rank × n`) before
+/// `end` that can be quantized to integers `T`: from the last one
+/// backwards while `spent` plus their exact errors stays within `limit`
+/// (they are added to `spent`).
+fn quantizable<T: Level>(
+    u: &[f64],
+    v: &[f64],
+    (m, n): (usize, usize),
+    end: usize,
+    spent: &mut f64,
+    limit: f64,
+) -> usize {
+    let mut first = end;
+    while first > 0 {
+        let k = first - 1;
+        let (uk, vk) = (&u[k * m..(k + 1) * m], &v[k * n..(k + 1) * n]);
+        let ((_, eu), (_, ev)) = (quantize::<T>(uk, |_| ()), quantize::<T>(vk, |_| ()));
+        // ‖s q_u q_vᵀ − u vᵀ‖_F ≤ e_u ‖v‖ + ‖u‖ e_v + e_u e_v.
+        let error = eu * dot(vk, vk).sqrt() + dot(uk, uk).sqrt() * ev + eu * ev;
+        if *spent + error > limit {
+            break;
+        }
+        *spent += error;
+        first = k;
     }
-    let s = largest / f64::from(i16::MAX);
-    let q: Vec<i16> = x.iter().map(|&v| (v / s).round() as i16).collect();
-    let error = q.iter().zip(x).map(|(&q, &v)| (s * f64::from(q) - v).powi(2)).sum::<f64>().sqrt();
-    (q, s, error)
+    first
 }
 
-/// The terms of [`aca`] in f64: `(U, V, ‖u_k‖ ‖v_k‖, ‖U Vᵀ‖_F²)`.
-type AcaTerms = (Vec<f64>, Vec<f64>, Vec<f64>, f64);
+/// The terms `range` of `U` (`rank × m`) and `V` (`rank × n`) quantized
+/// to integers `T`, each vector with its own scale.
+fn quantized<T: Level>(u: &[f64], v: &[f64], (m, n): (usize, usize), range: Range<usize>) -> Quantized<T> {
+    let mut q = Quantized {
+        u: Vec::with_capacity(range.len() * m),
+        v: Vec::with_capacity(range.len() * n),
+        scale: Vec::with_capacity(range.len()),
+    };
+    for k in range {
+        let (su, _) = quantize::<T>(&u[k * m..(k + 1) * m], |x| q.u.push(x));
+        let (sv, _) = quantize::<T>(&v[k * n..(k + 1) * n], |x| q.v.push(x));
+        q.scale.push(su * sv);
+    }
+    q
+}
 
-/// The terms of [`aca`] in f64 ([`AcaTerms`]), stopping
-/// when the last term's squared norm is below `eps² ‖U Vᵀ‖_F²` or
-/// `floor2`.
+/// `x` as integers `q` (passed to `out` in order) and a scale `s`
+/// (`x ≈ s q`, the largest entry at `±T::MAX`); returns `s` and the exact
+/// error `‖s q − x‖₂`.
+fn quantize<T: Level>(x: &[f64], mut out: impl FnMut(T)) -> (f64, f64) {
+    let largest = x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let s = if largest == 0.0 { 0.0 } else { largest / T::MAX };
+    let mut error2 = 0.0;
+    for &v in x {
+        let q = if s == 0.0 { T::round(0.0) } else { T::round(v / s) };
+        error2 += (s * q.into() - v).powi(2);
+        out(q);
+    }
+    (s, error2.sqrt())
+}
+
+/// The terms of [`aca`] in f64 into `work` (`U` in `work.u`, `V` in
+/// `work.v`, `‖u_k‖ ‖v_k‖` in `work.terms`), stopping when the last term's
+/// squared norm is below `eps² ‖U Vᵀ‖_F²` or `floor2`; returns
+/// `‖U Vᵀ‖_F²`, or `None` at the break-even rank.
 fn aca_terms(
     tree: &ClusterTree,
     kernel: Kernel,
@@ -518,21 +639,27 @@ fn aca_terms(
     cols: Range<usize>,
     floor2: f64,
     eps: f64,
-) -> Option<AcaTerms> {
+    work: &mut AcaWork,
+) -> Option<f64> {
     let (m, n) = (rows.len(), cols.len());
-    let mut terms = Vec::new();
     let max_rank = m * n / (m + n);
-    let (mut u, mut v) = (Vec::<f64>::new(), Vec::<f64>::new());
-    let mut used = vec![false; m];
+    let AcaWork { u, v, terms, row, col, used } = work;
+    for w in [&mut *u, &mut *v, &mut *terms] {
+        w.clear();
+    }
+    used.clear();
+    used.resize(m, false);
+    row.resize(n, 0.0);
+    col.resize(m, 0.0);
+    let (row, col) = (&mut row[..n], &mut col[..m]);
     let mut norm2 = 0.0f64;
     let mut i = 0;
     let mut rank = 0;
-    let mut row = vec![0.0; n];
-    let mut col = vec![0.0; m];
-    let mut col_point = vec![0.0; tree.dim];
+    let mut col_point = [0.0; 8];
+    let col_point = &mut col_point[..tree.dim];
     loop {
         used[i] = true;
-        kernel_row(tree, kernel, tree.point(rows.start + i), cols.clone(), &mut row);
+        kernel_row(tree, kernel, tree.point(rows.start + i), cols.clone(), row);
         for k in 0..rank {
             let uk = u[k * m + i];
             row.iter_mut().zip(&v[k * n..(k + 1) * n]).for_each(|(r, v)| *r -= uk * v);
@@ -548,7 +675,7 @@ fn aca_terms(
                     i = next;
                     continue;
                 }
-                None => return Some((u, v, terms, norm2)),
+                None => return Some(norm2),
             }
         }
         if rank >= max_rank {
@@ -556,7 +683,7 @@ fn aca_terms(
         }
         row.iter_mut().for_each(|r| *r /= pivot);
         col_point.copy_from_slice(tree.point(cols.start + j));
-        kernel_row(tree, kernel, &col_point, rows.clone(), &mut col);
+        kernel_row(tree, kernel, col_point, rows.clone(), col);
         for k in 0..rank {
             let vk = v[k * n + j];
             col.iter_mut().zip(&u[k * m..(k + 1) * m]).for_each(|(c, u)| *c -= vk * u);
@@ -576,7 +703,7 @@ fn aca_terms(
         rank += 1;
         terms.push((nu * nv).sqrt());
         if nu * nv <= (eps * eps * norm2).max(floor2) {
-            return Some((u, v, terms, norm2));
+            return Some(norm2);
         }
         let next = (0..m).filter(|&r| !used[r]).fold(None, |b: Option<(usize, f64)>, r| match b {
             Some((_, best)) if col[r].abs() <= best => b,
@@ -584,7 +711,7 @@ fn aca_terms(
         });
         match next {
             Some((r, _)) => i = r,
-            None => return Some((u, v, terms, norm2)),
+            None => return Some(norm2),
         }
     }
 }
@@ -671,7 +798,8 @@ mod tests {
     #[test]
     fn quantize_reports_its_exact_error() {
         let x: Vec<f64> = (0..200).map(|i| ((i * 37) % 101) as f64 / 7.0 - 5.0).collect();
-        let (q, s, error) = quantize(&x);
+        let mut q = Vec::new();
+        let (s, error) = quantize::<i16>(&x, |v| q.push(v));
         let exact = q.iter().zip(&x).map(|(&q, &x)| (s * f64::from(q) - x).powi(2)).sum::<f64>().sqrt();
         assert_eq!(error, exact);
         // Half a step per entry at most, and not exact.
@@ -679,7 +807,43 @@ mod tests {
         assert!(q.iter().any(|&q| q.unsigned_abs() == i16::MAX as u16));
         assert!(error <= 0.5 * s * (x.len() as f64).sqrt() && error > 0.0, "{error:e}");
         assert!(s <= largest / 32000.0);
-        assert_eq!(quantize(&[0.0; 4]), (vec![0; 4], 0.0, 0.0));
+        let mut zeros = Vec::new();
+        assert_eq!(quantize::<i16>(&[0.0; 4], |v| zeros.push(v)), (0.0, 0.0));
+        assert_eq!(zeros, [0; 4]);
+        // 32-bit: the same rule, 2¹⁶ times finer.
+        let mut q32 = Vec::new();
+        let (s32, error32) = quantize::<i32>(&x, |v| q32.push(v));
+        assert!(q32.iter().any(|&q| q.unsigned_abs() == i32::MAX as u32));
+        assert!(error32 <= 0.5 * s32 * (x.len() as f64).sqrt() && error32 < 1e-4 * error, "{error32:e}");
+    }
+
+    #[test]
+    fn blocks_over_the_budget_stop_the_build() {
+        let p = two_spheres(1500);
+        let tree = ClusterTree::new(&p, 4, LEAF);
+        let plan = BlockPlan::new(&tree);
+        let near = plan.near_bytes;
+        let full = HMatrix::new(&tree, plan, Kernel::ThinPlate, 0.0, 1e-9, usize::MAX).unwrap();
+        let bytes = full.bytes();
+        assert!(near > 0 && bytes > near, "near {near}, all {bytes}");
+        // Exactly enough: built, the same blocks.
+        let exact = HMatrix::new(&tree, BlockPlan::new(&tree), Kernel::ThinPlate, 0.0, 1e-9, bytes).unwrap();
+        assert_eq!(exact.bytes(), bytes);
+        // One byte short, or room for the near blocks only: refused, with
+        // the count reached (over the budget, at most the full size).
+        for budget in [bytes - 1, near] {
+            let Err(reached) =
+                HMatrix::new(&tree, BlockPlan::new(&tree), Kernel::ThinPlate, 0.0, 1e-9, budget)
+            else {
+                panic!("built within {budget} bytes");
+            };
+            assert!(reached > budget && reached <= bytes, "{reached} for budget {budget}");
+        }
+        // Not even the near blocks fit: refused before any is made.
+        assert_eq!(
+            HMatrix::new(&tree, BlockPlan::new(&tree), Kernel::ThinPlate, 0.0, 1e-9, near - 1).err(),
+            Some(near)
+        );
     }
 
     #[test]
@@ -689,10 +853,11 @@ mod tests {
         let tree = ClusterTree::new(&p, 4, LEAF);
         for kernel in [Kernel::ThinPlate, Kernel::Cubic] {
             for eps in [1e-4, 1e-9] {
-                let h = HMatrix::new(&tree, kernel, 0.0, eps);
+                let h = HMatrix::new(&tree, BlockPlan::new(&tree), kernel, 0.0, eps, usize::MAX).unwrap();
                 assert!(h.blocks.iter().any(|b| matches!(b, Block::LowRank { .. })), "nothing compressed");
                 // The smallest terms are stored in reduced precision.
-                let reduced = |b: &Block| matches!(b, Block::LowRank { f, .. } if !f.u32.is_empty() || !f.u16.is_empty());
+                let reduced =
+                    |b: &Block| matches!(b, Block::LowRank { f, .. } if f.i32.len() + f.i16.len() > 0);
                 assert!(h.blocks.iter().any(reduced), "{kernel:?} ε {eps:e}: all terms in f64");
                 assert!(h.bytes() < n * n * 8 / 2, "{} bytes", h.bytes());
                 let x: Vec<f64> = (0..n).map(|i| ((i * 7919) % 101) as f64 / 50.0 - 1.0).collect();

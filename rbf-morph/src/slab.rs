@@ -287,17 +287,17 @@ pub(crate) fn conjugate_gradients(
 /// `None` if it is not numerically positive definite.
 pub(crate) fn cholesky(s: MatRef<'_, f64>, par: Par) -> Option<Mat<f64>> {
     let mut l = s.to_owned();
+    cholesky_in_place(l.as_mut(), par).then_some(l)
+}
+
+/// Overwrites the lower triangle of the symmetric `l` (lower triangle
+/// read) with its Cholesky factor; `false` if it is not numerically
+/// positive definite.
+pub(crate) fn cholesky_in_place(l: MatMut<'_, f64>, par: Par) -> bool {
     let n = l.nrows();
     let mut mem = MemBuffer::new(llt::factor::cholesky_in_place_scratch::<f64>(n, par, Default::default()));
-    llt::factor::cholesky_in_place(
-        l.as_mut(),
-        Default::default(),
-        par,
-        MemStack::new(&mut mem),
-        Default::default(),
-    )
-    .ok()?;
-    Some(l)
+    llt::factor::cholesky_in_place(l, Default::default(), par, MemStack::new(&mut mem), Default::default())
+        .is_ok()
 }
 
 /// An orthonormal basis of the columns of `y` (thin QR).

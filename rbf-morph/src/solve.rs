@@ -65,6 +65,12 @@ pub enum Factorization {
     Hierarchical {
         /// GMRES iterations taken.
         iterations: usize,
+        /// Bytes of the solver's data: the H-matrix's blocks, the
+        /// preconditioner's factors and the GMRES basis (what is checked
+        /// against the memory limit, `isomorph_common::set_memory_limit`;
+        /// the process's peak is this plus the inputs and allocator
+        /// overhead).
+        bytes: usize,
     },
 }
 
@@ -136,6 +142,12 @@ impl PolyQr {
             return Err(RbfError::NotUnisolvent { rank: rank.saturating_sub(1), dim });
         }
         Ok(Self { n, m, v, tau, r })
+    }
+
+    /// An upper bound of the bytes of the QR of `n` points with `m`
+    /// polynomial terms (the reflectors, their column padding, `R`, `τ`).
+    pub fn bytes_bound(n: usize, m: usize) -> usize {
+        ((n + 16) * m + m * m + m) * size_of::<f64>()
     }
 
     /// `x ← Qᵀ x` (reflectors in order).
@@ -461,12 +473,26 @@ fn solve_ordered(
 fn reserve_system(n: usize, slab: bool) -> Result<(), RbfError> {
     let matrices = if slab { 2 } else { 1 };
     let requested = n.saturating_mul(n).saturating_mul(size_of::<f64>()).saturating_mul(matrices);
-    isomorph_common::reserve_memory(
-        || format!("the dense interpolation system of {n} constraints"),
-        requested,
-        "use fewer constraints (points per shape, or a coarser image)",
-    )
-    .map_err(|e| RbfError::from(isomorph_common::MorphError::from(e)))
+    reserve(|| format!("the dense interpolation system of {n} constraints"), requested)
+}
+
+/// What a user can lower when a solver's system is over the memory limit.
+const MEMORY_ADVICE: &str = "use fewer constraints (points per shape, or a coarser image)";
+
+/// Checks `requested` bytes for `what` (a solver's system) against the
+/// memory limit.
+pub(crate) fn reserve(what: impl FnOnce() -> String, requested: usize) -> Result<(), RbfError> {
+    isomorph_common::reserve_memory(what, requested, MEMORY_ADVICE).map_err(memory_error)
+}
+
+/// The memory-limit error for `what`, which needs (at least) `requested`
+/// bytes, over `limit`.
+pub(crate) fn over_limit(what: String, requested: usize, limit: usize) -> RbfError {
+    memory_error(isomorph_common::MemoryLimitError { what, requested, limit, advice: MEMORY_ADVICE })
+}
+
+fn memory_error(e: isomorph_common::MemoryLimitError) -> RbfError {
+    RbfError::from(isomorph_common::MorphError::from(e))
 }
 
 /// Factors the projected block `B` (the trailing `k × k` block of the

@@ -333,9 +333,11 @@ impl RbfMorph {
             Some(_) => Outcome::IterationCap,
         };
         // The dense factorizations hold the n × n matrix and its factor; the
-        // iterative solvers' working memory is not estimated here.
+        // hierarchical solver counts its own; the slab solver's working
+        // memory is not estimated here.
         let peak = match fit.factorization {
             Factorization::Cholesky | Factorization::Lblt => Some(12 * n * n),
+            Factorization::Hierarchical { bytes, .. } => Some(bytes),
             _ => None,
         };
         let mut report = MorphReport::new("rbf", outcome)
