@@ -604,7 +604,11 @@ fn apply_settings(
     s.tspline.fit.refinement = refine.map(|tolerance| Refinement { tolerance, max_rounds: refine_rounds });
     if let Some(beta) = beta_cells {
         if !matches!(s.tspline.evolve.speed, Speed::Robust { .. }) {
-            return Err(setting_error(py, "beta_cells", "is the robust speed's: give it with speed='robust'"));
+            return Err(setting_error(
+                py,
+                "beta_cells",
+                "is the robust speed's: give it with speed='robust'",
+            ));
         }
         s.tspline.evolve.speed = Speed::robust(beta);
     }
