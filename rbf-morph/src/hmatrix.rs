@@ -688,9 +688,9 @@ fn aca_terms(
             let vk = v[k * n + j];
             col.iter_mut().zip(&u[k * m..(k + 1) * m]).for_each(|(c, u)| *c -= vk * u);
         }
-        let (nu, nv) = (dot(&col, &col), dot(&row, &row));
+        let (nu, nv) = (dot(col, col), dot(row, row));
         let cross: f64 =
-            (0..rank).map(|k| dot(&u[k * m..(k + 1) * m], &col) * dot(&v[k * n..(k + 1) * n], &row)).sum();
+            (0..rank).map(|k| dot(&u[k * m..(k + 1) * m], col) * dot(&v[k * n..(k + 1) * n], row)).sum();
         norm2 += nu * nv + 2.0 * cross;
         // Grow by a few terms at a time, not by doubling: the factors of
         // the largest blocks are tens of MB.
@@ -698,8 +698,8 @@ fn aca_terms(
             u.reserve_exact(GROW * m);
             v.reserve_exact(GROW * n);
         }
-        u.extend_from_slice(&col);
-        v.extend_from_slice(&row);
+        u.extend_from_slice(col);
+        v.extend_from_slice(row);
         rank += 1;
         terms.push((nu * nv).sqrt());
         if nu * nv <= (eps * eps * norm2).max(floor2) {
