@@ -62,11 +62,11 @@ fn unusable_meshes_are_refused_by_every_method() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-#[test]
-fn a_dense_system_over_the_memory_limit_is_an_error_naming_the_option() {
-    let dir = scratch("memory");
-    // 900 points per shape give 3600 constraints: below `HIERARCHICAL_MIN`,
-    // so the dense solver (12 n² bytes, 198 MiB) is the one chosen.
+/// Runs an RBF sphere → torus morph with `points` per shape under
+/// `--max-memory 64M` and checks that it fails with the one-line memory
+/// message and writes no frame; returns that message.
+fn rbf_over_64m(points: &str) -> String {
+    let dir = scratch(&format!("memory-{points}"));
     let o = isomorph(&[
         "--max-memory",
         "64M",
@@ -74,7 +74,7 @@ fn a_dense_system_over_the_memory_limit_is_an_error_naming_the_option() {
         "--method",
         "rbf",
         "--points",
-        "900",
+        points,
         "--source",
         "sphere",
         "--target",
@@ -84,43 +84,30 @@ fn a_dense_system_over_the_memory_limit_is_an_error_naming_the_option() {
     ]);
     let err = stderr(&o);
     assert!(!o.status.success(), "{err}");
-    assert!(err.contains("over the memory limit of 64.0 MiB") && err.contains("--max-memory"), "{err}");
-    assert!(err.contains("fewer constraints"), "{err}");
-    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
-    let o = isomorph(&["--max-memory", "lots", "info", "x.obj"]);
-    assert!(!o.status.success() && stderr(&o).contains("512M"), "{}", stderr(&o));
-    let _ = std::fs::remove_dir_all(&dir);
-}
-
-#[test]
-fn the_hierarchical_solver_over_the_memory_limit_is_an_error_before_it_fits() {
-    let dir = scratch("memory-hierarchical");
-    // 2500 points per shape give 10000 constraints: the hierarchical
-    // solver, whose H-matrix, preconditioner and GMRES basis need some
-    // 100 MiB; it checks them against the limit before allocating them.
-    let o = isomorph(&[
-        "--max-memory",
-        "64M",
-        "morph",
-        "--method",
-        "rbf",
-        "--points",
-        "2500",
-        "--source",
-        "sphere",
-        "--target",
-        "torus",
-        "--out",
-        dir.to_str().unwrap(),
-    ]);
-    let err = stderr(&o);
-    assert!(!o.status.success(), "{err}");
-    assert!(err.contains("the hierarchical solver of") && err.contains("constraints needs"), "{err}");
     assert!(err.contains("over the memory limit of 64.0 MiB") && err.contains("--max-memory"), "{err}");
     assert!(err.contains("fewer constraints"), "{err}");
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
     assert!(!dir.join("frame_000.ply").exists(), "frames written");
     let _ = std::fs::remove_dir_all(&dir);
+    err
+}
+
+#[test]
+fn a_dense_system_over_the_memory_limit_is_an_error_naming_the_option() {
+    // 900 points per shape give 3600 constraints: below `HIERARCHICAL_MIN`,
+    // so the dense solver (12 n² bytes, 198 MiB) is the one chosen.
+    rbf_over_64m("900");
+    let o = isomorph(&["--max-memory", "lots", "info", "x.obj"]);
+    assert!(!o.status.success() && stderr(&o).contains("512M"), "{}", stderr(&o));
+}
+
+#[test]
+fn the_hierarchical_solver_over_the_memory_limit_is_an_error_before_it_fits() {
+    // 2500 points per shape give 10000 constraints: the hierarchical
+    // solver, whose H-matrix, preconditioner and GMRES basis need some
+    // 100 MiB; it checks them against the limit before allocating them.
+    let err = rbf_over_64m("2500");
+    assert!(err.contains("the hierarchical solver of") && err.contains("constraints needs"), "{err}");
 }
 
 #[test]
