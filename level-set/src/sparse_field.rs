@@ -1043,12 +1043,7 @@ mod tests {
         let speck = source.position(node.x, node.y, node.z);
         assert!(speck.length() > 0.2 + 2.0 * h && speck.length() < 0.35 - 2.0 * h, "{speck}");
         let body = Shape::sphere(0.2);
-        // A disc of a sheet 0.6 voxel thick through the node, across the
-        // lattice's diagonal: its face neighbours lie 0.58 voxel from the
-        // mid-plane (outside), its nodes touch along edges only.
-        let normal = Vec3::ONE.normalize();
-        let sheet =
-            move |p: Vec3| (0.3 * h - normal.dot(p - speck).abs()).min(2.0 * h - (p - speck).length());
+        let sheet = diagonal_sheet(speck, h);
         let target = move |p: Vec3| body.value(p).max(sheet(p));
         let speed = SpeedGrid::sample(&source, &target, |x| x, crate::Response::Identity).unwrap();
         let at = |u: &Bricks<f32>| u[source.index(node.x, node.y, node.z)];
@@ -1058,10 +1053,25 @@ mod tests {
             solver.step(&speed, &StepParams::default());
         }
         assert!(at(&solver.u) <= 0.0, "the speck's node is outside: {}", at(&solver.u));
-        let u: Vec<f32> = dense(&solver.u, source.len()).iter().map(|v| v * h).collect();
-        let grid = Grid3::from_vec(source.dims(), source.origin(), h, u).unwrap();
-        let mesh = isomorph_common::marching_cubes::marching_cubes(&grid, 0.0);
-        assert_eq!(mesh.metrics().components, 1);
+        assert_eq!(surface_components(&solver, &source), 1);
+    }
+
+    /// A disc of a sheet 0.6 voxel (of `h`) thick through `centre`, across
+    /// the lattice's diagonal (positive inside): the face neighbours of a
+    /// node at `centre` lie 0.58 voxel from the mid-plane (outside), and
+    /// the sheet's nodes touch along edges only.
+    fn diagonal_sheet(centre: Vec3, h: f32) -> impl Fn(Vec3) -> f32 + Copy {
+        let normal = Vec3::ONE.normalize();
+        move |p: Vec3| (0.3 * h - normal.dot(p - centre).abs()).min(2.0 * h - (p - centre).length())
+    }
+
+    /// Components of the zero set of `solver`'s values (in voxels) on the
+    /// lattice of `like`, by marching cubes.
+    fn surface_components(solver: &SparseFieldSolver, like: &Grid3<f32>) -> usize {
+        let h = like.spacing();
+        let u: Vec<f32> = dense(&solver.u, like.len()).iter().map(|v| v * h).collect();
+        let grid = Grid3::from_vec(like.dims(), like.origin(), h, u).unwrap();
+        isomorph_common::marching_cubes::marching_cubes(&grid, 0.0).metrics().components
     }
 
     /// A source feature thinner than a voxel, sampled at single nodes (the
@@ -1076,23 +1086,16 @@ mod tests {
         let h = probe.spacing();
         let node = UVec3::new(24, 16, 16);
         let speck = probe.position(node.x, node.y, node.z);
-        let normal = Vec3::ONE.normalize();
-        let sheet =
-            move |p: Vec3| (0.3 * h - normal.dot(p - speck).abs()).min(2.0 * h - (p - speck).length());
+        let sheet = diagonal_sheet(speck, h);
         let body = Shape::sphere(0.2);
         let source = Grid3::sample_box(&move |p: Vec3| body.value(p).max(sheet(p)), &bounds, n).unwrap();
         let index = source.index(node.x, node.y, node.z);
         assert!(source.data()[index] > 0.0, "the sheet's node is inside the source");
-        let grid_of = |solver: &SparseFieldSolver| {
-            let u: Vec<f32> = dense(&solver.u, source.len()).iter().map(|v| v * h).collect();
-            Grid3::from_vec(source.dims(), source.origin(), h, u).unwrap()
-        };
         let raw = isomorph_common::marching_cubes::marching_cubes(&source, 0.0);
         assert!(raw.metrics().components > 1, "the sampled source has specks");
         let solver = SparseFieldSolver::new(&source).unwrap();
         assert!(solver.u[index] <= 0.0, "the speck's node starts outside: {}", solver.u[index]);
-        let start = isomorph_common::marching_cubes::marching_cubes(&grid_of(&solver), 0.0);
-        assert_eq!(start.metrics().components, 1);
+        assert_eq!(surface_components(&solver, &source), 1);
         let mut dot = vec![-h; source.len()];
         dot[index] = 0.5 * h;
         let dot = Grid3::from_vec(source.dims(), source.origin(), h, dot).unwrap();
