@@ -5,8 +5,12 @@
 //!
 //! Fits the RBF morph as `isomorph morph --method rbf` does (inputs fitted
 //! to the unit box, `POINTS` per shape), then for each time `T` polygonizes
-//! the frame near its surface with the default evaluation and with the
-//! direct sum, counts the components of both, and at one vertex of each of
+//! the frame in each of the modes of `MODES` (comma-separated; default
+//! all): `sparse` (near its surface, default evaluation), `lattice` (the
+//! whole lattice by the dual tree, with its error against the exact sum),
+//! `frame` (as the CLI writes it: the lattice with its small sign islands
+//! confirmed by the exact sum) and `direct` (near the surface, direct
+//! sum), counts the components of each, and at one vertex of each of
 //! the smallest components prints the default (treecode), direct `f32` and
 //! exact `f64` values and the distance to the nearest constraint.
 
@@ -47,13 +51,17 @@ fn main() {
     );
     for &t in &times {
         let slice = morph.slice(t).expect("a slice");
-        let modes = std::env::var("MODES").unwrap_or_else(|_| "sparse,lattice,direct".into());
+        let modes = std::env::var("MODES").unwrap_or_else(|_| "sparse,lattice,frame,direct".into());
         for name in modes.split(',') {
             let evaluation = if name == "direct" { Evaluation::Direct } else { Evaluation::Auto };
             let field = slice.clone().with_evaluation(evaluation);
             let (start, cpu0) = (Instant::now(), cpu_seconds());
             let bounds = morph.field_bounds();
-            let mesh = if name == "lattice" {
+            let mesh = if name == "frame" {
+                // What the CLI writes: the lattice with its small sign
+                // islands confirmed by the exact sum.
+                morph.frame_mesh(t, res).expect("a frame")
+            } else if name == "lattice" {
                 let grid = Grid3::sample_box(&field, &bounds.expanded(1e-4), res).expect("a grid");
                 let cpu = cpu_seconds() - cpu0;
                 // The lattice values against the exact f64 sum at every

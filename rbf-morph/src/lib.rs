@@ -205,6 +205,7 @@ mod greedy;
 mod image;
 mod influence;
 mod interpolant;
+mod islands;
 mod kernel;
 mod reconstruct;
 mod slice;

@@ -1,11 +1,12 @@
 //! Fast batch evaluation of 2D and 3D slices of an interpolant.
 
 use crate::dual_tree::Lattice;
+use crate::islands::{BAND_SAFETY, ISLAND_NODES, PROBES, doubtful_nodes, surface_probes};
 use crate::kernel::{Kernel, eval_r2_f32};
 use crate::treecode::{AUTO_MIN_CENTRES, AUTO_MIN_NODES, AUTO_MIN_POINTS, Evaluation, Treecode};
 use glam::{UVec3, Vec2, Vec3};
-use isomorph_common::marching_cubes::{SparseSettings, polygonize, polygonize_near_surface};
-use isomorph_common::{Aabb, Field3, Grid2, GridError, MorphError, TriMesh, lattice_for_box};
+use isomorph_common::marching_cubes::{SparseSettings, marching_cubes, polygonize_near_surface};
+use isomorph_common::{Aabb, Field3, Grid2, Grid3, GridError, MorphError, TriMesh, lattice_for_box};
 use pulp::{Arch, Simd, WithSimd};
 use rayon::prelude::*;
 use std::sync::OnceLock;
@@ -418,9 +419,45 @@ impl Slice3 {
     /// As [`Grid3::sample_box`](isomorph_common::Grid3::sample_box) (bad box,
     /// `res < 2`, a lattice too large for memory).
     pub fn polygonize(&self, bounds: &Aabb, res: u32) -> Result<TriMesh, MorphError> {
+        self.polygonize_confirmed(bounds, res, None)
+    }
+
+    /// [`Slice3::polygonize`], with the lattice's small sign islands
+    /// ([`islands`](crate::islands)) re-evaluated by `exact` (the value at
+    /// a world point) before marching cubes when the dual tree evaluated
+    /// the lattice.
+    pub(crate) fn polygonize_confirmed(
+        &self,
+        bounds: &Aabb,
+        res: u32,
+        exact: Option<&(dyn Fn(Vec3) -> f64 + Sync)>,
+    ) -> Result<TriMesh, MorphError> {
         let (dims, _, _) = lattice_for_box(bounds, res)?;
         if self.eval.lattice_by_tree(dims.element_product() as usize) {
-            Ok(polygonize(self, bounds, res, 0.0)?)
+            let mut grid = Grid3::sample_box(self, bounds, res)?;
+            if let Some(exact) = exact {
+                let at = |grid: &Grid3<f32>, nodes: &[usize]| -> Vec<f32> {
+                    nodes
+                        .par_iter()
+                        .map(|&n| {
+                            let c = grid.node_of(n);
+                            exact(grid.position(c.x, c.y, c.z)) as f32
+                        })
+                        .collect()
+                };
+                let probes = surface_probes(&grid, 0.0, PROBES);
+                let band = at(&grid, &probes)
+                    .iter()
+                    .zip(&probes)
+                    .map(|(e, &n)| (e - grid.data()[n]).abs())
+                    .fold(0.0f32, f32::max)
+                    * BAND_SAFETY;
+                let nodes = doubtful_nodes(&grid, 0.0, band, ISLAND_NODES);
+                let values = at(&grid, &nodes);
+                let data = grid.data_mut();
+                nodes.iter().zip(values).for_each(|(&n, v)| data[n] = v);
+            }
+            Ok(marching_cubes(&grid, 0.0))
         } else {
             polygonize_near_surface(self, bounds, res, 0.0, &SparseSettings::default()).map(|(mesh, _)| mesh)
         }

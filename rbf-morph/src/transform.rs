@@ -391,8 +391,8 @@ impl RbfMorph {
 /// Frames are slices of the 4D implicit in world space (identity transform);
 /// [`Morph::frame_mesh`] is [`Slice3::polygonize`] over the field bounds
 /// (grown by `1e-4` as the default polygonizer grows them): the whole
-/// lattice by the dual tree for many centres, the near-surface direct sum
-/// for few.
+/// lattice by the dual tree for many centres, its small sign islands
+/// confirmed by the exact sum, the near-surface direct sum for few.
 impl Morph for RbfMorph {
     type Field = Slice3;
     type Error = RbfError;
@@ -417,8 +417,14 @@ impl Morph for RbfMorph {
         &self.report
     }
 
+    /// Small sign islands of the dual tree's lattice are confirmed by the
+    /// exact `f64` sum ([`islands`](crate::islands)): the fast far field's
+    /// error at the large weights of real meshes would leave specks.
     fn frame_mesh(&self, t: f32, res: u32) -> Result<TriMesh, RbfError> {
-        Ok(self.slice(t)?.polygonize(&self.bounds.expanded(1e-4), res)?)
+        let time = f64::from(check_time(t)? * self.separation);
+        let exact =
+            |p: Vec3| self.interpolant.value_f64([f64::from(p.x), f64::from(p.y), f64::from(p.z), time]);
+        Ok(self.slice(t)?.polygonize_confirmed(&self.bounds.expanded(1e-4), res, Some(&exact))?)
     }
 }
 
