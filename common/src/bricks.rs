@@ -192,6 +192,15 @@ impl<T: Copy + PartialEq> Bricks<T> {
         *self.read(brick, local)
     }
 
+    /// The value at node `c` if its brick holds values of its own, `None`
+    /// in a background brick: one brick lookup for both questions.
+    #[inline]
+    pub fn stored(&self, c: UVec3) -> Option<T> {
+        let (brick, local) = self.locate(c);
+        let slot = self.table[brick];
+        (slot < INSIDE).then(|| self.data[slot as usize * BRICK_NODES + local])
+    }
+
     #[inline]
     fn read(&self, brick: usize, local: usize) -> &T {
         match self.table[brick] {
@@ -597,6 +606,21 @@ impl<T: Copy + PartialEq + Debug + Send + Sync> NodeStore<T> for Bricks<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `stored` reads an allocated brick's values (its background fill
+    /// included) and nothing in a background brick, whichever side it is.
+    #[test]
+    fn stored_is_none_only_in_background_bricks() {
+        let mut grid = Bricks::new(UVec3::new(20, 9, 17), -1.0f32, 1.0).unwrap();
+        let (set, same_brick, other) = (UVec3::new(12, 3, 5), UVec3::new(13, 2, 7), UVec3::new(2, 3, 5));
+        let inside = grid.brick_of(grid.linear(other));
+        grid.set_background(inside, true);
+        assert_eq!((grid.stored(set), grid.stored(other)), (None, None));
+        grid.set(set, 0.25);
+        assert_eq!(grid.stored(set), Some(0.25));
+        assert_eq!(grid.stored(same_brick), Some(-1.0));
+        assert_eq!((grid.stored(other), grid.get(other)), (None, 1.0));
+    }
 
     /// Random writes into a bricked and a dense grid of odd dims (edge
     /// bricks cut by the border) read back equal everywhere, through both

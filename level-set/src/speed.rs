@@ -365,11 +365,8 @@ impl SpeedReader<'_> {
         match self {
             SpeedReader::Dense(grid) => grid.data()[n],
             SpeedReader::Lazy { origin, spacing, bricks, sampler, .. } => {
-                if bricks.is_allocated(bricks.brick_of(n)) {
-                    bricks[n]
-                } else {
-                    sampler(*origin + bricks.coords(n).as_vec3() * *spacing)
-                }
+                let c = bricks.coords(n);
+                bricks.stored(c).unwrap_or_else(|| sampler(*origin + c.as_vec3() * *spacing))
             }
         }
     }
