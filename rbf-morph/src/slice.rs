@@ -1,7 +1,7 @@
 //! Fast batch evaluation of 2D and 3D slices of an interpolant.
 
 use crate::dual_tree::Lattice;
-use crate::islands::{BAND_SAFETY, ISLAND_NODES, PROBES, doubtful_nodes, surface_probes};
+use crate::islands::{BAND_SAFETY, EXACT_TERMS, ISLAND_NODES, PROBES, doubtful_nodes, surface_probes};
 use crate::kernel::{Kernel, eval_r2_f32};
 use crate::treecode::{AUTO_MIN_CENTRES, AUTO_MIN_NODES, AUTO_MIN_POINTS, Evaluation, Treecode};
 use glam::{UVec3, Vec2, Vec3};
@@ -422,10 +422,10 @@ impl Slice3 {
         self.polygonize_confirmed(bounds, res, None)
     }
 
-    /// [`Slice3::polygonize`], with the lattice's small sign islands
-    /// ([`islands`](crate::islands)) re-evaluated by `exact` (the value at
-    /// a world point) before marching cubes when the dual tree evaluated
-    /// the lattice.
+    /// [`Slice3::polygonize`], with the lattice's doubtful nodes (small
+    /// sign islands, values near zero: [`islands`](crate::islands))
+    /// re-evaluated by `exact` (the value at a world point) before marching
+    /// cubes when the dual tree evaluated the lattice.
     pub(crate) fn polygonize_confirmed(
         &self,
         bounds: &Aabb,
@@ -452,7 +452,8 @@ impl Slice3 {
                     .map(|(e, &n)| (e - grid.data()[n]).abs())
                     .fold(0.0f32, f32::max)
                     * BAND_SAFETY;
-                let nodes = doubtful_nodes(&grid, 0.0, band, ISLAND_NODES);
+                let limit = EXACT_TERMS / self.centres().max(1);
+                let nodes = doubtful_nodes(&grid, 0.0, band, ISLAND_NODES, limit);
                 let values = at(&grid, &nodes);
                 let data = grid.data_mut();
                 nodes.iter().zip(values).for_each(|(&n, v)| data[n] = v);

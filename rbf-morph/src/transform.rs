@@ -391,8 +391,8 @@ impl RbfMorph {
 /// Frames are slices of the 4D implicit in world space (identity transform);
 /// [`Morph::frame_mesh`] is [`Slice3::polygonize`] over the field bounds
 /// (grown by `1e-4` as the default polygonizer grows them): the whole
-/// lattice by the dual tree for many centres, its small sign islands
-/// confirmed by the exact sum, the near-surface direct sum for few.
+/// lattice by the dual tree for many centres, its doubtful nodes confirmed
+/// by the exact sum, the near-surface direct sum for few.
 impl Morph for RbfMorph {
     type Field = Slice3;
     type Error = RbfError;
@@ -417,9 +417,10 @@ impl Morph for RbfMorph {
         &self.report
     }
 
-    /// Small sign islands of the dual tree's lattice are confirmed by the
-    /// exact `f64` sum ([`islands`](crate::islands)): the fast far field's
-    /// error at the large weights of real meshes would leave specks.
+    /// The dual tree's doubtful lattice nodes (small sign islands, values
+    /// near zero) are confirmed by the exact `f64` sum
+    /// ([`islands`](crate::islands)): the fast far field's error at the
+    /// large weights of real meshes would leave specks and cut necks.
     fn frame_mesh(&self, t: f32, res: u32) -> Result<TriMesh, RbfError> {
         let time = f64::from(check_time(t)? * self.separation);
         let exact =
