@@ -445,15 +445,19 @@ impl Slice3 {
                         })
                         .collect()
                 };
+                // The probes (sorted) measure the band and keep their exact
+                // values; the doubtful nodes are then evaluated once each.
                 let probes = surface_probes(&grid, 0.0, PROBES);
-                let band = at(&grid, &probes)
-                    .iter()
-                    .zip(&probes)
-                    .map(|(e, &n)| (e - grid.data()[n]).abs())
-                    .fold(0.0f32, f32::max)
-                    * BAND_SAFETY;
+                let mut band = 0.0f32;
+                for (&n, e) in probes.iter().zip(at(&grid, &probes)) {
+                    band = band.max((e - grid.data()[n]).abs());
+                    grid.data_mut()[n] = e;
+                }
                 let limit = EXACT_TERMS / self.centres().max(1);
-                let nodes = doubtful_nodes(&grid, 0.0, band, ISLAND_NODES, limit);
+                let nodes: Vec<usize> = doubtful_nodes(&grid, 0.0, band * BAND_SAFETY, ISLAND_NODES, limit)
+                    .into_iter()
+                    .filter(|n| probes.binary_search(n).is_err())
+                    .collect();
                 let values = at(&grid, &nodes);
                 let data = grid.data_mut();
                 nodes.iter().zip(values).for_each(|(&n, v)| data[n] = v);

@@ -46,7 +46,7 @@ fn the_frame_confirms_the_nodes_the_fast_lattice_gets_wrong() {
 /// centres per time): `cargo test --release -p isomorph-rbf --test
 /// large_weights -- --include-ignored`.
 #[test]
-#[ignore]
+#[ignore = "slow: the exact 80³ lattice at four times (about 1 min in release); run with --include-ignored"]
 fn frames_match_the_exact_lattice() {
     let morph = bunny_teapot();
     let f = morph.interpolant();
