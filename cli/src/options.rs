@@ -69,7 +69,9 @@ pub struct MethodArgs {
     pub influence: Vec<String>,
     /// Fit to this tolerance through greedily chosen centres (FastRBF)
     /// instead of interpolating every constraint: relative to the normal
-    /// constraints' value, 0.001–1; allows up to 250000 --points.
+    /// constraints' value, 0.001–1 (a residual ε moves the surface by about
+    /// ε × the normal offset); allows up to 250000 --points. Points sampled
+    /// at a mesh's own resolution need nearly all of them below ~0.1.
     #[arg(long, help_heading = "RBF (Turk & O'Brien)")]
     pub tolerance: Option<f64>,
 
