@@ -348,7 +348,7 @@ pub struct MorphSpec {
     /// Per-leaf origin trajectories.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub trajectories: Vec<Trajectory>,
-    /// The animator's phantom parameters (position, radius, stiffness).
+    /// The animator's phantom parameters (position, skeleton scale, radius, stiffness).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub phantoms: Vec<Phantom>,
     /// Automatic coplanar frames (§3.4, Figs. 10–11): matched pairs of
@@ -2156,6 +2156,72 @@ mod tests {
         assert!(
             error("(phantoms: [(target: [1], position: (0, NaN, 0))])").to_string().contains("`position`")
         );
+    }
+
+    /// Fig. 17 as printed: the rounded cube's phantom of the pierced
+    /// sphere's boxes is "a sphere that the animator located at the center
+    /// of the cube" (`scale: 0`): every phantom skeleton is that point, the
+    /// boxes grow out of it (the skeleton at `t` is the target box scaled by
+    /// `t`), and the ends are the inputs. Under a warp the collapsed phantom
+    /// sits at the node's centre in world space.
+    #[test]
+    fn phantom_skeletons_collapse_to_a_point_and_grow() {
+        let (a, b, _) = crate::scenes::demo("cube_sphere").unwrap();
+        let spec =
+            MorphSpec::from_ron("(phantoms: [(target: [1], position: (0.1, 0, 0), scale: 0)])").unwrap();
+        let g = GenericTree::new(&a, &b, &spec).unwrap();
+        let Node::Difference { right, .. } = g.pair().side(crate::Side::Source) else {
+            panic!("a difference")
+        };
+        assert_eq!(right.leaf_count(), 3);
+        for leaf in right.children() {
+            let Node::Primitive(p) = leaf else { panic!("{leaf:?}") };
+            assert_eq!(p.skeleton.kind(), "point");
+            assert!((p.centre() - Vec3::new(0.1, 0.0, 0.0)).length() < 1e-6, "{}", p.centre());
+            assert_eq!(p.kernel.intensity, 0.0);
+        }
+        let points = testutil::points();
+        let (c0, c1) = (g.at(0.0).unwrap(), g.at(1.0).unwrap());
+        for &p in &points {
+            assert!((c0.value(p) - a.value(p)).abs() < 1e-6, "C(0) at {p}");
+            assert!((c1.value(p) - b.value(p)).abs() < 1e-6, "C(1) at {p}");
+        }
+        let Node::Difference { right: boxes, .. } = b.root() else { panic!("the pierced sphere") };
+        let extent = |p: &Primitive| {
+            let world: Vec<Vec3> =
+                p.skeleton.vertices().iter().map(|&v| p.frame.transform_point3(v)).collect();
+            Aabb::from_points(&world).size()
+        };
+        for t in [0.25f32, 0.5, 0.75] {
+            let Node::Difference { right, .. } = g.node_at(t) else { panic!("a difference at {t}") };
+            for (leaf, target) in right.children().into_iter().zip(boxes.children()) {
+                let (Node::Primitive(p), Node::Primitive(q)) = (leaf, target) else { panic!("leaves") };
+                let (got, want) = (extent(p), extent(q) * t);
+                assert!((got - want).abs().max_element() < 1e-5, "t = {t}: {got} vs {want}");
+            }
+        }
+        // A phantom holding a twist collapses onto the node's centre.
+        let a = BlobTree::from_ron(
+            r#"(root: (kind: "blend", children: [(kind: "point", vertices: [(0, 0, 0)], radius: 1)]))"#,
+        )
+        .unwrap();
+        let b = BlobTree::from_ron(
+            r#"(root: (kind: "blend", children: [(kind: "point", vertices: [(0, 0, 0)], radius: 1),
+                (kind: "twist", rate: 1.5, children: [(kind: "segment", vertices: [(1, 0, 0), (1, 0.5, 1)], radius: 0.5)])]))"#,
+        )
+        .unwrap();
+        let links = "links: [(a: [], b: []), (a: [0], b: [0])]";
+        let spec = MorphSpec::from_ron(&format!("({links}, phantoms: [(target: [1], scale: 0)])")).unwrap();
+        let g = GenericTree::new(&a, &b, &spec).unwrap();
+        let source = g.pair().side(crate::Side::Source);
+        let phantom = source.children()[1];
+        let Node::Warp { child, .. } = phantom else { panic!("{phantom:?}") };
+        assert!(matches!(&**child, Node::Primitive(p) if p.skeleton.kind() == "point"));
+        let centre = b.root().children()[1].centre();
+        assert!((phantom.centre() - centre).length() < 1e-5, "{} vs {centre}", phantom.centre());
+        let bad = MorphSpec::from_ron(&format!("({links}, phantoms: [(target: [1], scale: -1)])")).unwrap();
+        let error = GenericTree::new(&a, &b, &bad);
+        assert!(error.unwrap_err().to_string().contains("`scale` must be in [0, 1e6]"));
     }
 
     #[test]
