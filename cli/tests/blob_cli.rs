@@ -59,3 +59,70 @@ fn via_takes_a_links_spec_with_level_links() {
     assert!(!o.status.success() && stderr(&o).contains("levels"), "{}", stderr(&o));
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// `--via-links` gives each pair arriving at a `--via` shape its own spec:
+/// the shipped rook → queen spec given explicitly draws exactly the frames
+/// of the built-in default, automatic matching (an empty spec) others; a
+/// link to a missing node names the pair's segment, an unreadable spec its
+/// file and pair, and a wrong count is refused.
+#[test]
+fn via_links_give_each_pair_its_spec() {
+    let out = scratch("blob_via_links");
+    std::fs::create_dir_all(&out).unwrap();
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../blobtree/scenes/rook_queen.links.ron");
+    let empty = out.join("empty.links.ron");
+    std::fs::write(&empty, "()").unwrap();
+    let frame = |via_links: &[&Path], name: &str| {
+        let frames = out.join(name);
+        let mut args =
+            vec!["--via", "queen", "--via-mode", "chain", "--res", "24", "--frames", "5", "--no-preview"];
+        for path in via_links {
+            args.extend(["--via-links", path.to_str().unwrap()]);
+        }
+        args.extend(["--out", frames.to_str().unwrap()]);
+        let o = morph("blobtree", "rook", "bear", &args);
+        assert_ok(&o);
+        std::fs::read(frames.join("frame_001.ply")).unwrap()
+    };
+    let default = frame(&[], "default");
+    assert_eq!(frame(&[&shipped], "shipped"), default, "the shipped spec is the built-in default");
+    assert_ne!(frame(&[&empty], "automatic"), default, "automatic matching gives another in-between");
+    // A link to a node the rook lacks names the segment; a malformed file its path and pair.
+    let bad = out.join("bad.links.ron");
+    let frames = out.join("bad");
+    let args = [
+        "--via",
+        "queen",
+        "--via-links",
+        bad.to_str().unwrap(),
+        "--res",
+        "16",
+        "--out",
+        frames.to_str().unwrap(),
+    ];
+    std::fs::write(&bad, "(links: [(a: [99], b: [0])])").unwrap();
+    let o = morph("blobtree", "rook", "bear", &args);
+    let err = stderr(&o);
+    assert!(
+        !o.status.success() && err.contains("segment 0") && err.contains("root/99, which does not exist"),
+        "{err}"
+    );
+    std::fs::write(&bad, "(links: [(a: [[99], b: [0])])").unwrap();
+    let o = morph("blobtree", "rook", "bear", &args);
+    let err = stderr(&o);
+    assert!(!o.status.success() && err.contains("rook → queen") && err.contains("bad.links.ron"), "{err}");
+    // One --via-links per --via, or none.
+    let args = [
+        "--via",
+        "queen",
+        "--via-links",
+        empty.to_str().unwrap(),
+        "--via-links",
+        empty.to_str().unwrap(),
+        "--out",
+        frames.to_str().unwrap(),
+    ];
+    let o = morph("blobtree", "rook", "bear", &args);
+    assert!(!o.status.success() && stderr(&o).contains("one --via-links per --via"), "{}", stderr(&o));
+    let _ = std::fs::remove_dir_all(&out);
+}
