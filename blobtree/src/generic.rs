@@ -911,6 +911,8 @@ impl GenericTree {
             trajectories.insert((&tr.a, &tr.b), k);
         }
         let mut matched = vec![false; spec.trajectories.len()];
+        // The kind of a matched generic node without a frame, per trajectory.
+        let mut frameless: Vec<Option<&'static str>> = vec![None; spec.trajectories.len()];
         let mut failed = None;
         for_matching(&mut root, &trajectories, &mut |k, n| match &mut n.kind {
             GKind::Leaf(l) => {
@@ -932,16 +934,18 @@ impl GenericTree {
                 }
                 matched[k] = true;
             }
-            _ => {}
+            GKind::Nary(op, _) => frameless[k] = frameless[k].or(Some(op.name())),
+            GKind::Difference(..) => frameless[k] = frameless[k].or(Some("difference")),
+            GKind::Warp(w, ..) => frameless[k] = frameless[k].or(Some(w.kind())),
         });
         if let Some(e) = failed {
             return Err(e);
         }
         if let Some(tr) = spec.trajectories.iter().find(|tr| !matched[trajectories[&(&tr.a, &tr.b)]]) {
-            return Err(BlobMorphError::UnmatchedPair {
-                what: "trajectory",
-                a: tr.a.clone(),
-                b: tr.b.clone(),
+            let (a, b) = (tr.a.clone(), tr.b.clone());
+            return Err(match frameless[trajectories[&(&tr.a, &tr.b)]] {
+                Some(kind) => BlobMorphError::FramelessTrajectory { a, b, kind },
+                None => BlobMorphError::UnmatchedPair { what: "trajectory", a, b },
             });
         }
         Ok(Self { root, thresholds: (a.threshold(), b.threshold()), pair })
@@ -2498,6 +2502,41 @@ mod tests {
             GenericTree::new(&a, &b, &far),
             Err(BlobMorphError::InvalidTrajectory { value: 1e38, .. })
         ));
+    }
+
+    /// A trajectory on a matched node without a frame (an operator, a
+    /// twist) is refused as such, naming the kind and where frames are; on
+    /// the affine node above the twist it moves the twist's axis.
+    #[test]
+    fn trajectories_on_frameless_nodes_say_where_frames_are() {
+        let scene = |rate: f32, x: f32| {
+            BlobTree::from_ron(&format!(
+                r#"(root: (kind: "blend", children: [(kind: "affine", frame: (translate: ({x}, 0, 0)), children: [
+                    (kind: "twist", rate: {rate}, children: [
+                        (kind: "segment", vertices: [(0, 0, -0.5), (0.2, 0, 0.5)], radius: 0.5)])])]))"#
+            ))
+            .unwrap()
+        };
+        let (a, b) = (scene(0.0, 0.0), scene(2.0, 1.0));
+        let run = |pa: &str, pb: &str| {
+            let spec =
+                format!("(trajectories: [(a: {pa}, b: {pb}, keys: [(s: 0.5, position: (0.5, 1, 0))])])");
+            GenericTree::new(&a, &b, &MorphSpec::from_ron(&spec).unwrap())
+        };
+        for (path, kind) in [("[]", "blend"), ("[0, 0]", "twist")] {
+            let err = run(path, path).unwrap_err();
+            assert!(
+                matches!(&err, BlobMorphError::FramelessTrajectory { kind: k, .. } if *k == kind),
+                "{path}: {err}"
+            );
+            assert!(err.to_string().contains("affine node above it"), "{err}");
+        }
+        let g = run("[0]", "[0]").unwrap();
+        // The twist's axis (through the affine node's origin) passes the key at s = ½.
+        let mid = g.at(0.5).unwrap();
+        let Node::Nary { children, .. } = mid.root() else { panic!("a blend") };
+        let Node::Warp { warp: Warp::Affine(m), .. } = children[0] else { panic!("{:?}", children[0]) };
+        assert!((Vec3::from(m.translation) - Vec3::new(0.5, 1.0, 0.0)).length() < 1e-6, "{m:?}");
     }
 
     #[test]

@@ -157,7 +157,11 @@
 //!   the animator bends the origin's path into a cubic Bézier curve
 //!   (`handles`), or keys positions (a C¹ cubic spline with Catmull–Rom
 //!   tangents through the keys) and orientations (slerp from key to key),
-//!   for leaves and affine nodes alike. Keys are at the node's local time
+//!   for leaves and affine nodes alike. Twists, tapers and bends act about
+//!   their local axes, so the affine node above one is its frame and
+//!   carries its trajectory (the paper's warps of internal nodes); a
+//!   trajectory on a frameless node (an operator, a difference, a twist,
+//!   taper or bend) is refused ([`BlobMorphError::FramelessTrajectory`]). Keys are at the node's local time
 //!   `s`, after its speed curve.
 //! - **Phantom parameters**: position, skeleton size (`scale`, down to a
 //!   point), radius and stiffness; the
