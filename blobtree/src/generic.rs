@@ -116,6 +116,7 @@ impl Speed {
 
 /// The speed curve of the generic node made from source node `a` and target node `b`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct SpeedCurve {
     /// Source node path.
     pub a: NodePath,
@@ -123,6 +124,23 @@ pub struct SpeedCurve {
     pub b: NodePath,
     /// The curve.
     pub speed: Speed,
+    /// For two warps of different kinds, which of the two generic warps
+    /// `(ω_A →s_A(t) Id) ∘ (Id →s_B(t) ω_B)` of Fig. 16 the curve drives
+    /// (default: both).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub warp: Option<WarpHalf>,
+}
+
+/// One of the two generic warps a pair of warps of different kinds becomes
+/// (§4.4, Fig. 16: `ω_A →s(t) ω_B = (ω_A →s_A(t) ω_Id) ∘ (ω_Id →s_B(t) ω_B)`),
+/// each with its own speed curve.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WarpHalf {
+    /// `ω_A → Id`, at speed `s_A(t)`: the source's warp is undone.
+    Source,
+    /// `Id → ω_B`, at speed `s_B(t)`: the target's warp is applied.
+    Target,
 }
 
 /// The trajectory of the frame made from source node `a` and target node
@@ -471,6 +489,8 @@ struct GNode {
     kind: GKind,
     speed: Speed,
     origin: Origin,
+    /// Which generic warp of a pair of different kinds this is (Fig. 16).
+    half: Option<WarpHalf>,
     children: Vec<GNode>,
 }
 
@@ -591,7 +611,18 @@ fn build(
         }
         Pair::Warp { a, b, child, .. } => (GKind::Warp(*a, *b, None), vec![build(child)?]),
     };
-    Ok(GNode { kind, speed: Speed::default(), origin, children })
+    let mut node = GNode { kind, speed: Speed::default(), origin, half: None, children };
+    // Fig. 16: a warp pair of different kinds is two warps of one origin,
+    // the source's over the target's.
+    if let [lower @ GNode { kind: GKind::Warp(..), .. }] = &mut node.children[..]
+        && matches!(node.kind, GKind::Warp(..))
+        && lower.origin == node.origin
+        && node.origin.a.is_some()
+        && node.origin.b.is_some()
+    {
+        (node.half, lower.half) = (Some(WarpHalf::Source), Some(WarpHalf::Target));
+    }
+    Ok(node)
 }
 
 /// The pairs the correspondence made under the commutative nodes of
@@ -625,16 +656,18 @@ fn links_of(pair: &Pair) -> Vec<Link> {
 }
 
 /// Applies `f` to every node whose origin `(a, b)` is a key of `wanted`,
-/// with that key's index; one traversal for all keys.
+/// with each of that key's indices in order; one traversal for all keys.
 fn for_matching(
     node: &mut GNode,
-    wanted: &HashMap<(&NodePath, &NodePath), usize>,
+    wanted: &HashMap<(&NodePath, &NodePath), Vec<usize>>,
     f: &mut dyn FnMut(usize, &mut GNode),
 ) {
     if let (Some(a), Some(b)) = (&node.origin.a, &node.origin.b)
-        && let Some(&k) = wanted.get(&(a, b))
+        && let Some(ks) = wanted.get(&(a, b)).cloned()
     {
-        f(k, node);
+        for k in ks {
+            f(k, node);
+        }
     }
     for c in &mut node.children {
         for_matching(c, wanted, f);
@@ -884,31 +917,37 @@ impl GenericTree {
         }
         let mut topologies = leaves.into_iter().map(|l| Some(&*l.skeleton)).chain(std::iter::repeat(None));
         let mut root = build(&pair, spec.coplanar_frames, &mut topologies)?;
-        // Later curves for the same pair override earlier ones.
-        let mut speeds = HashMap::new();
+        // Later curves for the same node override earlier ones.
+        let mut speeds: HashMap<_, Vec<usize>> = HashMap::new();
         for (k, sc) in spec.speeds.iter().enumerate() {
             if let Some(problem) = sc.speed.problem() {
                 return Err(BlobMorphError::InvalidSpeed { a: sc.a.clone(), b: sc.b.clone(), problem });
             }
-            speeds.insert((&sc.a, &sc.b), k);
+            speeds.entry((&sc.a, &sc.b)).or_default().push(k);
         }
-        let mut matched = vec![false; spec.speeds.len()];
+        let (mut paired, mut matched) = (vec![false; spec.speeds.len()], vec![false; spec.speeds.len()]);
         for_matching(&mut root, &speeds, &mut |k, n| {
-            n.speed = spec.speeds[k].speed.clone();
-            matched[k] = true;
+            paired[k] = true;
+            if spec.speeds[k].warp.is_none_or(|w| n.half == Some(w)) {
+                n.speed = spec.speeds[k].speed.clone();
+                matched[k] = true;
+            }
         });
-        if let Some(sc) = spec.speeds.iter().find(|sc| !matched[speeds[&(&sc.a, &sc.b)]]) {
-            return Err(BlobMorphError::UnmatchedPair {
-                what: "speed curve",
-                a: sc.a.clone(),
-                b: sc.b.clone(),
+        if let Some(k) = (0..spec.speeds.len()).find(|&k| !matched[k]) {
+            let (a, b) = (spec.speeds[k].a.clone(), spec.speeds[k].b.clone());
+            return Err(if paired[k] {
+                let problem = "`warp` picks one of the two warps of a pair of different kinds (Fig. 16); \
+                               these nodes are not such a pair";
+                BlobMorphError::InvalidSpeed { a, b, problem }
+            } else {
+                BlobMorphError::UnmatchedPair { what: "speed curve", a, b }
             });
         }
-        let mut trajectories = HashMap::new();
+        let mut trajectories: HashMap<_, Vec<usize>> = HashMap::new();
         let mut paths = Vec::with_capacity(spec.trajectories.len());
         for (k, tr) in spec.trajectories.iter().enumerate() {
             paths.push(FramePath::new(tr)?);
-            trajectories.insert((&tr.a, &tr.b), k);
+            trajectories.entry((&tr.a, &tr.b)).or_default().push(k);
         }
         let mut matched = vec![false; spec.trajectories.len()];
         // The kind of a matched generic node without a frame, per trajectory.
@@ -941,9 +980,9 @@ impl GenericTree {
         if let Some(e) = failed {
             return Err(e);
         }
-        if let Some(tr) = spec.trajectories.iter().find(|tr| !matched[trajectories[&(&tr.a, &tr.b)]]) {
-            let (a, b) = (tr.a.clone(), tr.b.clone());
-            return Err(match frameless[trajectories[&(&tr.a, &tr.b)]] {
+        if let Some(k) = (0..spec.trajectories.len()).find(|&k| !matched[k]) {
+            let (a, b) = (spec.trajectories[k].a.clone(), spec.trajectories[k].b.clone());
+            return Err(match frameless[k] {
                 Some(kind) => BlobMorphError::FramelessTrajectory { a, b, kind },
                 None => BlobMorphError::UnmatchedPair { what: "trajectory", a, b },
             });
@@ -2304,6 +2343,7 @@ mod tests {
                 a: NodePath::root(),
                 b: NodePath::root(),
                 speed: Speed { start: 0.5, end: 1.0, ..Speed::default() },
+                warp: None,
             }],
             ..MorphSpec::default()
         };
@@ -2561,6 +2601,38 @@ mod tests {
             assert!((g.at(0.0).unwrap().value(p) - a.value(p)).abs() < 1e-5);
             assert!((g.at(1.0).unwrap().value(p) - b.value(p)).abs() < 1e-5);
         }
+        // The paper's s_A and s_B: the twist unwinds over [0, ½], then the
+        // bend winds up over [½, 1]; a curve without `warp` drives both.
+        let spec = MorphSpec::from_ron(
+            "(speeds: [(a: [], b: [], warp: source, speed: (end: 0.5)), (a: [], b: [], warp: target, speed: (start: 0.5))])",
+        )
+        .unwrap();
+        let g = GenericTree::new(&a, &b, &spec).unwrap();
+        let rates = |t: f32| {
+            let n = g.node_at(t);
+            let Node::Warp { warp: Warp::Twist { rate: twist }, child } = &n else { panic!("{n:?}") };
+            let Node::Warp { warp: Warp::Bend { rate: bend, .. }, .. } = **child else { panic!("{child:?}") };
+            (*twist, bend)
+        };
+        for (t, want) in [(0.25, (1.0, 0.0)), (0.5, (0.0, 0.0)), (0.75, (0.0, 0.4)), (1.0, (0.0, 0.8))] {
+            let got = rates(t);
+            assert!((got.0 - want.0).abs() < 1e-6 && (got.1 - want.1).abs() < 1e-6, "t = {t}: {got:?}");
+        }
+        let both = MorphSpec::from_ron("(speeds: [(a: [], b: [], speed: (end: 0.5))])").unwrap();
+        let n = GenericTree::new(&a, &b, &both).unwrap().node_at(0.25);
+        let Node::Warp { warp: Warp::Twist { rate }, child } = &n else { panic!("{n:?}") };
+        assert!((rate - 1.0).abs() < 1e-6);
+        assert!(
+            matches!(**child, Node::Warp { warp: Warp::Bend { rate, .. }, .. } if (rate - 0.4).abs() < 1e-6)
+        );
+        // `warp` on a pair that is not two warps of different kinds is refused.
+        let err = GenericTree::new(
+            &a,
+            &a,
+            &MorphSpec::from_ron("(speeds: [(a: [], b: [], warp: source, speed: (end: 0.5))])").unwrap(),
+        )
+        .unwrap_err();
+        assert!(err.to_string().contains("not such a pair"), "{err}");
     }
 
     #[test]

@@ -84,7 +84,7 @@
 //! |---|---|
 //! | `links: [(a: PATH, b: PATH), …]` | source node `a` corresponds to target node `b` (§3.1); a node with several links is split (§3.2, §4.2); children of linked nodes without a link get phantom partners (§3.3); links must respect the hierarchy (a link's parents are matched) |
 //! | `heuristic: nearest_centre`, `hierarchical` or `all_children` | how children of matched nodes without links are paired (default `nearest_centre`: nearest skeleton centres; `hierarchical`: nearest centres relative to their parents, recursively; `all_children`: every child with every child) ([`Heuristic`]) |
-//! | `speeds: [(a: PATH, b: PATH, speed: (start: 0.2, end: 0.8, smooth: true)), …]` | the speed `s(t)` of the generic node made from `a` and `b` (§4.4): 0 before `start`, 1 after `end`, linear or smooth (`3u² − 2u³`) in between (defaults 0, 1, false); or free-form with `points: [(u, s), …]`, a monotone piecewise cubic through `(0, 0)`, the points and `(1, 1)` over the window ([`Speed`]) |
+//! | `speeds: [(a: PATH, b: PATH, speed: (start: 0.2, end: 0.8, smooth: true)), …]` | the speed `s(t)` of the generic node made from `a` and `b` (§4.4): 0 before `start`, 1 after `end`, linear or smooth (`3u² − 2u³`) in between (defaults 0, 1, false); or free-form with `points: [(u, s), …]`, a monotone piecewise cubic through `(0, 0)`, the points and `(1, 1)` over the window ([`Speed`]); for two warps of different kinds, which become `(ω_A →s_A(t) Id) ∘ (Id →s_B(t) ω_B)` (Fig. 16), `warp: source` or `warp: target` gives `s_A` or `s_B` alone (default: both) ([`WarpHalf`]) |
 //! | `trajectories: [(a: PATH, b: PATH, handles: ((x, y, z), (x, y, z))), …]` | the two inner control points (world units) of the cubic Bézier curve the frame origin of the generic leaf or affine node `a → b` follows (default: uniform straight motion, slerped orientation); or key frames `keys: [(s: 0.5, position: (x, y, z), rotate: (axis: (x, y, z), degrees: a)), …]` at increasing local times `s ∈ (0, 1)`, each with a position and/or an orientation: the origin follows the cubic spline (Catmull–Rom tangents) through the end origins and the key positions, the orientation slerps from key to key ([`Trajectory`], [`FrameKey`]) |
 //! | `coplanar_frames: true` | automatic coplanar frames (§3.4, Figs. 10–11): matched points, segments and polygons are interpolated in local frames where both lie in one plane, so in-between skeletons stay segments or polygons (default `false`) |
 //! | `phantoms: [(target: PATH, position: (x, y, z), radius: R, stiffness: k, scale: f), …]` | the phantom partner of a node without correspondence (§3.3, Fig. 17; [`Phantom`]): name the node by `source: PATH` or `target: PATH`; its phantom's skeletons are centred at `position` (world units) and scaled by `f ≥ 0` about that centre (`0`: every skeleton becomes that point, as Fig. 17's phantom sphere at the cube's centre), its primitives get radius `R` and stiffness `k` (each optional; default: the node's own, `f = 1`); its intensity stays 0 |
@@ -270,7 +270,7 @@ pub use correspond::{
 pub use error::{BlobError, BlobMorphError, NodePath, NodeProblem, Side};
 pub use generic::{
     BlobMorph, BlobSettings, FrameKey, GenericTree, KeyShape, LevelLinks, MorphSpec, Orientation, Speed,
-    SpeedCurve, Trajectory, ViaMode,
+    SpeedCurve, Trajectory, ViaMode, WarpHalf,
 };
 pub use kernel::Kernel;
 pub use minkowski::MinkowskiPath;

@@ -264,6 +264,7 @@ pub fn demo(name: &str) -> Option<(BlobTree, BlobTree, MorphSpec)> {
                     a,
                     b,
                     speed: Speed { start: 0.0, end: 0.5, ..Speed::default() },
+                    warp: None,
                 });
             }
         }
