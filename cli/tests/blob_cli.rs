@@ -5,14 +5,18 @@
 mod common;
 
 use common::{assert_ok, morph, scratch, stderr};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// A fresh scratch folder and the path of a file shipped in `blobtree/scenes/`.
+fn setup(scratch_name: &str, shipped_file: &str) -> (PathBuf, PathBuf) {
+    let out = scratch(scratch_name);
+    std::fs::create_dir_all(&out).unwrap();
+    (out, Path::new(env!("CARGO_MANIFEST_DIR")).join("../blobtree/scenes").join(shipped_file))
+}
 
 #[test]
 fn via_takes_a_links_spec_with_level_links() {
-    let out = scratch("blob_levels");
-    std::fs::create_dir_all(&out).unwrap();
-    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../blobtree/scenes");
-    let spec = shipped.join("rook_queen_bear.levels.links.ron");
+    let (out, spec) = setup("blob_levels", "rook_queen_bear.levels.links.ron");
     let frames = out.join("frames");
     let args = [
         "--via",
@@ -67,9 +71,7 @@ fn via_takes_a_links_spec_with_level_links() {
 /// file and pair, and a wrong count is refused.
 #[test]
 fn via_links_give_each_pair_its_spec() {
-    let out = scratch("blob_via_links");
-    std::fs::create_dir_all(&out).unwrap();
-    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../blobtree/scenes/rook_queen.links.ron");
+    let (out, shipped) = setup("blob_via_links", "rook_queen.links.ron");
     let empty = out.join("empty.links.ron");
     std::fs::write(&empty, "()").unwrap();
     let frame = |via_links: &[&Path], name: &str| {
@@ -88,18 +90,10 @@ fn via_links_give_each_pair_its_spec() {
     assert_eq!(frame(&[&shipped], "shipped"), default, "the shipped spec is the built-in default");
     assert_ne!(frame(&[&empty], "automatic"), default, "automatic matching gives another in-between");
     // A link to a node the rook lacks names the segment; a malformed file its path and pair.
-    let bad = out.join("bad.links.ron");
-    let frames = out.join("bad");
-    let args = [
-        "--via",
-        "queen",
-        "--via-links",
-        bad.to_str().unwrap(),
-        "--res",
-        "16",
-        "--out",
-        frames.to_str().unwrap(),
-    ];
+    let (bad, frames) = (out.join("bad.links.ron"), out.join("bad"));
+    let (bad_file, empty_file, out_dir) =
+        (bad.to_str().unwrap(), empty.to_str().unwrap(), frames.to_str().unwrap());
+    let args = ["--via", "queen", "--via-links", bad_file, "--res", "16", "--out", out_dir];
     std::fs::write(&bad, "(links: [(a: [99], b: [0])])").unwrap();
     let o = morph("blobtree", "rook", "bear", &args);
     let err = stderr(&o);
@@ -112,16 +106,7 @@ fn via_links_give_each_pair_its_spec() {
     let err = stderr(&o);
     assert!(!o.status.success() && err.contains("rook → queen") && err.contains("bad.links.ron"), "{err}");
     // One --via-links per --via, or none.
-    let args = [
-        "--via",
-        "queen",
-        "--via-links",
-        empty.to_str().unwrap(),
-        "--via-links",
-        empty.to_str().unwrap(),
-        "--out",
-        frames.to_str().unwrap(),
-    ];
+    let args = ["--via", "queen", "--via-links", empty_file, "--via-links", empty_file, "--out", out_dir];
     let o = morph("blobtree", "rook", "bear", &args);
     assert!(!o.status.success() && stderr(&o).contains("one --via-links per --via"), "{}", stderr(&o));
     let _ = std::fs::remove_dir_all(&out);
