@@ -227,6 +227,12 @@ pub struct MethodArgs {
     /// at 0, the keys at 1/3 and 2/3, the target at 1).
     #[arg(long, help_heading = "BlobTree (Galin et al.)", value_enum, default_value_t = ViaModeArg::Bezier)]
     pub via_mode: ViaModeArg,
+
+    /// Also write each frame's BlobTree C(t) as a scene file
+    /// (OUT/frame_000.ron, ...; the paper's genericity): it loads back into
+    /// the same field, to polygonize with `isomorph blob` or morph further.
+    #[arg(long, help_heading = "BlobTree (Galin et al.)")]
+    pub scenes: bool,
 }
 
 /// Which options belong to which method (by their argument ids).
@@ -272,6 +278,7 @@ const OWNERS: &[(&str, &[Method])] = &[
     ("via", &[Method::Blobtree]),
     ("via_mode", &[Method::Blobtree]),
     ("via_links", &[Method::Blobtree]),
+    ("scenes", &[Method::Blobtree]),
 ];
 
 /// The options given on the command line that belong to no method in

@@ -111,3 +111,39 @@ fn via_links_give_each_pair_its_spec() {
     assert!(!o.status.success() && stderr(&o).contains("one --via-links per --via"), "{}", stderr(&o));
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// `--scenes` writes every frame's generic tree `C(t)` as a scene file
+/// beside its mesh, which loads back into the morph's field at that `t`
+/// (the shipped rook file into the queen, automatic correspondence).
+#[test]
+fn scenes_save_each_frame_as_a_blobtree() {
+    use isomorph_blobtree::{BlobMorph, BlobTree, scenes};
+    use isomorph_common::{Field3, Morph};
+    let (out, rook_file) = setup("blob_scenes", "rook.ron");
+    let frames = out.join("frames");
+    let args =
+        ["--res", "16", "--frames", "3", "--no-preview", "--scenes", "--out", frames.to_str().unwrap()];
+    assert_ok(&morph("blobtree", rook_file.to_str().unwrap(), "queen", &args));
+    let (rook, queen) = (scenes::rook(), scenes::queen());
+    let expected = BlobMorph::from_trees(&rook, &queen, &Default::default()).unwrap();
+    let support = expected.frame(0.5).unwrap().field.support();
+    for (i, t) in [0.0f32, 0.5, 1.0].into_iter().enumerate() {
+        let text = std::fs::read_to_string(frames.join(format!("frame_{i:03}.ron"))).unwrap();
+        let saved = BlobTree::from_ron(&text).unwrap();
+        let field = expected.frame(t).unwrap().field;
+        for k in 0..500 {
+            let u = isomorph_common::glam::Vec3::new(
+                (k as f32 * 0.377).sin(),
+                (k as f32 * 0.613).cos(),
+                (k as f32 * 0.231).sin(),
+            ) * 0.5
+                + 0.5;
+            let p = support.min + (support.max - support.min) * u;
+            assert!((saved.value(p) - field.value(p)).abs() <= 1e-6, "t = {t} at {p}");
+        }
+    }
+    // The scenes are the BlobTree method's: other methods refuse the option.
+    let o = morph("level-set", "sphere", "torus", &["--scenes", "--out", frames.to_str().unwrap()]);
+    assert!(!o.status.success() && stderr(&o).contains("--scenes"), "{}", stderr(&o));
+    let _ = std::fs::remove_dir_all(&out);
+}
