@@ -270,8 +270,8 @@ pub fn morph(method: Method, io: &Io, settings: &Settings, out: &Path) -> anyhow
 
 /// Writes the BlobTree morph's frames `C(t)` at the mesh frames' times as
 /// scene files `out/frame_NNN.ron` (`isomorph morph --scenes`). The morph
-/// is built again from the inputs (BlobTree morphs build in well under the
-/// time their frames take to polygonize).
+/// is built again from the inputs: the boxed morph the exporter used gives
+/// its frames as opaque fields, not as BlobTrees.
 ///
 /// # Errors
 /// The inputs', the morph's and the files' errors.
