@@ -7,6 +7,14 @@ mod common;
 use common::{assert_ok, morph, scratch, stderr};
 use std::path::{Path, PathBuf};
 
+/// The error output of `isomorph morph --method METHOD` from `source` to
+/// `target` with `args`, which must fail.
+fn refused(method: &str, source: &str, target: &str, args: &[&str]) -> String {
+    let o = morph(method, source, target, args);
+    assert!(!o.status.success(), "{method} {source} -> {target} {args:?} succeeded");
+    stderr(&o)
+}
+
 /// A fresh scratch folder and the path of a file shipped in `blobtree/scenes/`.
 fn setup(scratch_name: &str, shipped_file: &str) -> (PathBuf, PathBuf) {
     let out = scratch(scratch_name);
@@ -53,14 +61,12 @@ fn via_takes_a_links_spec_with_level_links() {
         "--out",
         frames.to_str().unwrap(),
     ];
-    let o = morph("blobtree", "rook", "bear", &args);
-    assert!(!o.status.success());
-    let err = stderr(&o);
+    let err = refused("blobtree", "rook", "bear", &args);
     assert!(err.contains("de Casteljau level 2, pair 0") && err.contains("does not exist"), "{err}");
     // Level links without control shapes are refused.
     let args = ["--links", bad.to_str().unwrap(), "--res", "16", "--out", frames.to_str().unwrap()];
-    let o = morph("blobtree", "rook", "bear", &args);
-    assert!(!o.status.success() && stderr(&o).contains("levels"), "{}", stderr(&o));
+    let err = refused("blobtree", "rook", "bear", &args);
+    assert!(err.contains("levels"), "{err}");
     let _ = std::fs::remove_dir_all(&out);
 }
 
@@ -95,20 +101,15 @@ fn via_links_give_each_pair_its_spec() {
         (bad.to_str().unwrap(), empty.to_str().unwrap(), frames.to_str().unwrap());
     let args = ["--via", "queen", "--via-links", bad_file, "--res", "16", "--out", out_dir];
     std::fs::write(&bad, "(links: [(a: [99], b: [0])])").unwrap();
-    let o = morph("blobtree", "rook", "bear", &args);
-    let err = stderr(&o);
-    assert!(
-        !o.status.success() && err.contains("segment 0") && err.contains("root/99, which does not exist"),
-        "{err}"
-    );
+    let err = refused("blobtree", "rook", "bear", &args);
+    assert!(err.contains("segment 0") && err.contains("root/99, which does not exist"), "{err}");
     std::fs::write(&bad, "(links: [(a: [[99], b: [0])])").unwrap();
-    let o = morph("blobtree", "rook", "bear", &args);
-    let err = stderr(&o);
-    assert!(!o.status.success() && err.contains("rook → queen") && err.contains("bad.links.ron"), "{err}");
+    let err = refused("blobtree", "rook", "bear", &args);
+    assert!(err.contains("rook → queen") && err.contains("bad.links.ron"), "{err}");
     // One --via-links per --via, or none.
     let args = ["--via", "queen", "--via-links", empty_file, "--via-links", empty_file, "--out", out_dir];
-    let o = morph("blobtree", "rook", "bear", &args);
-    assert!(!o.status.success() && stderr(&o).contains("one --via-links per --via"), "{}", stderr(&o));
+    let err = refused("blobtree", "rook", "bear", &args);
+    assert!(err.contains("one --via-links per --via"), "{err}");
     let _ = std::fs::remove_dir_all(&out);
 }
 
@@ -131,19 +132,16 @@ fn scenes_save_each_frame_as_a_blobtree() {
         let text = std::fs::read_to_string(frames.join(format!("frame_{i:03}.ron"))).unwrap();
         let saved = BlobTree::from_ron(&text).unwrap();
         let field = expected.frame(t).unwrap().field;
-        for k in 0..500 {
-            let u = isomorph_common::glam::Vec3::new(
-                (k as f32 * 0.377).sin(),
-                (k as f32 * 0.613).cos(),
-                (k as f32 * 0.231).sin(),
-            ) * 0.5
-                + 0.5;
-            let p = support.min + (support.max - support.min) * u;
+        // An 8³ lattice over the support box of the middle frame.
+        for k in 0..512u16 {
+            let cell =
+                isomorph_common::glam::UVec3::new(u32::from(k % 8), u32::from(k / 8 % 8), u32::from(k / 64));
+            let p = support.min + (support.max - support.min) * cell.as_vec3() / 7.0;
             assert!((saved.value(p) - field.value(p)).abs() <= 1e-6, "t = {t} at {p}");
         }
     }
     // The scenes are the BlobTree method's: other methods refuse the option.
-    let o = morph("level-set", "sphere", "torus", &["--scenes", "--out", frames.to_str().unwrap()]);
-    assert!(!o.status.success() && stderr(&o).contains("--scenes"), "{}", stderr(&o));
+    let err = refused("level-set", "sphere", "torus", &["--scenes", "--out", frames.to_str().unwrap()]);
+    assert!(err.contains("--scenes"), "{err}");
     let _ = std::fs::remove_dir_all(&out);
 }
