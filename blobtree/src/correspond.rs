@@ -157,9 +157,12 @@ impl Pair {
 /// The animator's parameters of one phantom (§3.3, Fig. 17): the
 /// null-intensity partner a node without correspondence gets on the other
 /// side. By default the phantom has the node's skeletons, radii and
-/// stiffnesses; these fields move and reshape it, so the node grows from
-/// (or shrinks into) another place and size. Its intensity stays 0 — that
-/// is what makes it a phantom and keeps the end shape the input.
+/// stiffnesses; these fields move and reshape it (the paper's `S_B`, `R_B`,
+/// `k_B`), so the node grows from (or shrinks into) another place, skeleton
+/// and size. Fig. 17's phantom, "a sphere that the animator located at the
+/// center of the cube", is `position` at the centre with `scale: 0`. Its
+/// intensity stays 0 — that is what makes it a phantom and keeps the end
+/// shape the input.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Phantom {
@@ -181,6 +184,14 @@ pub struct Phantom {
     /// The stiffness `k` of its primitives (default: the node's).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stiffness: Option<f32>,
+    /// The factor (≥ 0, unitless; default 1) its skeletons are scaled by
+    /// about the phantom's centre (`position`, or the node's centre): 0
+    /// collapses every skeleton to a point there, so the node's primitives
+    /// grow out of that point (a Minkowski interpolation from a point). The
+    /// centre is taken through the inverse of the warps inside the node, so
+    /// the scaling is exact in world space unless the node holds warps.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scale: Option<f32>,
 }
 
 impl Phantom {
@@ -210,6 +221,9 @@ impl Phantom {
         if self.stiffness.is_some_and(|k| !(0.0..=MAX_MAGNITUDE).contains(&k)) {
             return fail("`stiffness` must be in [0, 1e6]");
         }
+        if self.scale.is_some_and(|k| !(0.0..=MAX_MAGNITUDE).contains(&k)) {
+            return fail("`scale` must be in [0, 1e6]");
+        }
         Ok((side, path))
     }
 }
@@ -235,6 +249,11 @@ struct Reshape {
     radius: Option<f32>,
     /// Stiffness, if set.
     stiffness: Option<f32>,
+    /// Scale factor of the skeletons, if set, about `pivot`.
+    scale: Option<f32>,
+    /// The phantom's centre before the shift, in the space of the node
+    /// being paired (mapped through the warps met on the way down).
+    pivot: Vec3,
 }
 
 struct Ctx<'a> {
@@ -747,10 +766,13 @@ fn with_phantom(
         && let Some(&ph) = ctx.phantoms.get(&(side, p.clone()))
     {
         ctx.phantoms_used.insert((side, p.clone()));
+        let centre = node.centre();
         reshape = Some(Reshape {
-            shift: ph.position.map_or(Vec3::ZERO, |q| Vec3::from_array(q) - node.centre()),
+            shift: ph.position.map_or(Vec3::ZERO, |q| Vec3::from_array(q) - centre),
             radius: ph.radius,
             stiffness: ph.stiffness,
+            scale: ph.scale,
+            pivot: centre,
         });
     }
     let mut phantom = node.phantom();
@@ -758,6 +780,15 @@ fn with_phantom(
         p.frame = glam::Affine3A::from_translation(r.shift) * p.frame;
         p.kernel.radius = r.radius.unwrap_or(p.kernel.radius);
         p.kernel.stiffness = r.stiffness.unwrap_or(p.kernel.stiffness);
+        if let Some(factor) = r.scale {
+            // An affine frame keeps ratios: scaling about the pivot's
+            // local image is the scaling about the pivot.
+            let pivot = p.frame.inverse().transform_point3(r.pivot + r.shift);
+            p.skeleton = p.skeleton.scaled_about(pivot, factor);
+        }
+    }
+    if let (Node::Warp { warp, .. }, Some(r)) = (node, reshape.as_mut()) {
+        r.pivot = warp.inverse(r.pivot);
     }
     let origin = match side {
         Side::Source => Origin { a: path.clone(), b: None },

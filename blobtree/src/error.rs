@@ -232,6 +232,22 @@ pub enum BlobMorphError {
         /// Target node.
         b: NodePath,
     },
+    /// A trajectory names a matched pair whose generic node has no frame to
+    /// move: an n-ary operator, a difference, or a twist, taper or bend
+    /// (these act about their local axes; the affine node above one is its
+    /// frame).
+    #[error(
+        "trajectory for {a} ↔ {b}: their generic node is a {kind}, which has no frame to move; give trajectories \
+         to leaves and affine nodes (to move a twist, taper or bend, to the affine node above it)"
+    )]
+    FramelessTrajectory {
+        /// Source node.
+        a: NodePath,
+        /// Target node.
+        b: NodePath,
+        /// The generic node's kind (`"blend"`, `"difference"`, `"twist"`, …).
+        kind: &'static str,
+    },
     /// A trajectory handle coordinate is NaN, infinite or beyond
     /// [`crate::node::MAX_MAGNITUDE`].
     #[error(

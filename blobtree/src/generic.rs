@@ -116,6 +116,7 @@ impl Speed {
 
 /// The speed curve of the generic node made from source node `a` and target node `b`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct SpeedCurve {
     /// Source node path.
     pub a: NodePath,
@@ -123,6 +124,23 @@ pub struct SpeedCurve {
     pub b: NodePath,
     /// The curve.
     pub speed: Speed,
+    /// For two warps of different kinds, which of the two generic warps
+    /// `(ω_A →s_A(t) Id) ∘ (Id →s_B(t) ω_B)` of Fig. 16 the curve drives
+    /// (default: both).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub warp: Option<WarpHalf>,
+}
+
+/// One of the two generic warps a pair of warps of different kinds becomes
+/// (§4.4, Fig. 16: `ω_A →s(t) ω_B = (ω_A →s_A(t) ω_Id) ∘ (ω_Id →s_B(t) ω_B)`),
+/// each with its own speed curve.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WarpHalf {
+    /// `ω_A → Id`, at speed `s_A(t)`: the source's warp is undone.
+    Source,
+    /// `Id → ω_B`, at speed `s_B(t)`: the target's warp is applied.
+    Target,
 }
 
 /// The trajectory of the frame made from source node `a` and target node
@@ -348,7 +366,7 @@ pub struct MorphSpec {
     /// Per-leaf origin trajectories.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub trajectories: Vec<Trajectory>,
-    /// The animator's phantom parameters (position, radius, stiffness).
+    /// The animator's phantom parameters (position, skeleton scale, radius, stiffness).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub phantoms: Vec<Phantom>,
     /// Automatic coplanar frames (§3.4, Figs. 10–11): matched pairs of
@@ -471,6 +489,8 @@ struct GNode {
     kind: GKind,
     speed: Speed,
     origin: Origin,
+    /// Which generic warp of a pair of different kinds this is (Fig. 16).
+    half: Option<WarpHalf>,
     children: Vec<GNode>,
 }
 
@@ -591,7 +611,18 @@ fn build(
         }
         Pair::Warp { a, b, child, .. } => (GKind::Warp(*a, *b, None), vec![build(child)?]),
     };
-    Ok(GNode { kind, speed: Speed::default(), origin, children })
+    let mut node = GNode { kind, speed: Speed::default(), origin, half: None, children };
+    // Fig. 16: a warp pair of different kinds is two warps of one origin,
+    // the source's over the target's.
+    if let [lower @ GNode { kind: GKind::Warp(..), .. }] = &mut node.children[..]
+        && matches!(node.kind, GKind::Warp(..))
+        && lower.origin == node.origin
+        && node.origin.a.is_some()
+        && node.origin.b.is_some()
+    {
+        (node.half, lower.half) = (Some(WarpHalf::Source), Some(WarpHalf::Target));
+    }
+    Ok(node)
 }
 
 /// The pairs the correspondence made under the commutative nodes of
@@ -625,16 +656,18 @@ fn links_of(pair: &Pair) -> Vec<Link> {
 }
 
 /// Applies `f` to every node whose origin `(a, b)` is a key of `wanted`,
-/// with that key's index; one traversal for all keys.
+/// with each of that key's indices in order; one traversal for all keys.
 fn for_matching(
     node: &mut GNode,
-    wanted: &HashMap<(&NodePath, &NodePath), usize>,
+    wanted: &HashMap<(&NodePath, &NodePath), Vec<usize>>,
     f: &mut dyn FnMut(usize, &mut GNode),
 ) {
     if let (Some(a), Some(b)) = (&node.origin.a, &node.origin.b)
-        && let Some(&k) = wanted.get(&(a, b))
+        && let Some(ks) = wanted.get(&(a, b)).cloned()
     {
-        f(k, node);
+        for k in ks {
+            f(k, node);
+        }
     }
     for c in &mut node.children {
         for_matching(c, wanted, f);
@@ -884,33 +917,41 @@ impl GenericTree {
         }
         let mut topologies = leaves.into_iter().map(|l| Some(&*l.skeleton)).chain(std::iter::repeat(None));
         let mut root = build(&pair, spec.coplanar_frames, &mut topologies)?;
-        // Later curves for the same pair override earlier ones.
-        let mut speeds = HashMap::new();
+        // Later curves for the same node override earlier ones.
+        let mut speeds: HashMap<_, Vec<usize>> = HashMap::new();
         for (k, sc) in spec.speeds.iter().enumerate() {
             if let Some(problem) = sc.speed.problem() {
                 return Err(BlobMorphError::InvalidSpeed { a: sc.a.clone(), b: sc.b.clone(), problem });
             }
-            speeds.insert((&sc.a, &sc.b), k);
+            speeds.entry((&sc.a, &sc.b)).or_default().push(k);
         }
-        let mut matched = vec![false; spec.speeds.len()];
+        let (mut paired, mut matched) = (vec![false; spec.speeds.len()], vec![false; spec.speeds.len()]);
         for_matching(&mut root, &speeds, &mut |k, n| {
-            n.speed = spec.speeds[k].speed.clone();
-            matched[k] = true;
+            paired[k] = true;
+            if spec.speeds[k].warp.is_none_or(|w| n.half == Some(w)) {
+                n.speed = spec.speeds[k].speed.clone();
+                matched[k] = true;
+            }
         });
-        if let Some(sc) = spec.speeds.iter().find(|sc| !matched[speeds[&(&sc.a, &sc.b)]]) {
-            return Err(BlobMorphError::UnmatchedPair {
-                what: "speed curve",
-                a: sc.a.clone(),
-                b: sc.b.clone(),
+        if let Some(k) = (0..spec.speeds.len()).find(|&k| !matched[k]) {
+            let (a, b) = (spec.speeds[k].a.clone(), spec.speeds[k].b.clone());
+            return Err(if paired[k] {
+                let problem = "`warp` picks one of the two warps of a pair of different kinds (Fig. 16); \
+                               these nodes are not such a pair";
+                BlobMorphError::InvalidSpeed { a, b, problem }
+            } else {
+                BlobMorphError::UnmatchedPair { what: "speed curve", a, b }
             });
         }
-        let mut trajectories = HashMap::new();
+        let mut trajectories: HashMap<_, Vec<usize>> = HashMap::new();
         let mut paths = Vec::with_capacity(spec.trajectories.len());
         for (k, tr) in spec.trajectories.iter().enumerate() {
             paths.push(FramePath::new(tr)?);
-            trajectories.insert((&tr.a, &tr.b), k);
+            trajectories.entry((&tr.a, &tr.b)).or_default().push(k);
         }
         let mut matched = vec![false; spec.trajectories.len()];
+        // The kind of a matched generic node without a frame, per trajectory.
+        let mut frameless: Vec<Option<&'static str>> = vec![None; spec.trajectories.len()];
         let mut failed = None;
         for_matching(&mut root, &trajectories, &mut |k, n| match &mut n.kind {
             GKind::Leaf(l) => {
@@ -932,16 +973,18 @@ impl GenericTree {
                 }
                 matched[k] = true;
             }
-            _ => {}
+            GKind::Nary(op, _) => frameless[k] = frameless[k].or(Some(op.name())),
+            GKind::Difference(..) => frameless[k] = frameless[k].or(Some("difference")),
+            GKind::Warp(w, ..) => frameless[k] = frameless[k].or(Some(w.kind())),
         });
         if let Some(e) = failed {
             return Err(e);
         }
-        if let Some(tr) = spec.trajectories.iter().find(|tr| !matched[trajectories[&(&tr.a, &tr.b)]]) {
-            return Err(BlobMorphError::UnmatchedPair {
-                what: "trajectory",
-                a: tr.a.clone(),
-                b: tr.b.clone(),
+        if let Some(k) = (0..spec.trajectories.len()).find(|&k| !matched[k]) {
+            let (a, b) = (spec.trajectories[k].a.clone(), spec.trajectories[k].b.clone());
+            return Err(match frameless[k] {
+                Some(kind) => BlobMorphError::FramelessTrajectory { a, b, kind },
+                None => BlobMorphError::UnmatchedPair { what: "trajectory", a, b },
             });
         }
         Ok(Self { root, thresholds: (a.threshold(), b.threshold()), pair })
@@ -2158,6 +2201,72 @@ mod tests {
         );
     }
 
+    /// Fig. 17 as printed: the rounded cube's phantom of the pierced
+    /// sphere's boxes is "a sphere that the animator located at the center
+    /// of the cube" (`scale: 0`): every phantom skeleton is that point, the
+    /// boxes grow out of it (the skeleton at `t` is the target box scaled by
+    /// `t`), and the ends are the inputs. Under a warp the collapsed phantom
+    /// sits at the node's centre in world space.
+    #[test]
+    fn phantom_skeletons_collapse_to_a_point_and_grow() {
+        let (a, b, _) = crate::scenes::demo("cube_sphere").unwrap();
+        let spec =
+            MorphSpec::from_ron("(phantoms: [(target: [1], position: (0.1, 0, 0), scale: 0)])").unwrap();
+        let g = GenericTree::new(&a, &b, &spec).unwrap();
+        let Node::Difference { right, .. } = g.pair().side(crate::Side::Source) else {
+            panic!("a difference")
+        };
+        assert_eq!(right.leaf_count(), 3);
+        for leaf in right.children() {
+            let Node::Primitive(p) = leaf else { panic!("{leaf:?}") };
+            assert_eq!(p.skeleton.kind(), "point");
+            assert!((p.centre() - Vec3::new(0.1, 0.0, 0.0)).length() < 1e-6, "{}", p.centre());
+            assert_eq!(p.kernel.intensity, 0.0);
+        }
+        let points = testutil::points();
+        let (c0, c1) = (g.at(0.0).unwrap(), g.at(1.0).unwrap());
+        for &p in &points {
+            assert!((c0.value(p) - a.value(p)).abs() < 1e-6, "C(0) at {p}");
+            assert!((c1.value(p) - b.value(p)).abs() < 1e-6, "C(1) at {p}");
+        }
+        let Node::Difference { right: boxes, .. } = b.root() else { panic!("the pierced sphere") };
+        let extent = |p: &Primitive| {
+            let world: Vec<Vec3> =
+                p.skeleton.vertices().iter().map(|&v| p.frame.transform_point3(v)).collect();
+            Aabb::from_points(&world).size()
+        };
+        for t in [0.25f32, 0.5, 0.75] {
+            let Node::Difference { right, .. } = g.node_at(t) else { panic!("a difference at {t}") };
+            for (leaf, target) in right.children().into_iter().zip(boxes.children()) {
+                let (Node::Primitive(p), Node::Primitive(q)) = (leaf, target) else { panic!("leaves") };
+                let (got, want) = (extent(p), extent(q) * t);
+                assert!((got - want).abs().max_element() < 1e-5, "t = {t}: {got} vs {want}");
+            }
+        }
+        // A phantom holding a twist collapses onto the node's centre.
+        let a = BlobTree::from_ron(
+            r#"(root: (kind: "blend", children: [(kind: "point", vertices: [(0, 0, 0)], radius: 1)]))"#,
+        )
+        .unwrap();
+        let b = BlobTree::from_ron(
+            r#"(root: (kind: "blend", children: [(kind: "point", vertices: [(0, 0, 0)], radius: 1),
+                (kind: "twist", rate: 1.5, children: [(kind: "segment", vertices: [(1, 0, 0), (1, 0.5, 1)], radius: 0.5)])]))"#,
+        )
+        .unwrap();
+        let links = "links: [(a: [], b: []), (a: [0], b: [0])]";
+        let spec = MorphSpec::from_ron(&format!("({links}, phantoms: [(target: [1], scale: 0)])")).unwrap();
+        let g = GenericTree::new(&a, &b, &spec).unwrap();
+        let source = g.pair().side(crate::Side::Source);
+        let phantom = source.children()[1];
+        let Node::Warp { child, .. } = phantom else { panic!("{phantom:?}") };
+        assert!(matches!(&**child, Node::Primitive(p) if p.skeleton.kind() == "point"));
+        let centre = b.root().children()[1].centre();
+        assert!((phantom.centre() - centre).length() < 1e-5, "{} vs {centre}", phantom.centre());
+        let bad = MorphSpec::from_ron(&format!("({links}, phantoms: [(target: [1], scale: -1)])")).unwrap();
+        let error = GenericTree::new(&a, &b, &bad);
+        assert!(error.unwrap_err().to_string().contains("`scale` must be in [0, 1e6]"));
+    }
+
     #[test]
     fn bad_speed_curves_are_errors() {
         let a = BlobTree::from_ron(r#"(root: (kind: "point", vertices: [(0,0,0)], radius: 1))"#).unwrap();
@@ -2234,6 +2343,7 @@ mod tests {
                 a: NodePath::root(),
                 b: NodePath::root(),
                 speed: Speed { start: 0.5, end: 1.0, ..Speed::default() },
+                warp: None,
             }],
             ..MorphSpec::default()
         };
@@ -2434,6 +2544,41 @@ mod tests {
         ));
     }
 
+    /// A trajectory on a matched node without a frame (an operator, a
+    /// twist) is refused as such, naming the kind and where frames are; on
+    /// the affine node above the twist it moves the twist's axis.
+    #[test]
+    fn trajectories_on_frameless_nodes_say_where_frames_are() {
+        let scene = |rate: f32, x: f32| {
+            BlobTree::from_ron(&format!(
+                r#"(root: (kind: "blend", children: [(kind: "affine", frame: (translate: ({x}, 0, 0)), children: [
+                    (kind: "twist", rate: {rate}, children: [
+                        (kind: "segment", vertices: [(0, 0, -0.5), (0.2, 0, 0.5)], radius: 0.5)])])]))"#
+            ))
+            .unwrap()
+        };
+        let (a, b) = (scene(0.0, 0.0), scene(2.0, 1.0));
+        let run = |pa: &str, pb: &str| {
+            let spec =
+                format!("(trajectories: [(a: {pa}, b: {pb}, keys: [(s: 0.5, position: (0.5, 1, 0))])])");
+            GenericTree::new(&a, &b, &MorphSpec::from_ron(&spec).unwrap())
+        };
+        for (path, kind) in [("[]", "blend"), ("[0, 0]", "twist")] {
+            let err = run(path, path).unwrap_err();
+            assert!(
+                matches!(&err, BlobMorphError::FramelessTrajectory { kind: k, .. } if *k == kind),
+                "{path}: {err}"
+            );
+            assert!(err.to_string().contains("affine node above it"), "{err}");
+        }
+        let g = run("[0]", "[0]").unwrap();
+        // The twist's axis (through the affine node's origin) passes the key at s = ½.
+        let mid = g.at(0.5).unwrap();
+        let Node::Nary { children, .. } = mid.root() else { panic!("a blend") };
+        let Node::Warp { warp: Warp::Affine(m), .. } = children[0] else { panic!("{:?}", children[0]) };
+        assert!((Vec3::from(m.translation) - Vec3::new(0.5, 1.0, 0.0)).length() < 1e-6, "{m:?}");
+    }
+
     #[test]
     fn different_warps_compose_through_the_identity() {
         // Fig. 16: twist ↔ bend becomes twist(→ id) ∘ bend(id →).
@@ -2456,6 +2601,38 @@ mod tests {
             assert!((g.at(0.0).unwrap().value(p) - a.value(p)).abs() < 1e-5);
             assert!((g.at(1.0).unwrap().value(p) - b.value(p)).abs() < 1e-5);
         }
+        // The paper's s_A and s_B: the twist unwinds over [0, ½], then the
+        // bend winds up over [½, 1]; a curve without `warp` drives both.
+        let spec = MorphSpec::from_ron(
+            "(speeds: [(a: [], b: [], warp: source, speed: (end: 0.5)), (a: [], b: [], warp: target, speed: (start: 0.5))])",
+        )
+        .unwrap();
+        let g = GenericTree::new(&a, &b, &spec).unwrap();
+        let rates = |t: f32| {
+            let n = g.node_at(t);
+            let Node::Warp { warp: Warp::Twist { rate: twist }, child } = &n else { panic!("{n:?}") };
+            let Node::Warp { warp: Warp::Bend { rate: bend, .. }, .. } = **child else { panic!("{child:?}") };
+            (*twist, bend)
+        };
+        for (t, want) in [(0.25, (1.0, 0.0)), (0.5, (0.0, 0.0)), (0.75, (0.0, 0.4)), (1.0, (0.0, 0.8))] {
+            let got = rates(t);
+            assert!((got.0 - want.0).abs() < 1e-6 && (got.1 - want.1).abs() < 1e-6, "t = {t}: {got:?}");
+        }
+        let both = MorphSpec::from_ron("(speeds: [(a: [], b: [], speed: (end: 0.5))])").unwrap();
+        let n = GenericTree::new(&a, &b, &both).unwrap().node_at(0.25);
+        let Node::Warp { warp: Warp::Twist { rate }, child } = &n else { panic!("{n:?}") };
+        assert!((rate - 1.0).abs() < 1e-6);
+        assert!(
+            matches!(**child, Node::Warp { warp: Warp::Bend { rate, .. }, .. } if (rate - 0.4).abs() < 1e-6)
+        );
+        // `warp` on a pair that is not two warps of different kinds is refused.
+        let err = GenericTree::new(
+            &a,
+            &a,
+            &MorphSpec::from_ron("(speeds: [(a: [], b: [], warp: source, speed: (end: 0.5))])").unwrap(),
+        )
+        .unwrap_err();
+        assert!(err.to_string().contains("not such a pair"), "{err}");
     }
 
     #[test]

@@ -23,7 +23,7 @@
 //! | §2 blend, union (max), intersection (min), difference, super-elliptic blend, warps `f ∘ w⁻¹` | [`Node`], [`NaryOp`], [`Primitive`], [`Warp`], [`BlobTree`] |
 //! | scene files (RON / JSON, below) | [`BlobTree::from_ron`], [`BlobTree::from_json`], [`BlobTree::to_ron`], [`BlobTree::to_json`], [`scenes::load`] |
 //! | §3.1–3.3, §4.1–4.3 correspondence, decomposition, phantoms | [`decompose`], [`Correspondence`], [`Pair`], [`Link`], [`Heuristic`], [`Phantom`], [`split`] |
-//! | §1, §3 genericity: saved in-betweens, morphs through key shapes | [`BlobTree::to_ron`] of a frame (`mix` nodes), [`BlobMorph::through`], [`KeyShape`]; Bézier-like control shapes: [`BlobMorph::bezier`], [`ViaMode`] |
+//! | §1, §3 genericity: saved in-betweens (`isomorph morph --scenes`), morphs through key shapes | [`BlobTree::to_ron`] of a frame (`mix` nodes), [`BlobMorph::through`], [`KeyShape`]; Bézier-like control shapes: [`BlobMorph::bezier`], [`ViaMode`] |
 //! | §3.4.1 Minkowski-sum skeleton interpolation, generic topology | [`MinkowskiPath`] |
 //! | §3.4.2–3.5, §4.4 generic elements and nodes, frames, speed `s(t)`, `T(t)` | [`GenericTree`], [`BlobMorph`], [`MorphSpec`], [`SpeedCurve`], [`Trajectory`] |
 //! | §5 sequences (cube → pierced sphere, sphere → propeller, rook → queen, bear → bird) | [`scenes`] |
@@ -34,7 +34,8 @@
 //! `scenes/` folder (`blobtree/scenes/` in the repository: `rook.ron`,
 //! `queen.ron`, `rounded_cube.ron`, `pierced_sphere.ron`, `propeller.ron`,
 //! `bear.ron`, `bird.ron`, `sphere.ron`, `torus.ron`, the rook → queen
-//! links `rook_queen.links.ron`, and `bear_bird.every_feature.links.ron`,
+//! links `rook_queen.links.ron`, the cube → pierced sphere phantom of
+//! Fig. 17 `cube_sphere.links.ron`, and `bear_bird.every_feature.links.ron`,
 //! which uses every control); a test keeps them equal to the built-ins.
 //! `isomorph blob --dump NAME [--format ron|json]` prints any built-in
 //! scene or built-in morph's links spec.
@@ -83,11 +84,11 @@
 //! |---|---|
 //! | `links: [(a: PATH, b: PATH), …]` | source node `a` corresponds to target node `b` (§3.1); a node with several links is split (§3.2, §4.2); children of linked nodes without a link get phantom partners (§3.3); links must respect the hierarchy (a link's parents are matched) |
 //! | `heuristic: nearest_centre`, `hierarchical` or `all_children` | how children of matched nodes without links are paired (default `nearest_centre`: nearest skeleton centres; `hierarchical`: nearest centres relative to their parents, recursively; `all_children`: every child with every child) ([`Heuristic`]) |
-//! | `speeds: [(a: PATH, b: PATH, speed: (start: 0.2, end: 0.8, smooth: true)), …]` | the speed `s(t)` of the generic node made from `a` and `b` (§4.4): 0 before `start`, 1 after `end`, linear or smooth (`3u² − 2u³`) in between (defaults 0, 1, false); or free-form with `points: [(u, s), …]`, a monotone piecewise cubic through `(0, 0)`, the points and `(1, 1)` over the window ([`Speed`]) |
+//! | `speeds: [(a: PATH, b: PATH, speed: (start: 0.2, end: 0.8, smooth: true)), …]` | the speed `s(t)` of the generic node made from `a` and `b` (§4.4): 0 before `start`, 1 after `end`, linear or smooth (`3u² − 2u³`) in between (defaults 0, 1, false); or free-form with `points: [(u, s), …]`, a monotone piecewise cubic through `(0, 0)`, the points and `(1, 1)` over the window ([`Speed`]); for two warps of different kinds, which become `(ω_A →s_A(t) Id) ∘ (Id →s_B(t) ω_B)` (Fig. 16), `warp: source` or `warp: target` gives `s_A` or `s_B` alone (default: both) ([`WarpHalf`]) |
 //! | `trajectories: [(a: PATH, b: PATH, handles: ((x, y, z), (x, y, z))), …]` | the two inner control points (world units) of the cubic Bézier curve the frame origin of the generic leaf or affine node `a → b` follows (default: uniform straight motion, slerped orientation); or key frames `keys: [(s: 0.5, position: (x, y, z), rotate: (axis: (x, y, z), degrees: a)), …]` at increasing local times `s ∈ (0, 1)`, each with a position and/or an orientation: the origin follows the cubic spline (Catmull–Rom tangents) through the end origins and the key positions, the orientation slerps from key to key ([`Trajectory`], [`FrameKey`]) |
 //! | `coplanar_frames: true` | automatic coplanar frames (§3.4, Figs. 10–11): matched points, segments and polygons are interpolated in local frames where both lie in one plane, so in-between skeletons stay segments or polygons (default `false`) |
-//! | `phantoms: [(target: PATH, position: (x, y, z), radius: R, stiffness: k), …]` | the phantom partner of a node without correspondence (§3.3, Fig. 17; [`Phantom`]): name the node by `source: PATH` or `target: PATH`; its phantom's skeletons are centred at `position` (world units), its primitives get radius `R` and stiffness `k` (each optional; default: the node's own); its intensity stays 0 |
-//! | `levels: [(level: 2, pair: 0, links: [(a: PATH, b: PATH), …]), …]` | a Bézier-like morph through control shapes `P_0 … P_n` only (`--via`, [`BlobMorph::bezier`]): links for pair `i` of de Casteljau level `r` (`2 ≤ r ≤ n`, `0 ≤ i ≤ n − r`), the correspondence between the level-`(r − 1)` shapes `P_i^{r−1}` and `P_{i+1}^{r−1}`, made once with these links (children of linked nodes without a link get phantoms) and kept for every `t`; without them a level pairs nearest centres at `t = ½`. Paths name nodes of those shapes as [`BlobMorph::level_shapes`] returns them and [`BlobTree::to_ron`] writes them (their structure does not depend on `t`). The morph gathers `levels` from every pair's spec (with `--via`, the `--links` file is the last pair's) ([`LevelLinks`]) |
+//! | `phantoms: [(target: PATH, position: (x, y, z), radius: R, stiffness: k, scale: f), …]` | the phantom partner of a node without correspondence (§3.3, Fig. 17; [`Phantom`]): name the node by `source: PATH` or `target: PATH`; its phantom's skeletons are centred at `position` (world units) and scaled by `f ≥ 0` about that centre (`0`: every skeleton becomes that point, as Fig. 17's phantom sphere at the cube's centre), its primitives get radius `R` and stiffness `k` (each optional; default: the node's own, `f = 1`); its intensity stays 0 |
+//! | `levels: [(level: 2, pair: 0, links: [(a: PATH, b: PATH), …]), …]` | a Bézier-like morph through control shapes `P_0 … P_n` only (`--via`, [`BlobMorph::bezier`]): links for pair `i` of de Casteljau level `r` (`2 ≤ r ≤ n`, `0 ≤ i ≤ n − r`), the correspondence between the level-`(r − 1)` shapes `P_i^{r−1}` and `P_{i+1}^{r−1}`, made once with these links (children of linked nodes without a link get phantoms) and kept for every `t`; without them a level pairs nearest centres at `t = ½`. Paths name nodes of those shapes as [`BlobMorph::level_shapes`] returns them and [`BlobTree::to_ron`] writes them (their structure does not depend on `t`). The morph gathers `levels` from every pair's spec (with `--via`, the `--links` file is the last pair's, and `--via-links FILE`, one per `--via` shape, gives the spec of the pair arriving at that shape) ([`LevelLinks`]) |
 //!
 //! A full scene and a links spec for it, as in the shipped files:
 //!
@@ -156,9 +157,14 @@
 //!   the animator bends the origin's path into a cubic Bézier curve
 //!   (`handles`), or keys positions (a C¹ cubic spline with Catmull–Rom
 //!   tangents through the keys) and orientations (slerp from key to key),
-//!   for leaves and affine nodes alike. Keys are at the node's local time
+//!   for leaves and affine nodes alike. Twists, tapers and bends act about
+//!   their local axes, so the affine node above one is its frame and
+//!   carries its trajectory (the paper's warps of internal nodes); a
+//!   trajectory on a frameless node (an operator, a difference, a twist,
+//!   taper or bend) is refused ([`BlobMorphError::FramelessTrajectory`]). Keys are at the node's local time
 //!   `s`, after its speed curve.
-//! - **Phantom parameters**: position, radius and stiffness; the
+//! - **Phantom parameters**: position, skeleton size (`scale`, down to a
+//!   point), radius and stiffness; the
 //!   intensity of a phantom stays 0 (a phantom with an intensity would
 //!   change the end shape it belongs to).
 //! - **Coplanar frames** (`coplanar_frames`): local x along a segment or a
@@ -264,7 +270,7 @@ pub use correspond::{
 pub use error::{BlobError, BlobMorphError, NodePath, NodeProblem, Side};
 pub use generic::{
     BlobMorph, BlobSettings, FrameKey, GenericTree, KeyShape, LevelLinks, MorphSpec, Orientation, Speed,
-    SpeedCurve, Trajectory, ViaMode,
+    SpeedCurve, Trajectory, ViaMode, WarpHalf,
 };
 pub use kernel::Kernel;
 pub use minkowski::MinkowskiPath;

@@ -9,12 +9,12 @@
 //!
 //! | demo | source → target | what it exercises |
 //! |---|---|---|
-//! | `cube_sphere` | rounded cube → sphere minus three axis-aligned boxes (Fig. 17) | primitive ↔ difference: a difference with a phantom subtrahend is inserted; L^∞ box holes; change of genus |
+//! | `cube_sphere` | rounded cube → sphere minus three axis-aligned boxes (Fig. 17) | primitive ↔ difference: a difference with a phantom subtrahend is inserted, the animator's phantom a point at the cube's centre (`scale: 0`) as in the paper, so the holes open from an inner cavity; L^∞ box holes; change of genus |
 //! | `sphere_propeller` | sphere (radius 0.6) → twisted blend of two rounded rods (Fig. 19) | identity twist inserted, sphere split into two α-weighted copies |
 //! | `rook_queen` | rook → queen (Fig. 21) | difference ↔ difference (each slot linked to four of the eight spherical carvings, replicated under the union), identity taper inserted, polygon ↔ point skeletons, per-node speed curves |
 //! | `bear_bird` | blob bear → blob bird (Fig. 2) | nearest-centre matching of many blended primitives, segments ↔ polygons |
 
-use crate::correspond::Link;
+use crate::correspond::{Link, Phantom};
 use crate::error::BlobError;
 use crate::error::NodePath;
 use crate::generic::{MorphSpec, Speed, SpeedCurve};
@@ -264,9 +264,21 @@ pub fn demo(name: &str) -> Option<(BlobTree, BlobTree, MorphSpec)> {
                     a,
                     b,
                     speed: Speed { start: 0.0, end: 0.5, ..Speed::default() },
+                    warp: None,
                 });
             }
         }
+    }
+    if name == "cube_sphere" {
+        // Fig. 17: the cube is rewritten as the cube minus a phantom of the
+        // three boxes, "a sphere that the animator located at the center of
+        // the cube": the boxes grow out of that point.
+        spec.phantoms.push(Phantom {
+            target: Some(NodePath(vec![1])),
+            position: Some([0.0; 3]),
+            scale: Some(0.0),
+            ..Default::default()
+        });
     }
     Some((a, b, spec))
 }
@@ -329,9 +341,12 @@ mod tests {
 
     /// The in-betweens the paper shows (Figs. 2, 17, 19): the sphere
     /// splits into the propeller's rods and the bear becomes the bird in one
-    /// sphere-like piece at every frame; the three tunnels of the pierced
-    /// sphere open together, the genus going from 0 straight to 5 and
-    /// staying there, in one piece.
+    /// sphere-like piece at every frame. In Fig. 17 the pierced sphere's
+    /// boxes grow out of the phantom sphere at the cube's centre, so the
+    /// holes open from the inside: one outer shell throughout, an enclosed
+    /// cavity first (a void, never an outer piece), then the three tunnels
+    /// break through together, the genus going from 0 straight to 5 and
+    /// staying there, with no void left.
     #[test]
     fn in_betweens_keep_one_piece_and_the_genus_changes_once() {
         let frames = |name: &str| {
@@ -339,21 +354,24 @@ mod tests {
             let m = BlobMorph::from_trees(&a, &b, &spec).unwrap();
             (0..=20)
                 .map(|k| {
-                    let mesh = m.frame_mesh(k as f32 / 20.0, 48).unwrap();
-                    (mesh.connected_components(), mesh.genus())
+                    let m = m.frame_mesh(k as f32 / 20.0, 48).unwrap().metrics();
+                    (m.components - m.voids, m.voids, m.genus)
                 })
                 .collect::<Vec<_>>()
         };
         for name in ["sphere_propeller", "bear_bird"] {
             let seen = frames(name);
-            assert!(seen.iter().all(|&f| f == (1, Some(0))), "{name}: (components, genus) {seen:?}");
+            assert!(seen.iter().all(|&f| f == (1, 0, Some(0))), "{name}: (shells, voids, genus) {seen:?}");
         }
         let seen = frames("cube_sphere");
-        assert!(seen.iter().all(|&(c, _)| c == 1), "cube → sphere: {seen:?}");
-        let genus: Vec<Option<i64>> = seen.iter().map(|&(_, g)| g).collect();
+        assert!(seen.iter().all(|&(shells, _, _)| shells == 1), "cube → sphere: {seen:?}");
+        let genus: Vec<Option<i64>> = seen.iter().map(|&(_, _, g)| g).collect();
         let first_open = genus.iter().position(|&g| g == Some(5)).expect("the tunnels open");
         assert!(genus[..first_open].iter().all(|&g| g == Some(0)), "{genus:?}");
         assert!(genus[first_open..].iter().all(|&g| g == Some(5)), "{genus:?}");
+        let voids: Vec<usize> = seen.iter().map(|&(_, v, _)| v).collect();
+        assert!(voids[..first_open].contains(&1), "the cavity before the tunnels: {voids:?}");
+        assert!(voids.iter().all(|&v| v <= 1) && voids[first_open..].iter().all(|&v| v == 0), "{voids:?}");
     }
 
     /// The first point of the zero set along `from + t·dir`, `t` in

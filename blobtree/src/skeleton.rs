@@ -149,6 +149,26 @@ impl Skeleton {
         v.iter().copied().sum::<Vec3>() / v.len().max(1) as f32
     }
 
+    /// The skeleton scaled by `factor ≥ 0` about `pivot` (both in the
+    /// skeleton's own coordinates): every vertex `v` moves to
+    /// `pivot + factor·(v − pivot)`. A factor of 0 collapses it to the
+    /// point `pivot`; a positive factor keeps its kind and structure.
+    pub(crate) fn scaled_about(&self, pivot: Vec3, factor: f32) -> Skeleton {
+        let map = |v: Vec3| pivot + (v - pivot) * factor;
+        if factor == 0.0 {
+            return Skeleton::Point(pivot);
+        }
+        match self {
+            Skeleton::Point(p) => Skeleton::Point(map(*p)),
+            Skeleton::Segment(a, b) => Skeleton::Segment(map(*a), map(*b)),
+            Skeleton::Polygon(v) => Skeleton::Polygon(v.iter().map(|&v| map(v)).collect()),
+            Skeleton::Polyhedron(v) => Skeleton::Polyhedron(v.iter().map(|&v| map(v)).collect()),
+            Skeleton::Generic(p) => {
+                Skeleton::Generic(p.moved(p.vertices().iter().map(|&v| map(v)).collect()))
+            }
+        }
+    }
+
     /// The evaluable polytope, checking the vertex count and dimension.
     ///
     /// # Errors

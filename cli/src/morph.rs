@@ -212,10 +212,16 @@ pub fn run(args: &MorphArgs, matches: &ArgMatches) -> anyhow::Result<()> {
     let io = args.io.for_options(&args.options);
     let settings = io.settings(&args.options)?;
     let report = morph(args.method, &io, &settings, &args.out)?;
+    if args.options.scenes {
+        write_scenes(&io, &settings, &args.out)?;
+    }
     if args.report {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
         print_summary(&report, &io, &args.out);
+        if args.options.scenes {
+            println!("  wrote {}/frame_*.ron (the frames as BlobTree scenes)", args.out.display());
+        }
     }
     Ok(())
 }
@@ -260,6 +266,27 @@ pub fn morph(method: Method, io: &Io, settings: &Settings, out: &Path) -> anyhow
         );
     }
     Ok(report)
+}
+
+/// Writes the BlobTree morph's frames `C(t)` at the mesh frames' times as
+/// scene files `out/frame_NNN.ron` (`isomorph morph --scenes`). The morph
+/// is built again from the inputs: the boxed morph the exporter used gives
+/// its frames as opaque fields, not as BlobTrees.
+///
+/// # Errors
+/// The inputs', the morph's and the files' errors.
+fn write_scenes(io: &Io, settings: &Settings, out: &Path) -> anyhow::Result<()> {
+    use isomorph_common::Morph;
+    let (source, target) = io.inputs(Method::Blobtree)?;
+    let morph = isomorph_blobtree::BlobMorph::new(&source, &target, &settings.blobtree, &Control::new())?;
+    // The exporter's times: `frames ≥ 2` (checked by clap).
+    for i in 0..io.frames {
+        let t = i as f32 / (io.frames - 1) as f32;
+        let path = out.join(format!("frame_{i:03}.ron"));
+        std::fs::write(&path, morph.frame(t)?.field.to_ron()?)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    Ok(())
 }
 
 /// Prints where the files went and the per-frame metrics.

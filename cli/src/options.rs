@@ -207,10 +207,19 @@ pub struct MethodArgs {
     /// A control (key) shape between the source and the target (a BlobTree
     /// scene file or a built-in scene); repeat for several, in order. The
     /// generic trees of each pair of consecutive shapes are combined as
-    /// --via-mode says. Each pair uses its built-in spec (a built-in pair)
-    /// or automatic correspondence; the last pair uses --links if given.
+    /// --via-mode says. Each pair uses its --via-links or --links spec if
+    /// given, else its built-in spec (a built-in pair) or automatic
+    /// correspondence.
     #[arg(long, help_heading = "BlobTree (Galin et al.)")]
     pub via: Vec<String>,
+
+    /// The links spec (as --links) of the pair arriving at each --via shape:
+    /// the first is the source → first --via shape's, the second the first
+    /// → second --via shape's, and so on; give none or one per --via
+    /// (--links stays the last --via shape → target's). Node paths `a` name
+    /// nodes of the pair's first shape, `b` of its second.
+    #[arg(long, value_name = "FILE", help_heading = "BlobTree (Galin et al.)")]
+    pub via_links: Vec<PathBuf>,
 
     /// How the --via shapes are used: `bezier` (the paper's Bézier-like
     /// morph: de Casteljau's combination of the pairwise generic trees; the
@@ -220,6 +229,12 @@ pub struct MethodArgs {
     /// at 0, the keys at 1/3 and 2/3, the target at 1).
     #[arg(long, help_heading = "BlobTree (Galin et al.)", value_enum, default_value_t = ViaModeArg::Bezier)]
     pub via_mode: ViaModeArg,
+
+    /// Also write each frame's BlobTree C(t) as a scene file
+    /// (OUT/frame_000.ron, ...; the paper's genericity): it loads back into
+    /// the same field, to polygonize with `isomorph blob` or morph further.
+    #[arg(long, help_heading = "BlobTree (Galin et al.)")]
+    pub scenes: bool,
 }
 
 /// Which options belong to which method (by their argument ids).
@@ -264,6 +279,8 @@ const OWNERS: &[(&str, &[Method])] = &[
     ("links", &[Method::Blobtree]),
     ("via", &[Method::Blobtree]),
     ("via_mode", &[Method::Blobtree]),
+    ("via_links", &[Method::Blobtree]),
+    ("scenes", &[Method::Blobtree]),
 ];
 
 /// The options given on the command line that belong to no method in
@@ -396,10 +413,11 @@ impl MethodArgs {
             }
         };
 
+        let load_links = |path: &PathBuf| {
+            MorphSpec::load(path).with_context(|| format!("invalid links file {}", path.display()))
+        };
         settings.blobtree.spec = match &self.links {
-            Some(path) => {
-                MorphSpec::load(path).with_context(|| format!("invalid links file {}", path.display()))?
-            }
+            Some(path) => load_links(path)?,
             None => {
                 let last = self.via.last().map_or(source, String::as_str);
                 isomorph_blobtree::scenes::demo_spec(last, target).unwrap_or_default()
@@ -409,11 +427,22 @@ impl MethodArgs {
             ViaModeArg::Bezier => isomorph_blobtree::ViaMode::Bezier,
             ViaModeArg::Chain => isomorph_blobtree::ViaMode::Chain,
         };
+        if !self.via_links.is_empty() && self.via_links.len() != self.via.len() {
+            bail!(
+                "give one --via-links per --via shape, in order (the spec of the pair arriving at it), or none: got \
+                 {} --via and {} --via-links",
+                self.via.len(),
+                self.via_links.len()
+            );
+        }
         let mut from = source;
         settings.blobtree.via = Vec::with_capacity(self.via.len());
-        for name in &self.via {
+        for (k, name) in self.via.iter().enumerate() {
             let shape = isomorph_blobtree::scenes::load(name).with_context(|| format!("--via {name}"))?;
-            let spec = isomorph_blobtree::scenes::demo_spec(from, name).unwrap_or_default();
+            let spec = match self.via_links.get(k) {
+                Some(path) => load_links(path).with_context(|| format!("--via-links for {from} → {name}"))?,
+                None => isomorph_blobtree::scenes::demo_spec(from, name).unwrap_or_default(),
+            };
             settings.blobtree.via.push(isomorph_blobtree::KeyShape { shape, spec });
             from = name;
         }

@@ -5,14 +5,26 @@
 mod common;
 
 use common::{assert_ok, morph, scratch, stderr};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// The error output of `isomorph morph --method METHOD` from `source` to
+/// `target` with `args`, which must fail.
+fn refused(method: &str, source: &str, target: &str, args: &[&str]) -> String {
+    let o = morph(method, source, target, args);
+    assert!(!o.status.success(), "{method} {source} -> {target} {args:?} succeeded");
+    stderr(&o)
+}
+
+/// A fresh scratch folder and the path of a file shipped in `blobtree/scenes/`.
+fn setup(scratch_name: &str, shipped_file: &str) -> (PathBuf, PathBuf) {
+    let out = scratch(scratch_name);
+    std::fs::create_dir_all(&out).unwrap();
+    (out, Path::new(env!("CARGO_MANIFEST_DIR")).join("../blobtree/scenes").join(shipped_file))
+}
 
 #[test]
 fn via_takes_a_links_spec_with_level_links() {
-    let out = scratch("blob_levels");
-    std::fs::create_dir_all(&out).unwrap();
-    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../blobtree/scenes");
-    let spec = shipped.join("rook_queen_bear.levels.links.ron");
+    let (out, spec) = setup("blob_levels", "rook_queen_bear.levels.links.ron");
     let frames = out.join("frames");
     let args = [
         "--via",
@@ -49,13 +61,87 @@ fn via_takes_a_links_spec_with_level_links() {
         "--out",
         frames.to_str().unwrap(),
     ];
-    let o = morph("blobtree", "rook", "bear", &args);
-    assert!(!o.status.success());
-    let err = stderr(&o);
+    let err = refused("blobtree", "rook", "bear", &args);
     assert!(err.contains("de Casteljau level 2, pair 0") && err.contains("does not exist"), "{err}");
     // Level links without control shapes are refused.
     let args = ["--links", bad.to_str().unwrap(), "--res", "16", "--out", frames.to_str().unwrap()];
-    let o = morph("blobtree", "rook", "bear", &args);
-    assert!(!o.status.success() && stderr(&o).contains("levels"), "{}", stderr(&o));
+    let err = refused("blobtree", "rook", "bear", &args);
+    assert!(err.contains("levels"), "{err}");
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// `--via-links` gives each pair arriving at a `--via` shape its own spec:
+/// the shipped rook → queen spec given explicitly draws exactly the frames
+/// of the built-in default, automatic matching (an empty spec) others; a
+/// link to a missing node names the pair's segment, an unreadable spec its
+/// file and pair, and a wrong count is refused.
+#[test]
+fn via_links_give_each_pair_its_spec() {
+    let (out, shipped) = setup("blob_via_links", "rook_queen.links.ron");
+    let empty = out.join("empty.links.ron");
+    std::fs::write(&empty, "()").unwrap();
+    let frame = |via_links: &[&Path], name: &str| {
+        let frames = out.join(name);
+        let mut args =
+            vec!["--via", "queen", "--via-mode", "chain", "--res", "24", "--frames", "5", "--no-preview"];
+        for path in via_links {
+            args.extend(["--via-links", path.to_str().unwrap()]);
+        }
+        args.extend(["--out", frames.to_str().unwrap()]);
+        let o = morph("blobtree", "rook", "bear", &args);
+        assert_ok(&o);
+        std::fs::read(frames.join("frame_001.ply")).unwrap()
+    };
+    let default = frame(&[], "default");
+    assert_eq!(frame(&[&shipped], "shipped"), default, "the shipped spec is the built-in default");
+    assert_ne!(frame(&[&empty], "automatic"), default, "automatic matching gives another in-between");
+    // A link to a node the rook lacks names the segment; a malformed file its path and pair.
+    let (bad, frames) = (out.join("bad.links.ron"), out.join("bad"));
+    let (bad_file, empty_file, out_dir) =
+        (bad.to_str().unwrap(), empty.to_str().unwrap(), frames.to_str().unwrap());
+    let args = ["--via", "queen", "--via-links", bad_file, "--res", "16", "--out", out_dir];
+    std::fs::write(&bad, "(links: [(a: [99], b: [0])])").unwrap();
+    let err = refused("blobtree", "rook", "bear", &args);
+    assert!(err.contains("segment 0") && err.contains("root/99, which does not exist"), "{err}");
+    std::fs::write(&bad, "(links: [(a: [[99], b: [0])])").unwrap();
+    let err = refused("blobtree", "rook", "bear", &args);
+    assert!(err.contains("rook → queen") && err.contains("bad.links.ron"), "{err}");
+    // One --via-links per --via, or none.
+    let args = ["--via", "queen", "--via-links", empty_file, "--via-links", empty_file, "--out", out_dir];
+    let err = refused("blobtree", "rook", "bear", &args);
+    assert!(err.contains("one --via-links per --via"), "{err}");
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// `--scenes` writes every frame's generic tree `C(t)` as a scene file
+/// beside its mesh, which loads back into the morph's field at that `t`
+/// (the shipped rook file into the queen, automatic correspondence).
+#[test]
+fn scenes_save_each_frame_as_a_blobtree() {
+    use isomorph_blobtree::{BlobMorph, BlobTree, scenes};
+    use isomorph_common::{Field3, Morph};
+    let (out, rook_file) = setup("blob_scenes", "rook.ron");
+    let frames = out.join("frames");
+    let args =
+        ["--res", "16", "--frames", "3", "--no-preview", "--scenes", "--out", frames.to_str().unwrap()];
+    assert_ok(&morph("blobtree", rook_file.to_str().unwrap(), "queen", &args));
+    let (rook, queen) = (scenes::rook(), scenes::queen());
+    let expected = BlobMorph::from_trees(&rook, &queen, &Default::default()).unwrap();
+    let support = expected.frame(0.5).unwrap().field.support();
+    for (i, t) in [0.0f32, 0.5, 1.0].into_iter().enumerate() {
+        let text = std::fs::read_to_string(frames.join(format!("frame_{i:03}.ron"))).unwrap();
+        let saved = BlobTree::from_ron(&text).unwrap();
+        let field = expected.frame(t).unwrap().field;
+        // An 8³ lattice over the support box of the middle frame.
+        for k in 0..512u16 {
+            let cell =
+                isomorph_common::glam::UVec3::new(u32::from(k % 8), u32::from(k / 8 % 8), u32::from(k / 64));
+            let p = support.min + (support.max - support.min) * cell.as_vec3() / 7.0;
+            assert!((saved.value(p) - field.value(p)).abs() <= 1e-6, "t = {t} at {p}");
+        }
+    }
+    // The scenes are the BlobTree method's: other methods refuse the option.
+    let err = refused("level-set", "sphere", "torus", &["--scenes", "--out", frames.to_str().unwrap()]);
+    assert!(err.contains("--scenes"), "{err}");
     let _ = std::fs::remove_dir_all(&out);
 }
