@@ -196,7 +196,8 @@ impl Block {
     }
 
     /// Whether the surface may pass through: a sign change among the corners
-    /// or a non-finite value; otherwise, when the field bounds its values
+    /// or a non-finite value (for a single cell, whose nodes are all
+    /// evaluated, nothing else); otherwise, when the field bounds its values
     /// over the block ([`Field3::range`]), whether those bounds let the iso
     /// value in; otherwise a Lipschitz estimate of zero (corners of the
     /// block and its neighbours all equal: flat samples prove nothing, the
@@ -214,6 +215,10 @@ impl Block {
         if inside != 0 && inside != 8 {
             return true;
         }
+        if (self.hi - self.lo).max_element() <= 1 {
+            // A single cell: all its nodes are evaluated, nothing to refine.
+            return false;
+        }
         let h = grid.spacing();
         // A hair of margin: the nodes' positions are rounded.
         let region = Aabb::new(grid.origin() + self.lo.as_vec3() * h, grid.origin() + self.hi.as_vec3() * h)
@@ -224,7 +229,7 @@ impl Block {
             return !(hi <= iso || lo > iso);
         }
         if self.lipschitz == 0.0 {
-            return self.lo != self.hi;
+            return true;
         }
         let reach = 0.5 * self.lipschitz * ((self.hi - self.lo).as_vec3() * h).length();
         self.corners()
