@@ -328,6 +328,40 @@ mod tests {
         assert_eq!(rounded_cube().mesh(24).unwrap().genus(), Some(0));
     }
 
+    /// Regression: `isomorph morph --method blobtree --source pierced_sphere
+    /// --target pierced_sphere --res 16` came out empty (every coarse block
+    /// corner of the sparse mesher lay where the field is flat at `−T`). The
+    /// frame meshes must be the full grid's marching cubes mesh, at every
+    /// resolution around it.
+    #[test]
+    fn pierced_sphere_frames_are_whole_at_coarse_resolutions() {
+        let a = pierced_sphere();
+        let m = BlobMorph::from_trees(&a, &a, &MorphSpec::default()).unwrap();
+        for res in [12, 16, 20] {
+            for t in [0.0, 1.0] {
+                let mesh = m.frame_mesh(t, res).unwrap();
+                let field = m.frame(t).unwrap().field;
+                let full = isomorph_common::marching_cubes::polygonize(
+                    &field,
+                    &m.field_bounds().expanded(1e-4),
+                    res,
+                    0.0,
+                )
+                .unwrap();
+                assert!(!mesh.triangles.is_empty(), "res {res}, t = {t}");
+                assert_eq!(mesh.triangles.len(), full.triangles.len(), "res {res}, t = {t}");
+                assert_eq!(mesh.triangles, full.triangles, "res {res}, t = {t}");
+                assert_eq!(mesh.positions, full.positions, "res {res}, t = {t}");
+                // At res 12 the thin shell between the holes falls apart on
+                // the full grid too (12 pieces); from 16 on it is whole.
+                if res >= 16 {
+                    assert_eq!(mesh.connected_components(), 1, "res {res}, t = {t}");
+                    assert_eq!(mesh.genus(), Some(5), "res {res}, t = {t}");
+                }
+            }
+        }
+    }
+
     /// Every rook → queen frame is one piece (nothing pops out of thin air).
     #[test]
     fn rook_to_queen_frames_are_single_components() {

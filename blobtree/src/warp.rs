@@ -189,6 +189,29 @@ impl Warp {
         }
     }
 
+    /// A box containing `w⁻¹(region)` (every point the warped field reads
+    /// its child at for a point of `region`), or `None` where no cheap bound
+    /// is known (the bend).
+    pub(crate) fn preimage_bounds(&self, region: &Aabb) -> Option<Aabb> {
+        if region.is_empty() {
+            return Some(*region);
+        }
+        match *self {
+            // The inverse turns about z too: the same disc holds it.
+            Warp::Twist { .. } => Some(self.image_bounds(region)),
+            Warp::Taper { slope } => {
+                let r0 = taper_scale(slope, region.min.z);
+                let r1 = taper_scale(slope, region.max.z);
+                // `r` is monotone in z, so over the box it lies in [r0, r1] (either order).
+                let inv_max = 1.0 / r0.min(r1);
+                let a = region.min.abs().max(region.max.abs()) * inv_max;
+                Some(Aabb::new(Vec3::new(-a.x, -a.y, region.min.z), Vec3::new(a.x, a.y, region.max.z)))
+            }
+            Warp::Bend { .. } => None,
+            Warp::Affine(m) => Some(region.transformed(&m.inverse())),
+        }
+    }
+
     /// A box containing the image under `w` of everything in `child`.
     pub fn image_bounds(&self, child: &Aabb) -> Aabb {
         if child.is_empty() {

@@ -56,6 +56,23 @@ pub trait Field3: Sync {
         None
     }
 
+    /// Bounds `[lo, hi]` on the field's values over the closed box `region`
+    /// (every `value(p)` with `p` in `region` satisfies `lo ≤ value(p) ≤ hi`),
+    /// when the field can prove them cheaply; `None` (the default) when it
+    /// cannot. The sparse polygonizer
+    /// ([`polygonize_near_surface`](crate::marching_cubes::polygonize_near_surface))
+    /// skips a block with no further evaluation when these bounds keep the
+    /// iso value out, and otherwise refines it: a field whose slope its
+    /// samples cannot estimate (flat outside a compact support, such as a
+    /// BlobTree) should implement this so that no surface is lost.
+    ///
+    /// The bounds must be *sound* (they may be loose, never too tight); an
+    /// empty `region` may return anything.
+    fn range(&self, region: &Aabb) -> Option<[f32; 2]> {
+        let _ = region;
+        None
+    }
+
     /// Evaluates the field at every node of the lattice of `dims` nodes at
     /// `origin + spacing·(i, j, k)` into `out`, `i` fastest then `j`, `k`
     /// (the layout of [`Grid3`](crate::Grid3)).
@@ -127,6 +144,9 @@ impl Field3 for Box<dyn Field3 + '_> {
     fn bounds(&self) -> Option<Aabb> {
         (**self).bounds()
     }
+    fn range(&self, region: &Aabb) -> Option<[f32; 2]> {
+        (**self).range(region)
+    }
 }
 
 /// A field with a stated bounding box: wraps a closure (or any field) so that
@@ -163,6 +183,9 @@ impl<F: Field3> Field3 for Bounded<F> {
     }
     fn bounds(&self) -> Option<Aabb> {
         Some(self.bounds)
+    }
+    fn range(&self, region: &Aabb) -> Option<[f32; 2]> {
+        self.field.range(region)
     }
 }
 

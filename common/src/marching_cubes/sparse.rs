@@ -2,20 +2,30 @@
 //! only near the surface: coarse-to-fine sparse blocks.
 //!
 //! The lattice of [`Grid3::sample_box`] is split into blocks of `block³`
-//! cells and the field is evaluated at their corners. A local Lipschitz
-//! estimate `L` (the largest difference quotient along the edges of the
-//! block and its face neighbours, times a safety factor) marks a block
-//! *active* when its corners differ in sign or the smallest `|f − iso|` at a
-//! corner is within `L ·` half the block diagonal. Active blocks are halved
-//! along each axis, their children's corners evaluated in one batch per
-//! level, and tested again with their own (tighter) half diagonal and `L`
-//! (the parent's, or the children's own edge quotients if steeper), down to
-//! single cells. Every node no active block evaluated takes the (common)
-//! sign of its inactive block's corners. Marching cubes on that grid then
-//! gives **exactly the same mesh as the full grid** whenever no piece of
-//! surface hides entirely inside an inactive block — which the Lipschitz
-//! test rules out unless the field varies faster than `L` there (tested
-//! against the full grid).
+//! cells and the field is evaluated at their corners. A block is *active*
+//! (may hold surface) when its corners differ in sign or one is not
+//! finite; otherwise:
+//! - when the field bounds its values over the block ([`Field3::range`]),
+//!   the block is active unless those bounds keep `iso` out. This is a
+//!   proof, so such fields lose no surface: a BlobTree, exactly `−T` outside
+//!   its primitives' supports, implements it;
+//! - otherwise a local Lipschitz estimate `L` (the largest difference
+//!   quotient along the edges of the block and its face neighbours, times a
+//!   safety factor) marks it active when `L = 0` (every one of those
+//!   corners has the same value: flat samples say nothing of what lies
+//!   between them) or when the smallest `|f − iso|` at a corner is within
+//!   `L ·` half the block diagonal.
+//!
+//! Active blocks are halved along each axis, their children's corners
+//! evaluated in one batch per level, and tested again (with their own
+//! bounds, or their own half diagonal and `L`: the parent's, or the
+//! children's own edge quotients if steeper), down to single cells. Every
+//! node no active block evaluated takes the (common) sign of its inactive
+//! block's corners. Marching cubes on that grid then gives **exactly the
+//! same mesh as the full grid** whenever no piece of surface hides entirely
+//! inside an inactive block — which a sound [`Field3::range`] rules out,
+//! and the Lipschitz test rules out unless the field varies faster than
+//! `L` there (tested against the full grid).
 
 use super::marching_cubes;
 use crate::grid::lattice_for_box;
@@ -118,7 +128,7 @@ pub fn polygonize_near_surface<F: Field3 + ?Sized>(
     while !level.is_empty() {
         let mut next = Vec::new();
         for block in level {
-            if !block.active(sampler.grid, iso) {
+            if !block.active(field, sampler.grid, iso) {
                 inactive.push(block);
                 continue;
             }
@@ -185,19 +195,45 @@ impl Block {
         l
     }
 
-    /// Whether the surface may pass through: a sign change among the corners,
-    /// a non-finite value, or a corner within `L ·` half the diagonal.
-    fn active(&self, grid: &Grid3<f32>, iso: f32) -> bool {
-        let reach = 0.5 * self.lipschitz * ((self.hi - self.lo).as_vec3() * grid.spacing()).length();
+    /// Whether the surface may pass through: a sign change among the corners
+    /// or a non-finite value (for a single cell, whose nodes are all
+    /// evaluated, nothing else); otherwise, when the field bounds its values
+    /// over the block ([`Field3::range`]), whether those bounds let the iso
+    /// value in; otherwise a Lipschitz estimate of zero (corners of the
+    /// block and its neighbours all equal: flat samples prove nothing, the
+    /// surface may still pass between them) or a corner within `L ·` half
+    /// the diagonal.
+    fn active<F: Field3 + ?Sized>(&self, field: &F, grid: &Grid3<f32>, iso: f32) -> bool {
         let mut inside = 0;
         for c in self.corners() {
             let v = *grid.get(c.x, c.y, c.z).expect("corner inside the lattice") - iso;
-            if !v.is_finite() || v.abs() <= reach {
+            if !v.is_finite() {
                 return true;
             }
             inside += usize::from(v > 0.0);
         }
-        inside != 0 && inside != 8
+        if inside != 0 && inside != 8 {
+            return true;
+        }
+        if (self.hi - self.lo).max_element() <= 1 {
+            // A single cell: all its nodes are evaluated, nothing to refine.
+            return false;
+        }
+        let h = grid.spacing();
+        // A hair of margin: the nodes' positions are rounded.
+        let region = Aabb::new(grid.origin() + self.lo.as_vec3() * h, grid.origin() + self.hi.as_vec3() * h)
+            .expanded(1e-4 * h);
+        if let Some([lo, hi]) = field.range(&region) {
+            // No node crosses when all are at most `iso` (outside) or all
+            // above it (inside); NaN bounds keep the block.
+            return !(hi <= iso || lo > iso);
+        }
+        if self.lipschitz == 0.0 {
+            return true;
+        }
+        let reach = 0.5 * self.lipschitz * ((self.hi - self.lo).as_vec3() * h).length();
+        self.corners()
+            .any(|c| (*grid.get(c.x, c.y, c.z).expect("corner inside the lattice") - iso).abs() <= reach)
     }
 
     /// The halves along every axis more than one cell long (up to eight
@@ -320,5 +356,76 @@ mod tests {
         ));
         let sphere = level_set_mesh(&Shape::sphere(0.3), &box_, 32, 0.0).unwrap();
         assert_eq!(sphere.genus(), Some(0));
+    }
+
+    /// A compactly supported bump `(1 − r²/R²)³ − ½` around `centre`: flat
+    /// (exactly `−½`) at distance ≥ `R`, like a BlobTree primitive.
+    fn bump(centre: Vec3, radius: f32) -> impl Fn(Vec3) -> f32 + Sync {
+        move |p: Vec3| {
+            let x = (p - centre).length_squared() / (radius * radius);
+            if x >= 1.0 { -0.5 } else { (1.0 - x).powi(3) - 0.5 }
+        }
+    }
+
+    /// The bump with its exact value bounds over a box (the kernel is
+    /// monotone in the distance to the centre).
+    struct BoundedBump(Vec3, f32);
+
+    impl Field3 for BoundedBump {
+        fn value(&self, p: Vec3) -> f32 {
+            bump(self.0, self.1)(p)
+        }
+        fn range(&self, region: &Aabb) -> Option<[f32; 2]> {
+            let near = self.0.clamp(region.min, region.max);
+            let far = Vec3::select((self.0 - region.min).cmpgt(region.max - self.0), region.min, region.max);
+            Some([self.value(far), self.value(near)])
+        }
+    }
+
+    /// Every triple of `xs` (the top-level block corners of a cubic lattice).
+    fn triples(xs: &[f32]) -> Vec<(&f32, &f32, &f32)> {
+        xs.iter().flat_map(|x| xs.iter().flat_map(move |y| xs.iter().map(move |z| (x, y, z)))).collect()
+    }
+
+    /// Regression (BlobMorph of `pierced_sphere` at res 16 came out empty):
+    /// a surface whose field is flat at every top-level block corner was
+    /// skipped, because the Lipschitz estimate from those corners is zero.
+    /// The bump's support (radius 0.45 around `(−0.2)³`) holds no block
+    /// corner (the nearest, `(−0.467)³` or `(0.067)³`, are 0.46 away).
+    #[test]
+    fn a_field_flat_at_every_block_corner_keeps_its_surface() {
+        let (box_, res, centre, radius) = (Aabb::cube(1.0), 16, Vec3::splat(-0.2), 0.45);
+        let (dims, origin, h) = lattice_for_box(&box_, res).unwrap();
+        let at = |i: u32| origin.x + h * i.min(dims.x - 1) as f32;
+        let corners: Vec<f32> = (0..=dims.x).step_by(4).map(at).collect();
+        for (&x, &y, &z) in triples(&corners) {
+            assert!(Vec3::new(x, y, z).distance(centre) > radius, "the test's premise");
+        }
+        let full = polygonize(&bump(centre, radius), &box_, res, 0.0).unwrap();
+        assert!(!full.triangles.is_empty());
+        assert_eq!(full.connected_components(), 1);
+        assert_eq!(full.genus(), Some(0));
+        // Without bounds from the field: flat samples are refined, not skipped.
+        let (sparse, _) =
+            polygonize_near_surface(&bump(centre, radius), &box_, res, 0.0, &SparseSettings::default())
+                .unwrap();
+        assert_eq!(sparse.triangles.len(), full.triangles.len());
+        assert_eq!(sparse.positions, full.positions);
+        assert_eq!(sparse.triangles, full.triangles);
+        // With the field's own bounds: the same mesh, from far fewer values.
+        let (bounded, stats) = polygonize_near_surface(
+            &BoundedBump(centre, radius),
+            &box_,
+            res,
+            0.0,
+            &SparseSettings::default(),
+        )
+        .unwrap();
+        assert_eq!(bounded.positions, full.positions);
+        assert_eq!(bounded.triangles, full.triangles);
+        assert!(stats.evaluated * 4 < stats.nodes, "{stats:?}");
+        // The same through the boxed form the morphs' frames take.
+        let boxed: crate::DynField = Box::new(BoundedBump(centre, radius));
+        assert_eq!(level_set_mesh(&boxed, &box_, res, 0.0).unwrap().connected_components(), 1);
     }
 }

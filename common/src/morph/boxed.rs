@@ -74,6 +74,9 @@ impl Field3 for DynField {
     fn bounds(&self) -> Option<Aabb> {
         (**self).bounds()
     }
+    fn range(&self, region: &Aabb) -> Option<[f32; 2]> {
+        (**self).range(region)
+    }
 }
 
 /// The adapter behind [`MorphExt::boxed`].
