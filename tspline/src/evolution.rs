@@ -525,9 +525,10 @@ fn velocity(
     let zero = vec![0.0; mesh.anchor_count()];
     let (mut cdot, mut stats) = lsq::solve(mesh, &blocks, settings.tikhonov, &zero, "evolution", symbolic)?;
     let fraction = settings.hold_fraction;
-    let mut held = vec![false; if fraction > 0.0 && row_weight > 0.0 { near_len(mesh) } else { 0 }];
+    let passes = if fraction > 0.0 && row_weight > 0.0 { HOLD_PASSES } else { 0 };
+    let mut held = vec![false; if passes > 0 { cell_count(mesh) } else { 0 }];
     let mut held_cells = 0;
-    for _ in 0..if held.is_empty() { 0 } else { HOLD_PASSES } {
+    for _ in 0..passes {
         let lifted = lifted_cells(spline, &cdot, samples, h_step, fraction, dt);
         let new: Vec<usize> = lifted.into_iter().filter(|&cell| !held[cell]).collect();
         if new.is_empty() {
@@ -550,7 +551,7 @@ fn velocity(
 }
 
 /// The number of finest lattice cells (`res³`).
-fn near_len(mesh: &crate::tmesh::TMesh) -> usize {
+fn cell_count(mesh: &crate::tmesh::TMesh) -> usize {
     let res = mesh.resolution() as usize;
     res * res * res
 }
@@ -611,12 +612,13 @@ fn lifted_cells(
 }
 
 /// Adds the far-field rows `ḟ = 0` (module docs) to `blocks` and returns
-/// their number and the weight of each: one at the centre of every leaf whose coefficients have
-/// one sign (no zero inside) and that lies farther than the front's reach
-/// from every zero-set sample. The reach is the step `h_step` rounded up to
-/// whole finest cells (at least one): a leaf within it may be entered by
-/// the next step, and a row there would hold the front back. The rows are
-/// constraints: their weight does not scale the Tikhonov term.
+/// their number and the weight of each: one at the centre of every leaf
+/// whose coefficients have one sign (no zero inside) and that lies farther
+/// than the front's reach from every zero-set sample. The reach is the
+/// step `h_step` rounded up to whole finest cells (at least one): a leaf
+/// within it may be entered by the next step, and a row there would hold
+/// the front back. The rows are constraints: their weight does not scale
+/// the Tikhonov term.
 fn far_field_rows(
     spline: &TSpline,
     samples: &[Sample],
@@ -730,7 +732,7 @@ mod tests {
         let got = lifted_cells(&f0, &cdot, &samples, h, fraction, dt);
         let reach = (h / (fraction * mesh.finest_cell())).ceil().max(1.0) as i64;
         let near = front_cells(&mesh, &samples, reach);
-        let expected: Vec<usize> = (0..near_len(&mesh))
+        let expected: Vec<usize> = (0..cell_count(&mesh))
             .filter(|&cell| {
                 let f = f0.value_at(cell_centre(&mesh, cell));
                 !near[cell] && f < 0.0 && dt * k > fraction * f.abs()
