@@ -137,6 +137,13 @@ pub struct MethodArgs {
     /// appearing away from the front).
     #[arg(long, help_heading = "T-spline (Yang & Jüttler)", default_value_t = TsplineSettings::default().evolve.far_field_weight)]
     pub far_field_weight: f64,
+    /// Hold the cells that a step would lift through zero away from the
+    /// front (0 to 1; 0 turns it off): finest cells farther than h / F from
+    /// the front where the step moves f towards zero by more than F |f| get
+    /// far-field rows ḟ = 0 and the step is solved again, so that no new
+    /// piece of surface is born there.
+    #[arg(long, help_heading = "T-spline (Yang & Jüttler)", default_value_t = TsplineSettings::default().evolve.hold_fraction)]
+    pub hold_fraction: f64,
     /// Leave out the projection frames (§4.3) at both ends: the sequence
     /// then starts and ends on the fitted level sets, not on the inputs.
     #[arg(long, help_heading = "T-spline (Yang & Jüttler)")]
@@ -265,6 +272,7 @@ const OWNERS: &[(&str, &[Method])] = &[
     ("stall_steps", &[Method::Tspline]),
     ("distance_weight", &[Method::Tspline]),
     ("far_field_weight", &[Method::Tspline]),
+    ("hold_fraction", &[Method::Tspline]),
     ("no_projection_frames", &[Method::Tspline]),
     ("step", &[Method::Tspline]),
     ("margin", &[Method::Tspline]),
@@ -376,6 +384,7 @@ impl MethodArgs {
         t.evolve.stall_steps = self.stall_steps;
         t.evolve.distance_weight = self.distance_weight;
         t.evolve.far_field_weight = self.far_field_weight;
+        t.evolve.hold_fraction = self.hold_fraction;
         t.projection_frames = !self.no_projection_frames;
         t.align = match &self.align {
             AlignArg::None => TsplineAlign::None,

@@ -71,6 +71,12 @@ fn demo_writes_frames_sheet_and_report() {
     let frames = holed["frames"].as_array().unwrap();
     assert_eq!(frames[0]["genus"], 0, "{holed}");
     assert_eq!(frames[frames.len() - 1]["genus"], 3, "{holed}");
+    // One outer shell in every frame; a cavity where the holes open from
+    // inside is reported as a void, not as another piece (issue 17).
+    for f in frames {
+        let (components, voids) = (f["components"].as_u64().unwrap(), f["voids"].as_u64().unwrap());
+        assert_eq!(components - voids, 1, "{f}");
+    }
     for f in ["frame_000.png", "contact_sheet.png", "spacetime.ply"] {
         assert!(out.join("rbf_x_to_o").join(f).is_file(), "missing rbf_x_to_o/{f}");
     }

@@ -125,6 +125,8 @@ fn tspline_knobs_reach_the_settings_and_bad_values_name_their_range() {
         "10",
         "--beta-cells",
         "0.25",
+        "--hold-fraction",
+        "0.5",
         "--no-projection-frames",
     ];
     let out = dir.join("knobs");
@@ -138,6 +140,8 @@ fn tspline_knobs_reach_the_settings_and_bad_values_name_their_range() {
     // A uniform depth-3 T-mesh: 9³ coefficients.
     assert_eq!(m["details"]["coefficients"], 729, "{m}");
     assert_eq!(m["details"]["speed"], "robust (v_max 0.2, beta 0.25 finest cells)", "{m}");
+    assert_eq!(m["details"]["hold_fraction"], 0.5, "{m}");
+    assert!(m["details"]["held_cells"].is_u64(), "{m}");
     let warnings = format!("{}", m["warnings"]);
     assert!(warnings.contains("step cap (3)"), "{warnings}");
 
@@ -167,6 +171,8 @@ fn tspline_knobs_reach_the_settings_and_bad_values_name_their_range() {
     assert!(err.contains("distance_weight = -1"), "{err}");
     let err = run(&["--far-field-weight=-1"]);
     assert!(err.contains("far_field_weight = -1"), "{err}");
+    let err = run(&["--hold-fraction", "2"]);
+    assert!(err.contains("hold_fraction = 2") && err.contains("0..=1"), "{err}");
     let err = run(&["--stall-steps", "0"]);
     assert!(err.contains("stall_steps = 0") && err.contains(">= 1"), "{err}");
     let err = run(&["--beta-cells", "11"]);

@@ -46,6 +46,27 @@
 //!   made up about 99 % of that diagonal at the weight 100 and raised the
 //!   Tikhonov damping of the velocity about seventy-fold.
 //!
+//! **Held cells.** The out-of-reach rule and the one-sign rule leave `ḟ`
+//! free in leaves whose coefficients change sign, and there a shallow
+//! plateau of `f` can still be lifted through zero away from the front
+//! when the front has nearly stopped and the step `Δτ = min(1, h / max|v|)`
+//! is long (Example 3: 18 of 22 births followed a step with `Δτ ≥ 0.59`).
+//! With [`EvolveSettings::hold_fraction`] `= c > 0`, after the solve every
+//! finest cell farther than `h / c` from the front whose centre `x` the
+//! step would move towards zero by more than a fraction `c` of its value,
+//!
+//! ```text
+//! f(x) ḟ(x) < 0   and   Δτ |ḟ(x)| > c |f(x)|,      ḟ = Σ_i ċ_i R_i,
+//! ```
+//!
+//! gets a far-field row `ḟ(x) = 0` (same weight per row) and `ċ` is solved
+//! again, up to three times. For a distance-like `f` with `ḟ` the extended
+//! speed no cell qualifies (at a distance `d > h / c` from the front
+//! `|f| ≈ d` and `Δτ |ḟ| ≤ h`), so the rows appear only where the least
+//! squares changes `f` off the front faster than the front moves. Unlike a
+//! shorter step (tried in the sixth session: Example 3 then stalled), the
+//! step stays the front's.
+//!
 //! The distance-field term asks `G = |∇f|² − 1` to relax as `Ġ = −G/τ`, which
 //! keeps `f` close to a signed distance function without re-initialization
 //! (the constraint of the paper's reference [29]). `ω_T` is relative to the
@@ -144,6 +165,13 @@ pub struct EvolveSettings {
     /// paper's Examples 1 and 3 and the T → C test all pass with it (at 0.1
     /// Example 1 had such pieces in 11 of 39 level sets).
     pub far_field_weight: f64,
+    /// Fraction `c` (0–1) of the held cells (module docs, "Held cells"):
+    /// finest cells farther than `h / c` from the front where the step
+    /// would move `f` towards zero by more than `c |f|` get far-field rows
+    /// `ḟ = 0` and the step's least squares is solved again, so that no new
+    /// piece of surface is born there. 0 turns it off; it also needs a
+    /// positive [`Self::far_field_weight`], whose per-row weight it uses.
+    pub hold_fraction: f64,
     /// Where the zero-set samples come from (paper §3.3).
     pub sampler: Sampler,
     /// Marching-cubes nodes per finest cell for the zero-set samples (1–4;
@@ -165,6 +193,7 @@ impl Default for EvolveSettings {
             relaxation: 1.0,
             tikhonov: 1e-2,
             far_field_weight: 100.0,
+            hold_fraction: 0.0,
             sampler: Sampler::MarchingCubes,
             samples_per_cell: 3,
             stall_steps: 8,
@@ -195,6 +224,7 @@ impl EvolveSettings {
         check_range("relaxation", self.relaxation, 1e-6, 1e6, "> 0")?;
         check_range("tikhonov", self.tikhonov, 1e-14, 1.0, "1e-14..=1")?;
         check_range("far_field_weight", self.far_field_weight, 0.0, 1e6, ">= 0")?;
+        check_range("hold_fraction", self.hold_fraction, 0.0, 1.0, "0..=1")?;
         check_range("samples_per_cell", f64::from(self.samples_per_cell), 1.0, 4.0, "1..=4")?;
         check_range("stall_steps", self.stall_steps as f64, 1.0, 1e9, ">= 1")?;
         if let Sampler::MarchingTriangulation { edge_cells } = self.sampler {
@@ -245,8 +275,12 @@ pub struct StepStats {
     pub gradient_range: (f64, f64),
     /// Stored non-zeros of the normal matrix.
     pub nonzeros: usize,
-    /// Far-field rows `ḟ = 0` of the step's least squares (module docs).
+    /// Far-field rows `ḟ = 0` of the step's least squares (module docs),
+    /// the held cells' rows included.
     pub far_rows: usize,
+    /// Held cells of the step (module docs, "Held cells"; 0 when
+    /// [`EvolveSettings::hold_fraction`] is 0).
+    pub held_cells: usize,
 }
 
 impl StepStats {
@@ -339,10 +373,10 @@ fn evolve_on_pool<D: Fn(DVec3) -> f64 + Sync + Send>(
         }
         let speeds: Vec<f64> =
             samples.iter().zip(&d_b).map(|(s, &d)| speed(settings.speed, d, s, h_min)).collect();
-        let (cdot, nonzeros, far_rows) =
-            velocity(&spline, &samples, &speeds, h_min, settings, &mut symbolic)?;
         let max_speed = speeds.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let dt = if max_speed > 0.0 { (h / max_speed).min(1.0) } else { 1.0 };
+        let Velocity { cdot, nonzeros, far_rows, held_cells } =
+            velocity(&spline, &samples, &speeds, h_min, dt, settings, &mut symbolic)?;
         let c: Vec<f64> = spline.coefficients().iter().zip(&cdot).map(|(c, d)| c + dt * d).collect();
         let grads = samples.iter().map(|s| s.eval.gradient.length());
         let gradient_range = grads.fold((f64::MAX, 0.0f64), |(lo, hi), g| (lo.min(g), hi.max(g)));
@@ -359,6 +393,7 @@ fn evolve_on_pool<D: Fn(DVec3) -> f64 + Sync + Send>(
             gradient_range,
             nonzeros,
             far_rows,
+            held_cells,
         };
         steps.push(stats);
         control.progress("evolution", Some(steps.len() as f32 / settings.max_steps as f32), || {
@@ -409,15 +444,33 @@ struct Row {
     rhs: f64,
 }
 
-/// Solves the least-squares problem of the module docs for `ċ`.
+/// The coefficient velocities of a step and how they were found.
+struct Velocity {
+    /// `ċ`.
+    cdot: Vec<f64>,
+    /// Stored non-zeros of the normal matrix.
+    nonzeros: usize,
+    /// Far-field rows, the held cells' included.
+    far_rows: usize,
+    /// Held cells.
+    held_cells: usize,
+}
+
+/// Largest number of times a step's least squares is solved again with
+/// new held cells (module docs).
+const HOLD_PASSES: usize = 3;
+
+/// Solves the least-squares problem of the module docs for `ċ`, holding
+/// the cells that a step of `dt` would lift through zero off the front.
 fn velocity(
     spline: &TSpline,
     samples: &[Sample],
     speeds: &[f64],
     h_min: f64,
+    dt: f64,
     settings: &EvolveSettings,
     symbolic: &mut lsq::SymbolicCache,
-) -> Result<(Vec<f64>, usize, usize), TsplineError> {
+) -> Result<Velocity, TsplineError> {
     let mesh = spline.mesh();
     let h_step = settings.step_size(h_min);
     let m = samples.len() as f64;
@@ -464,30 +517,115 @@ fn velocity(
     for row in &rows {
         blocks[row.leaf].push(&row.entries, row.weight, row.rhs);
     }
-    let far_rows = if settings.far_field_weight > 0.0 {
+    let (mut far_rows, row_weight) = if settings.far_field_weight > 0.0 {
         far_field_rows(spline, samples, h_step, settings.far_field_weight, &mut blocks)
     } else {
-        0
+        (0, 0.0)
     };
     let zero = vec![0.0; mesh.anchor_count()];
-    let (x, stats) = lsq::solve(mesh, &blocks, settings.tikhonov, &zero, "evolution", symbolic)?;
-    Ok((x, stats.nonzeros, far_rows))
+    let (mut cdot, mut stats) = lsq::solve(mesh, &blocks, settings.tikhonov, &zero, "evolution", symbolic)?;
+    let fraction = settings.hold_fraction;
+    let passes = if fraction > 0.0 && row_weight > 0.0 { HOLD_PASSES } else { 0 };
+    let mut held = vec![false; if passes > 0 { cell_count(mesh) } else { 0 }];
+    let mut held_cells = 0;
+    for _ in 0..passes {
+        let lifted = lifted_cells(spline, &cdot, samples, h_step, fraction, dt);
+        let new: Vec<usize> = lifted.into_iter().filter(|&cell| !held[cell]).collect();
+        if new.is_empty() {
+            break;
+        }
+        let mut local = crate::basis::LocalBasis::default();
+        let (mut r, mut dr) = (Vec::new(), Vec::new());
+        for cell in new {
+            held[cell] = true;
+            held_cells += 1;
+            local.at(mesh, cell_centre(mesh, cell));
+            if local.rational(&mut r, &mut dr) {
+                blocks[local.leaf].push_constraint(&r, row_weight, 0.0);
+                far_rows += 1;
+            }
+        }
+        (cdot, stats) = lsq::solve(mesh, &blocks, settings.tikhonov, &zero, "evolution", symbolic)?;
+    }
+    Ok(Velocity { cdot, nonzeros: stats.nonzeros, far_rows, held_cells })
+}
+
+/// The number of finest lattice cells (`res³`).
+fn cell_count(mesh: &crate::tmesh::TMesh) -> usize {
+    let res = mesh.resolution() as usize;
+    res * res * res
+}
+
+/// The centre (domain units) of finest lattice cell `cell` (indexed as
+/// [`TMesh::leaf_cells`](crate::tmesh::TMesh::leaf_cells) does).
+fn cell_centre(mesh: &crate::tmesh::TMesh, cell: usize) -> DVec3 {
+    let (res, cell) = (mesh.resolution(), cell as i64);
+    let centre = |k: i64| 0.5 * (mesh.coord(k) + mesh.coord(k + 1));
+    DVec3::new(centre(cell % res), centre((cell / res) % res), centre(cell / (res * res)))
+}
+
+/// The finest cells to hold (module docs, "Held cells"): those farther than
+/// `h_step / fraction` from the zero-set samples (whole cells, Chebyshev
+/// distance, at least one) at whose centre a step of `dt` along `cdot`
+/// (`ċ`) moves `f` towards zero by more than `fraction |f|`. In ascending
+/// order.
+fn lifted_cells(
+    spline: &TSpline,
+    cdot: &[f64],
+    samples: &[Sample],
+    h_step: f64,
+    fraction: f64,
+    dt: f64,
+) -> Vec<usize> {
+    let mesh = spline.mesh();
+    let c = spline.coefficients();
+    let reach = (h_step / (fraction * mesh.finest_cell())).ceil().max(1.0) as i64;
+    let near = front_cells(mesh, samples, reach);
+    let range = |v: &[f64], list: &[u32]| {
+        list.iter().fold((f64::MAX, f64::MIN), |(lo, hi), &i| (lo.min(v[i as usize]), hi.max(v[i as usize])))
+    };
+    let mut cells: Vec<usize> = (0..mesh.leaf_count())
+        .into_par_iter()
+        .filter(|&l| {
+            // f and ḟ are convex combinations of the leaf's coefficients,
+            // so where `dt ḟ + c f` keeps the sign of f by their ranges, no
+            // centre of the leaf qualifies.
+            let list = mesh.leaf_anchors(l);
+            let ((lo, hi), (dlo, dhi)) = (range(c, list), range(cdot, list));
+            !(lo > 0.0 && dt * dlo + fraction * lo >= 0.0 || hi < 0.0 && dt * dhi + fraction * hi <= 0.0)
+        })
+        .flat_map_iter(|l| mesh.leaf_cells(l).filter(|&cell| !near[cell]).collect::<Vec<_>>())
+        .map_init(crate::basis::LocalBasis::default, |local, cell| {
+            local.at(mesh, cell_centre(mesh, cell));
+            let (mut f, mut fdot) = (0.0, 0.0);
+            for (&i, b) in mesh.leaf_anchors(local.leaf).iter().zip(&local.b) {
+                f += c[i as usize] * b;
+                fdot += cdot[i as usize] * b;
+            }
+            // Both share the denominator D > 0, which cancels.
+            (f * fdot < 0.0 && dt * fdot.abs() > fraction * f.abs()).then_some(cell)
+        })
+        .flatten()
+        .collect();
+    cells.sort_unstable();
+    cells
 }
 
 /// Adds the far-field rows `ḟ = 0` (module docs) to `blocks` and returns
-/// their number: one at the centre of every leaf whose coefficients have
-/// one sign (no zero inside) and that lies farther than the front's reach
-/// from every zero-set sample. The reach is the step `h_step` rounded up to
-/// whole finest cells (at least one): a leaf within it may be entered by
-/// the next step, and a row there would hold the front back. The rows are
-/// constraints: their weight does not scale the Tikhonov term.
+/// their number and the weight of each: one at the centre of every leaf
+/// whose coefficients have one sign (no zero inside) and that lies farther
+/// than the front's reach from every zero-set sample. The reach is the
+/// step `h_step` rounded up to whole finest cells (at least one): a leaf
+/// within it may be entered by the next step, and a row there would hold
+/// the front back. The rows are constraints: their weight does not scale
+/// the Tikhonov term.
 fn far_field_rows(
     spline: &TSpline,
     samples: &[Sample],
     h_step: f64,
     weight: f64,
     blocks: &mut [LeafRows],
-) -> usize {
+) -> (usize, f64) {
     let mesh = spline.mesh();
     let c = spline.coefficients();
     let reach = (h_step / mesh.finest_cell()).ceil().max(1.0) as i64;
@@ -512,7 +650,7 @@ fn far_field_rows(
             count += 1;
         }
     }
-    count
+    (count, w)
 }
 
 /// Marks the finest lattice cells (indexed as
@@ -546,14 +684,7 @@ mod tests {
     }
 
     fn run_sampled(r0: f64, r1: f64, speed: Speed, sampler: Sampler) -> Evolution {
-        let (a, b) = (
-            crate::demo::sphere_samples(1500, r0, DVec3::ZERO),
-            crate::demo::sphere_samples(1500, r1, DVec3::ZERO),
-        );
-        let all: Vec<DVec3> = a.iter().chain(&b).copied().collect();
-        let s = TMeshSettings { max_depth: 4, min_depth: 3, sample_spacing: 0.05, ..Default::default() };
-        let mesh = Arc::new(TMesh::build(&all, &s).unwrap());
-        let (f0, _) = fit(mesh, move |p: DVec3| r0 - p.length(), &a, &FitSettings::default()).unwrap();
+        let (f0, b) = sphere_fit(r0, r1);
         let settings = EvolveSettings { speed, sampler, max_steps: 60, ..Default::default() };
         evolve(&f0, move |p: DVec3| r1 - p.length(), &b, &settings, &Control::new()).unwrap()
     }
@@ -574,6 +705,65 @@ mod tests {
     fn growing_sphere_converges_with_the_robust_speed() {
         let e = run(0.3, 0.6, Speed::Robust { v_max: 0.2, beta_cells: 1.0 });
         assert_eq!(e.outcome, Outcome::Converged, "{:?}", e.steps.last());
+    }
+
+    /// A depth-4 T-mesh around spheres of radius `r0` and `r1` and the fit
+    /// of the first's distance.
+    fn sphere_fit(r0: f64, r1: f64) -> (TSpline, Vec<DVec3>) {
+        let (a, b) = (
+            crate::demo::sphere_samples(1500, r0, DVec3::ZERO),
+            crate::demo::sphere_samples(1500, r1, DVec3::ZERO),
+        );
+        let all: Vec<DVec3> = a.iter().chain(&b).copied().collect();
+        let s = TMeshSettings { max_depth: 4, min_depth: 3, sample_spacing: 0.05, ..Default::default() };
+        let mesh = Arc::new(TMesh::build(&all, &s).unwrap());
+        (fit(mesh, move |p: DVec3| r0 - p.length(), &a, &FitSettings::default()).unwrap().0, b)
+    }
+
+    #[test]
+    fn lifted_cells_are_exactly_the_off_front_cells_the_step_moves_too_far() {
+        let (f0, _) = sphere_fit(0.4, 0.4);
+        let mesh = f0.mesh().clone();
+        let samples = zero_set_samples(&f0, Sampler::MarchingCubes, 3).unwrap();
+        // A uniform lift ḟ ≡ k (the R_i sum to one): every cell outside the
+        // sphere (f < 0) with dt k > c |f| and off the front qualifies.
+        let (k, dt, fraction, h) = (0.2, 1.0, 0.5, 0.5 * mesh.finest_cell());
+        let cdot = vec![k; mesh.anchor_count()];
+        let got = lifted_cells(&f0, &cdot, &samples, h, fraction, dt);
+        let reach = (h / (fraction * mesh.finest_cell())).ceil().max(1.0) as i64;
+        let near = front_cells(&mesh, &samples, reach);
+        let expected: Vec<usize> = (0..cell_count(&mesh))
+            .filter(|&cell| {
+                let f = f0.value_at(cell_centre(&mesh, cell));
+                !near[cell] && f < 0.0 && dt * k > fraction * f.abs()
+            })
+            .collect();
+        assert!(!expected.is_empty() && expected.len() < near.len() / 2, "{}", expected.len());
+        assert_eq!(got, expected);
+        // Lowering f instead moves only cells inside the sphere towards zero.
+        let down = vec![-k; mesh.anchor_count()];
+        let inside = lifted_cells(&f0, &down, &samples, h, fraction, dt);
+        assert!(inside.iter().all(|&cell| f0.value_at(cell_centre(&mesh, cell)) > 0.0));
+        assert!(!inside.is_empty());
+    }
+
+    #[test]
+    fn a_distance_like_front_holds_no_cell() {
+        let (f0, b) = sphere_fit(0.3, 0.6);
+        let target = |p: DVec3| 0.6 - p.length();
+        let speed = Speed::robust(1.0);
+        let held = EvolveSettings { speed, hold_fraction: 0.5, max_steps: 60, ..Default::default() };
+        let e = evolve(&f0, target, &b, &held, &Control::new()).unwrap();
+        assert_eq!(e.outcome, Outcome::Converged, "{:?}", e.steps.last());
+        assert!(e.steps.iter().all(|s| s.held_cells == 0), "{:?}", e.steps);
+        // Without holding, the same steps.
+        let free = EvolveSettings { hold_fraction: 0.0, ..held };
+        let plain = evolve(&f0, target, &b, &free, &Control::new()).unwrap();
+        assert_eq!(plain.frames, e.frames);
+        let bad = EvolveSettings { hold_fraction: 1.5, ..Default::default() };
+        assert!(
+            evolve(&f0, target, &b, &bad, &Control::new()).unwrap_err().to_string().contains("hold_fraction")
+        );
     }
 
     #[test]

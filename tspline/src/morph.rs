@@ -620,7 +620,9 @@ fn report(
         .with_detail("sampler", settings.evolve.sampler.describe())
         .with_detail("first_step_samples", evolution.steps.first().map_or(0, |s| s.samples))
         .with_detail("stall_steps", settings.evolve.stall_steps)
-        .with_detail("far_field_weight", settings.evolve.far_field_weight);
+        .with_detail("far_field_weight", settings.evolve.far_field_weight)
+        .with_detail("hold_fraction", settings.evolve.hold_fraction)
+        .with_detail("held_cells", evolution.steps.iter().map(|s| s.held_cells).sum::<usize>());
     let steps = evolution.steps.len();
     let warning = match evolution.outcome {
         Stop::Vanished => Some("the zero set vanished during the evolution".to_string()),
