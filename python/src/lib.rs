@@ -377,6 +377,7 @@ const SETTINGS: &[(&str, &[Method])] = &[
     ("sample_edge", &[Method::Tspline]),
     ("stall_steps", &[Method::Tspline]),
     ("far_field_weight", &[Method::Tspline]),
+    ("hold_fraction", &[Method::Tspline]),
     ("links", &[Method::Blobtree]),
 ];
 
@@ -591,6 +592,7 @@ fn apply_settings(
             "far_field_weight" => {
                 s.tspline.evolve.far_field_weight = number(&name, v, "a number", (0.0f64, 1e6))?
             }
+            "hold_fraction" => s.tspline.evolve.hold_fraction = number(&name, v, "a number", (0.0f64, 1.0))?,
             "links" => {
                 let path: PathBuf =
                     v.extract().map_err(|_| setting_error(py, &name, "expected a file path"))?;
@@ -671,6 +673,7 @@ fn default_of<'py>(py: Python<'py>, name: &str, s: &Settings, method: Method) ->
         "sample_edge" => DEFAULT_SAMPLE_EDGE.into_pyobject(py)?.into_any(),
         "stall_steps" => s.tspline.evolve.stall_steps.into_pyobject(py)?.into_any(),
         "far_field_weight" => s.tspline.evolve.far_field_weight.into_pyobject(py)?.into_any(),
+        "hold_fraction" => s.tspline.evolve.hold_fraction.into_pyobject(py)?.into_any(),
         "links" => py.None().into_bound(py),
         _ => py.None().into_bound(py),
     })

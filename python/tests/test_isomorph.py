@@ -181,6 +181,15 @@ def test_tspline_stall_and_far_field_settings_reach_the_evolution():
         isomorph.morph("sphere", "torus", method="tspline", far_field_weight=-1)
 
 
+def test_tspline_hold_fraction_reaches_the_evolution():
+    assert isomorph.defaults("tspline")["hold_fraction"] == 0.0
+    m = isomorph.morph("sphere", "torus", method="tspline", hold_fraction=0.5, max_steps=2)
+    assert m.report["details"]["hold_fraction"] == 0.5
+    assert m.report["details"]["held_cells"] >= 0
+    with pytest.raises(ValueError, match="hold_fraction"):
+        isomorph.morph("sphere", "torus", method="tspline", hold_fraction=1.5)
+
+
 def test_tspline_beta_cells_reaches_the_robust_speed():
     assert isomorph.defaults("tspline")["beta_cells"] > 0
     m = isomorph.morph("sphere", "torus", method="tspline", beta_cells=0.25, max_steps=2)
