@@ -526,7 +526,7 @@ fn velocity(
     let (mut cdot, mut stats) = lsq::solve(mesh, &blocks, settings.tikhonov, &zero, "evolution", symbolic)?;
     let fraction = settings.hold_fraction;
     let passes = if fraction > 0.0 && row_weight > 0.0 { HOLD_PASSES } else { 0 };
-    let mut held = vec![false; if passes > 0 { cell_count(mesh) } else { 0 }];
+    let mut held = vec![false; if passes > 0 { mesh.finest_cells() } else { 0 }];
     let mut held_cells = 0;
     for _ in 0..passes {
         let lifted = lifted_cells(spline, &cdot, samples, h_step, fraction, dt);
@@ -539,7 +539,7 @@ fn velocity(
         for cell in new {
             held[cell] = true;
             held_cells += 1;
-            local.at(mesh, cell_centre(mesh, cell));
+            local.at(mesh, mesh.finest_cell_centre(cell));
             if local.rational(&mut r, &mut dr) {
                 blocks[local.leaf].push_constraint(&r, row_weight, 0.0);
                 far_rows += 1;
@@ -548,20 +548,6 @@ fn velocity(
         (cdot, stats) = lsq::solve(mesh, &blocks, settings.tikhonov, &zero, "evolution", symbolic)?;
     }
     Ok(Velocity { cdot, nonzeros: stats.nonzeros, far_rows, held_cells })
-}
-
-/// The number of finest lattice cells (`res³`).
-fn cell_count(mesh: &crate::tmesh::TMesh) -> usize {
-    let res = mesh.resolution() as usize;
-    res * res * res
-}
-
-/// The centre (domain units) of finest lattice cell `cell` (indexed as
-/// [`TMesh::leaf_cells`](crate::tmesh::TMesh::leaf_cells) does).
-fn cell_centre(mesh: &crate::tmesh::TMesh, cell: usize) -> DVec3 {
-    let (res, cell) = (mesh.resolution(), cell as i64);
-    let centre = |k: i64| 0.5 * (mesh.coord(k) + mesh.coord(k + 1));
-    DVec3::new(centre(cell % res), centre((cell / res) % res), centre(cell / (res * res)))
 }
 
 /// The finest cells to hold (module docs, "Held cells"): those farther than
@@ -596,7 +582,7 @@ fn lifted_cells(
         })
         .flat_map_iter(|l| mesh.leaf_cells(l).filter(|&cell| !near[cell]).collect::<Vec<_>>())
         .map_init(crate::basis::LocalBasis::default, |local, cell| {
-            local.at(mesh, cell_centre(mesh, cell));
+            local.at(mesh, mesh.finest_cell_centre(cell));
             let (mut f, mut fdot) = (0.0, 0.0);
             for (&i, b) in mesh.leaf_anchors(local.leaf).iter().zip(&local.b) {
                 f += c[i as usize] * b;
@@ -658,7 +644,7 @@ fn far_field_rows(
 /// `reach` cells (Chebyshev distance) of a cell holding a sample.
 fn front_cells(mesh: &crate::tmesh::TMesh, samples: &[Sample], reach: i64) -> Vec<bool> {
     let res = mesh.resolution();
-    let mut mark = vec![false; (res * res * res) as usize];
+    let mut mark = vec![false; mesh.finest_cells()];
     for s in samples {
         let [x, y, z] = mesh.cell_of(s.p);
         for c in (z - reach).max(0)..=(z + reach).min(res - 1) {
@@ -732,9 +718,9 @@ mod tests {
         let got = lifted_cells(&f0, &cdot, &samples, h, fraction, dt);
         let reach = (h / (fraction * mesh.finest_cell())).ceil().max(1.0) as i64;
         let near = front_cells(&mesh, &samples, reach);
-        let expected: Vec<usize> = (0..cell_count(&mesh))
+        let expected: Vec<usize> = (0..mesh.finest_cells())
             .filter(|&cell| {
-                let f = f0.value_at(cell_centre(&mesh, cell));
+                let f = f0.value_at(mesh.finest_cell_centre(cell));
                 !near[cell] && f < 0.0 && dt * k > fraction * f.abs()
             })
             .collect();
@@ -743,7 +729,7 @@ mod tests {
         // Lowering f instead moves only cells inside the sphere towards zero.
         let down = vec![-k; mesh.anchor_count()];
         let inside = lifted_cells(&f0, &down, &samples, h, fraction, dt);
-        assert!(inside.iter().all(|&cell| f0.value_at(cell_centre(&mesh, cell)) > 0.0));
+        assert!(inside.iter().all(|&cell| f0.value_at(mesh.finest_cell_centre(cell)) > 0.0));
         assert!(!inside.is_empty());
     }
 

@@ -272,6 +272,20 @@ impl TMesh {
         -1.0 + 2.0 * k as f64 / self.res as f64
     }
 
+    /// The number of finest lattice cells (`res³`), indexed as
+    /// [`TMesh::leaf_cells`] does.
+    pub(crate) fn finest_cells(&self) -> usize {
+        (self.res * self.res * self.res) as usize
+    }
+
+    /// The centre (domain units) of finest lattice cell `cell` (indexed as
+    /// [`TMesh::leaf_cells`] does).
+    pub(crate) fn finest_cell_centre(&self, cell: usize) -> DVec3 {
+        let (res, cell) = (self.res, cell as i64);
+        let centre = |k: i64| 0.5 * (self.coord(k) + self.coord(k + 1));
+        DVec3::new(centre(cell % res), centre((cell / res) % res), centre(cell / (res * res)))
+    }
+
     fn lattice_len(&self, k: i64) -> f64 {
         2.0 * k as f64 / self.res as f64
     }

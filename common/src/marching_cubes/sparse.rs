@@ -204,13 +204,14 @@ impl Block {
     /// surface may still pass between them) or a corner within `L ·` half
     /// the diagonal.
     fn active<F: Field3 + ?Sized>(&self, field: &F, grid: &Grid3<f32>, iso: f32) -> bool {
-        let mut inside = 0;
+        let (mut inside, mut nearest) = (0, f32::INFINITY);
         for c in self.corners() {
             let v = *grid.get(c.x, c.y, c.z).expect("corner inside the lattice") - iso;
             if !v.is_finite() {
                 return true;
             }
             inside += usize::from(v > 0.0);
+            nearest = nearest.min(v.abs());
         }
         if inside != 0 && inside != 8 {
             return true;
@@ -231,9 +232,7 @@ impl Block {
         if self.lipschitz == 0.0 {
             return true;
         }
-        let reach = 0.5 * self.lipschitz * ((self.hi - self.lo).as_vec3() * h).length();
-        self.corners()
-            .any(|c| (*grid.get(c.x, c.y, c.z).expect("corner inside the lattice") - iso).abs() <= reach)
+        nearest <= 0.5 * self.lipschitz * ((self.hi - self.lo).as_vec3() * h).length()
     }
 
     /// The halves along every axis more than one cell long (up to eight
