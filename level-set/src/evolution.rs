@@ -359,9 +359,21 @@ fn run(
     let mut released = 0;
     // Iterations between kept frames under a budget.
     let mut stride = 1;
+    // A frame due after an iteration that is not the last is captured by
+    // the next step, beside its own work.
+    let mut pending = None;
     for iteration in 1..=settings.max_iterations {
         control.check()?;
-        let s = solver.step(speed, &params);
+        let (s, frame) = solver.step_after_capture(speed, &params, pending.take());
+        if let Some(frame) = frame {
+            frames.push(frame);
+            if let FrameSchedule::Budget(budget) = settings.frames
+                && frames.len() > 2 * budget + 1
+            {
+                stride *= 2;
+                frames.retain(|f| f.iteration % stride == 0);
+            }
+        }
         if iteration % RELEASE_EVERY == 0 {
             released += solver.release();
         }
@@ -385,15 +397,12 @@ fn run(
         };
         let last = done || iteration == settings.max_iterations;
         if due || last {
-            frames.push(solver.capture(iteration, time));
             last_kept_time = time;
-        }
-        if let FrameSchedule::Budget(budget) = settings.frames
-            && !last
-            && frames.len() > 2 * budget + 1
-        {
-            stride *= 2;
-            frames.retain(|f| f.iteration % stride == 0);
+            if last {
+                frames.push(solver.capture(iteration, time));
+            } else {
+                pending = Some((iteration, time));
+            }
         }
         if done {
             break;

@@ -116,6 +116,20 @@ pub trait Solver: Send {
     /// step within `params`.
     fn step(&mut self, speed: &SpeedGrid, params: &StepParams) -> StepStats;
 
+    /// [`Solver::step`], with the state before it captured as a kept frame
+    /// when `capture` gives the frame's `(iteration, time)`: the same frame
+    /// as [`Solver::capture`] before the step, which a solver may capture
+    /// while it computes the step (the sparse field does).
+    fn step_after_capture(
+        &mut self,
+        speed: &SpeedGrid,
+        params: &StepParams,
+        capture: Option<(usize, f64)>,
+    ) -> (StepStats, Option<BandFrame>) {
+        let frame = capture.map(|(iteration, time)| self.capture(iteration, time));
+        (self.step(speed, params), frame)
+    }
+
     /// Heap bytes of the solver's state (embedding, status or change
     /// arrays, lists, buffers).
     fn heap_bytes(&self) -> usize;

@@ -71,7 +71,7 @@
 //! grows with the surface area, not the volume.
 
 use crate::solver::{Curvature, Solver, StepParams, StepStats, node_rate, stable_time_step};
-use crate::stencil::{Lattice, Stored, zero_crossing};
+use crate::stencil::{Lattice, Stored, Values, zero_crossing};
 use crate::{BandFrame, LevelSetError, SpeedGrid};
 use isomorph_common::glam::{UVec3, Vec3};
 use isomorph_common::{BRICK, Bricks, Field3, Grid3, GridError, NodeStore};
@@ -370,27 +370,36 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> SparseFieldSolver<U, S> {
     }
 
     /// Step 1: change rate of every active point, with the speed sampled at
-    /// its nearest zero crossing.
-    fn compute_rates(&mut self, speed: &SpeedGrid, curvature: Option<Curvature>) {
-        let (lattice, u, h) = (&self.lattice, &Stored(&self.u), speed.spacing());
-        let active = &self.layers[slot(0)];
-        active
-            .par_iter()
-            .map(|&n| zero_crossing(lattice, u, n as usize))
-            .collect_into_vec(&mut self.crossings);
-        // A lazy speed fills the bricks the crossings read, then is read without locking per point.
-        speed.prepare(&self.crossings);
-        let speeds = speed.reader();
-        active
-            .par_iter()
-            .zip(&self.crossings)
-            .map(|(&n, &x)| {
-                let n = n as usize;
-                let d = speeds.at_voxel(x);
-                let (rate, gamma) = node_rate(lattice, u, n, d, h, curvature);
-                (rate, gamma, d)
-            })
-            .collect_into_vec(&mut self.rates);
+    /// its nearest zero crossing; with `capture`, the state before the step
+    /// is captured meanwhile (both only read the embedding), so that the
+    /// capture's serial parts overlap the rates' parallel work.
+    fn compute_rates(
+        &mut self,
+        speed: &SpeedGrid,
+        curvature: Option<Curvature>,
+        capture: Option<(usize, f64)>,
+    ) -> Option<BandFrame> {
+        let Self { lattice, u, layers, crossings, rates, .. } = self;
+        let (lattice, u, h) = (&*lattice, &Stored(&*u), speed.spacing());
+        let frame = || capture.map(|(iteration, time)| capture_layers(u, lattice, layers, iteration, time));
+        let rates = || {
+            let active = &layers[slot(0)];
+            active.par_iter().map(|&n| zero_crossing(lattice, u, n as usize)).collect_into_vec(crossings);
+            // A lazy speed fills the bricks the crossings read, then is read without locking per point.
+            speed.prepare(crossings);
+            let speeds = speed.reader();
+            active
+                .par_iter()
+                .zip(&*crossings)
+                .map(|(&n, &x)| {
+                    let n = n as usize;
+                    let d = speeds.at_voxel(x);
+                    let (rate, gamma) = node_rate(lattice, u, n, d, h, curvature);
+                    (rate, gamma, d)
+                })
+                .collect_into_vec(rates);
+        };
+        rayon::join(frame, rates).0
     }
 
     /// Step 2: applies the changes; returns the two status lists `S+1`, `S−1`
@@ -494,35 +503,36 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> SparseFieldSolver<U, S> {
     /// mirrored). Only points that crossed and their active neighbours can
     /// be alone, so the work is ∝ the crossings.
     fn dissolve_islands(&mut self, active: &[u32], before: &[f32]) {
-        let (u, lattice) = (&self.u, &self.lattice);
+        let (u, lattice, status) = (&self.u, &self.lattice, &self.status);
         let inside = |n: usize| u[n] > 0.0;
-        let crossed: Vec<(usize, f32)> = active
+        let alone = |n: usize| lattice.neighbours(n).into_iter().flatten().all(|m| inside(m) != inside(n));
+        // The crossings and their active neighbours (status `0`: the active
+        // list holds exactly those nodes) that are alone; few, so their old
+        // values are looked up afterwards.
+        let mut lonely: Vec<usize> = active
             .par_iter()
             .zip(before)
             .filter(|&(&n, &old)| (old > 0.0) != inside(n as usize))
-            .map(|(&n, &old)| (n as usize, old))
+            .flat_map_iter(|(&n, _)| {
+                let n = n as usize;
+                let around = lattice.neighbours(n).into_iter().flatten().filter(|&m| status[m] == 0);
+                std::iter::once(n).chain(around).filter(|&m| alone(m))
+            })
             .collect();
-        if crossed.is_empty() {
+        if lonely.is_empty() {
             return;
         }
-        let mut candidates = crossed.clone();
-        for &(n, _) in &crossed {
-            for m in lattice.neighbours(n).into_iter().flatten() {
-                if let Ok(k) = active.binary_search(&(m as u32)) {
-                    candidates.push((m, before[k]));
-                }
-            }
-        }
-        candidates.sort_unstable_by_key(|c| c.0);
-        candidates.dedup_by_key(|c| c.0);
-        let alone = |n: usize| lattice.neighbours(n).into_iter().flatten().all(|m| inside(m) != inside(n));
-        let moves: Vec<(usize, f32)> = candidates
+        lonely.sort_unstable();
+        lonely.dedup();
+        let moves: Vec<(usize, f32)> = lonely
             .into_iter()
-            .filter(|&(n, _)| alone(n))
-            .map(|(n, old)| match ((old > 0.0) != inside(n), u[n] > 0.0) {
-                (true, _) => (n, old),
-                (false, true) => (n, -u[n]),
-                (false, false) => (n, (-u[n]).max(f32::MIN_POSITIVE)),
+            .filter_map(|n| {
+                let old = before[active.binary_search(&(n as u32)).ok()?];
+                Some(match ((old > 0.0) != inside(n), u[n] > 0.0) {
+                    (true, _) => (n, old),
+                    (false, true) => (n, -u[n]),
+                    (false, false) => (n, (-u[n]).max(f32::MIN_POSITIVE)),
+                })
             })
             .collect();
         for (n, v) in moves {
@@ -824,7 +834,16 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> Solver for SparseFieldSolver<U, S> {
     }
 
     fn step(&mut self, speed: &SpeedGrid, params: &StepParams) -> StepStats {
-        self.compute_rates(speed, params.curvature);
+        self.step_after_capture(speed, params, None).0
+    }
+
+    fn step_after_capture(
+        &mut self,
+        speed: &SpeedGrid,
+        params: &StepParams,
+        capture: Option<(usize, f64)>,
+    ) -> (StepStats, Option<BandFrame>) {
+        let frame = self.compute_rates(speed, params.curvature, capture);
         let (max_rate, max_gamma) = self
             .rates
             .par_iter()
@@ -838,21 +857,31 @@ impl<U: NodeStore<f32>, S: NodeStore<i8>> Solver for SparseFieldSolver<U, S> {
         self.process_status_lists(&up, &down);
         self.propagate_layer_values();
         self.compact();
-        stats
+        (stats, frame)
     }
 
-    /// From the layer lists: every node with a face neighbour of the other
-    /// sign is in `L−1`, `L0` or `L+1` (positive nodes are in `L0` or
-    /// above, negative ones in `L0` or below, and face neighbours' layers
-    /// differ by at most one).
     fn release(&mut self) -> usize {
         self.u.release_uniform() + self.status.release_uniform()
     }
 
     fn capture(&self, iteration: usize, time: f64) -> BandFrame {
-        let near = [&self.layers[slot(-1)][..], &self.layers[slot(0)], &self.layers[slot(1)]];
-        BandFrame::capture_near(&Stored(&self.u), &self.lattice, near, iteration, time)
+        capture_layers(&Stored(&self.u), &self.lattice, &self.layers, iteration, time)
     }
+}
+
+/// The frame of embedding `u` from its layer lists: every node on the zero
+/// set is in `L−1`, `L0` or `L+1` (positive nodes are in `L0` or above,
+/// negative ones in `L0` or below, and face neighbours' layers differ by at
+/// most one).
+fn capture_layers(
+    u: &(impl Values + ?Sized),
+    lattice: &Lattice,
+    layers: &[Vec<u32>; 5],
+    iteration: usize,
+    time: f64,
+) -> BandFrame {
+    let near = [&layers[slot(-1)][..], &layers[slot(0)], &layers[slot(1)]];
+    BandFrame::capture_near(u, lattice, near, iteration, time)
 }
 
 #[cfg(test)]
