@@ -1732,7 +1732,7 @@ mod tests {
             ))
         };
         let a = BlobTree::new(ball(0.0), 0.5).unwrap();
-        let bend = Warp::Bend { rate: 0.49, centre: 0.0, min: -0.8, max: 0.8 };
+        let bend = Warp::bend(0.49, 0.0, -0.8, 0.8);
         let b = BlobTree::new(Node::warp(bend, ball(0.2)), 0.5).unwrap();
         let m = BlobMorph::from_trees(&a, &b, &MorphSpec::default()).unwrap();
         let reach = |b: &Aabb| b.min.abs().max(b.max.abs()).max_element();
@@ -2592,7 +2592,7 @@ mod tests {
         .unwrap();
         let g = GenericTree::new(&a, &b, &MorphSpec::default()).unwrap();
         let n = g.node_at(0.5);
-        let Node::Warp { warp: Warp::Twist { rate }, child } = &n else { panic!("{n:?}") };
+        let Node::Warp { warp: Warp::Twist { rate, .. }, child } = &n else { panic!("{n:?}") };
         assert!((rate - 1.0).abs() < 1e-6);
         assert!(
             matches!(**child, Node::Warp { warp: Warp::Bend { rate, .. }, .. } if (rate - 0.4).abs() < 1e-6)
@@ -2610,7 +2610,7 @@ mod tests {
         let g = GenericTree::new(&a, &b, &spec).unwrap();
         let rates = |t: f32| {
             let n = g.node_at(t);
-            let Node::Warp { warp: Warp::Twist { rate: twist }, child } = &n else { panic!("{n:?}") };
+            let Node::Warp { warp: Warp::Twist { rate: twist, .. }, child } = &n else { panic!("{n:?}") };
             let Node::Warp { warp: Warp::Bend { rate: bend, .. }, .. } = **child else { panic!("{child:?}") };
             (*twist, bend)
         };
@@ -2620,7 +2620,7 @@ mod tests {
         }
         let both = MorphSpec::from_ron("(speeds: [(a: [], b: [], speed: (end: 0.5))])").unwrap();
         let n = GenericTree::new(&a, &b, &both).unwrap().node_at(0.25);
-        let Node::Warp { warp: Warp::Twist { rate }, child } = &n else { panic!("{n:?}") };
+        let Node::Warp { warp: Warp::Twist { rate, .. }, child } = &n else { panic!("{n:?}") };
         assert!((rate - 1.0).abs() < 1e-6);
         assert!(
             matches!(**child, Node::Warp { warp: Warp::Bend { rate, .. }, .. } if (rate - 0.4).abs() < 1e-6)

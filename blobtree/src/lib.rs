@@ -278,7 +278,7 @@ pub use node::{MAX_MAGNITUDE, MAX_SUPPORT, NaryOp, Node, Primitive};
 pub use scene::{MAX_DEPTH, MAX_FILE_BYTES};
 pub use skeleton::{MAX_VERTICES, Polytope, Skeleton, lp_norm};
 pub use tree::BlobTree;
-pub use warp::{TAPER_MIN_SCALE, Warp};
+pub use warp::{DEFAULT_ALONG, DEFAULT_AXIS, MIN_ALONG_SINE, MIN_AXIS_LENGTH, TAPER_MIN_SCALE, Warp};
 
 #[cfg(test)]
 mod testutil;

@@ -22,7 +22,7 @@ use crate::kernel::Kernel;
 use crate::node::{NaryOp, Node, Primitive};
 use crate::skeleton::{Polytope, Skeleton};
 use crate::tree::BlobTree;
-use crate::warp::Warp;
+use crate::warp::{DEFAULT_ALONG, DEFAULT_AXIS, Warp};
 use glam::{Affine3A, Quat, Vec3};
 use serde::{Deserialize, Deserializer, Serialize};
 
@@ -98,23 +98,29 @@ enum NodeSpec<C> {
         #[serde(default)]
         children: Vec<C>,
     },
-    /// Barr twist about the local z axis.
+    /// Barr twist about `axis`.
     Twist {
-        /// Radians per unit of z.
+        /// Radians per unit length along the axis.
         rate: f32,
+        /// The axis (default z; written only when not z).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        axis: Option<[f32; 3]>,
         /// The warped child.
         #[serde(default)]
         children: Vec<C>,
     },
-    /// Barr taper along the local z axis.
+    /// Barr taper along `axis`.
     Taper {
-        /// Scale change per unit of z.
+        /// Scale change per unit length along the axis.
         slope: f32,
+        /// The axis (default z; written only when not z).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        axis: Option<[f32; 3]>,
         /// The warped child.
         #[serde(default)]
         children: Vec<C>,
     },
-    /// Barr bend in the y–z plane.
+    /// Barr bend in the plane of `along` and `axis` (default y–z).
     Bend {
         /// Curvature.
         rate: f32,
@@ -125,6 +131,12 @@ enum NodeSpec<C> {
         min: f32,
         /// End of the bent region.
         max: f32,
+        /// The direction the bend curves towards (default z; written only when not z).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        axis: Option<[f32; 3]>,
+        /// The band's direction (default y; written only when not y).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        along: Option<[f32; 3]>,
         /// The warped child.
         #[serde(default)]
         children: Vec<C>,
@@ -634,10 +646,15 @@ fn read_node(
         // Warps are built as written, never concatenated with a child
         // affine map ([`Node::warp`] does that), so that node paths in a
         // links spec name the nodes of the file.
-        NodeSpec::Twist { rate, children: kids } => warped(Warp::Twist { rate }, unary(kids, "twist")?),
-        NodeSpec::Taper { slope, children: kids } => warped(Warp::Taper { slope }, unary(kids, "taper")?),
-        NodeSpec::Bend { rate, centre, min, max, children: kids } => {
-            warped(Warp::Bend { rate, centre: centre.unwrap_or(0.0), min, max }, unary(kids, "bend")?)
+        NodeSpec::Twist { rate, axis, children: kids } => {
+            warped(Warp::Twist { rate, axis: direction(axis, DEFAULT_AXIS) }, unary(kids, "twist")?)
+        }
+        NodeSpec::Taper { slope, axis, children: kids } => {
+            warped(Warp::Taper { slope, axis: direction(axis, DEFAULT_AXIS) }, unary(kids, "taper")?)
+        }
+        NodeSpec::Bend { rate, centre, min, max, axis, along, children: kids } => {
+            let (axis, along) = (direction(axis, DEFAULT_AXIS), direction(along, DEFAULT_ALONG));
+            warped(Warp::Bend { rate, centre: centre.unwrap_or(0.0), min, max, axis, along }, unary(kids, "bend")?)
         }
         NodeSpec::Affine { frame, children: kids } => {
             let map = transform(&frame).map_err(err)?;
@@ -658,6 +675,16 @@ fn read_node(
             Node::Mix { from, to, s, children: children(kids, "≥ 1", at_least_one, "mix")? }
         }
     })
+}
+
+/// A written direction, or `default` when absent.
+fn direction(written: Option<[f32; 3]>, default: Vec3) -> Vec3 {
+    written.map_or(default, Vec3::from_array)
+}
+
+/// A direction to write: `None` (left out) when it is the default.
+fn written_direction(v: Vec3, default: Vec3) -> Option<[f32; 3]> {
+    (v != default).then(|| v.to_array())
 }
 
 /// `warp` over `child`, as one node.
@@ -801,11 +828,21 @@ fn write_node(node: &Node) -> Written {
         Node::Warp { warp, child } => {
             let children = vec![write_node(child)];
             match *warp {
-                Warp::Twist { rate } => NodeSpec::Twist { rate, children },
-                Warp::Taper { slope } => NodeSpec::Taper { slope, children },
-                Warp::Bend { rate, centre, min, max } => {
-                    NodeSpec::Bend { rate, centre: Some(centre), min, max, children }
+                Warp::Twist { rate, axis } => {
+                    NodeSpec::Twist { rate, axis: written_direction(axis, DEFAULT_AXIS), children }
                 }
+                Warp::Taper { slope, axis } => {
+                    NodeSpec::Taper { slope, axis: written_direction(axis, DEFAULT_AXIS), children }
+                }
+                Warp::Bend { rate, centre, min, max, axis, along } => NodeSpec::Bend {
+                    rate,
+                    centre: Some(centre),
+                    min,
+                    max,
+                    axis: written_direction(axis, DEFAULT_AXIS),
+                    along: written_direction(along, DEFAULT_ALONG),
+                    children,
+                },
                 Warp::Affine(m) => NodeSpec::Affine { frame: frame_of(&m), children },
             }
         }
@@ -961,7 +998,7 @@ mod tests {
                 (kind: "point", vertices: [(0,0,0)], radius: 1), (kind: "point", vertices: [(1,0,0)], radius: 1)])]))"#,
         );
         let Node::Warp { warp, child } = t.root() else { panic!("a warp") };
-        assert_eq!(*warp, Warp::Bend { rate: 1.0, centre: 0.0, min: -1.0, max: 1.0 });
+        assert_eq!(*warp, Warp::bend(1.0, 0.0, -1.0, 1.0));
         assert!(matches!(**child, Node::Difference { level, .. } if level == 0.4));
     }
 

@@ -172,7 +172,7 @@ fn propeller_sphere() -> BlobTree {
 /// Two rounded rods blended and twisted about their common axis (a helix).
 pub fn propeller() -> BlobTree {
     let rod = |x: f32| seg(Vec3::new(x, 0.0, -0.7), Vec3::new(x, 0.0, 0.7), 0.36);
-    tree(Node::warp(Warp::Twist { rate: 2.2 }, Node::blend(vec![rod(-0.2), rod(0.2)])))
+    tree(Node::warp(Warp::twist(2.2), Node::blend(vec![rod(-0.2), rod(0.2)])))
 }
 
 /// A rook: base and body blended, under a top cut by two crossing slots.
@@ -190,7 +190,7 @@ pub fn rook() -> BlobTree {
 pub fn queen() -> BlobTree {
     let base = disc(0.4, 8, -0.75, 0.3);
     let body = Node::warp(
-        Warp::Taper { slope: -0.35 },
+        Warp::taper(-0.35),
         seg(Vec3::new(0.0, 0.0, -0.7), Vec3::new(0.0, 0.0, 0.5), 0.46),
     );
     let crown = ball(Vec3::new(0.0, 0.0, 0.75), 0.9);

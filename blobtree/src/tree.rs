@@ -479,7 +479,7 @@ mod tests {
         // A phantom right child is neutral.
         assert_eq!(eval(Node::difference(a.clone(), b.phantom(), 0.5)), fa);
         // Twist about z of a point on the axis changes nothing there.
-        let w = Node::warp(Warp::Twist { rate: 2.0 }, a.clone());
+        let w = Node::warp(Warp::twist(2.0), a.clone());
         assert_eq!(eval(w), fa);
         // Consecutive affine maps are concatenated into one node.
         let m1 = Affine3A::from_translation(Vec3::X);
