@@ -633,6 +633,67 @@ mod tests {
         }
     }
 
+    /// With the default axes the warps are Barr's about z (bend in the
+    /// y–z plane), bit for bit as before axes existed: the formulas written
+    /// out here, and the image boxes of the unrotated frame.
+    #[test]
+    fn default_axes_are_the_warps_about_z_bit_for_bit() {
+        let (k, slope) = (1.3f32, 0.4f32);
+        let child = Aabb::new(Vec3::new(-0.5, -0.7, -0.4), Vec3::new(0.6, 0.8, 0.5));
+        for p in sample_points() {
+            let (s, c) = (k * p.z).sin_cos();
+            assert_eq!(Warp::twist(k).inverse(p), Vec3::new(c * p.x + s * p.y, -s * p.x + c * p.y, p.z));
+            assert_eq!(Warp::twist(k).forward(p), Vec3::new(c * p.x - s * p.y, s * p.x + c * p.y, p.z));
+            let r = (1.0 + slope * p.z).max(TAPER_MIN_SCALE);
+            assert_eq!(Warp::taper(slope).inverse(p), Vec3::new(p.x / r, p.y / r, p.z));
+            assert_eq!(Warp::taper(slope).forward(p), Vec3::new(r * p.x, r * p.y, p.z));
+            let bend = Warp::bend(0.8, 0.1, -0.6, 0.9);
+            assert_eq!(bend.forward(p), bend_forward(0.8, 0.1, -0.6, 0.9, p));
+            assert_eq!(bend.inverse(p), bend_inverse(0.8, 0.1, -0.6, 0.9, p));
+        }
+        for w in warps().into_iter().filter(|w| w.rotation().is_none()) {
+            assert_eq!(w.image_bounds(&child), w.image_bounds_local(&child), "{w:?}");
+        }
+        assert_eq!(warps().iter().filter(|w| w.rotation().is_none()).count(), 5);
+    }
+
+    /// Matched warps of one kind with different axes (§4.4): rates
+    /// linearly, twist and taper axes along the great circle at constant
+    /// angular speed, a bend's frame by slerp (axis and band direction
+    /// stay unit and across each other); equal axes are kept exactly;
+    /// opposite axes still give a unit axis.
+    #[test]
+    fn matched_warps_interpolate_their_axes() {
+        let a = Warp::Twist { rate: 2.0, axis: Vec3::Z };
+        let b = Warp::Twist { rate: -1.0, axis: Vec3::new(3.0, 0.0, 0.0) };
+        for s in [0.0, 0.25, 0.5, 0.9, 1.0] {
+            let Some(Warp::Twist { rate, axis }) = a.lerp(&b, s) else { panic!() };
+            assert!((rate - (2.0 - 3.0 * s)).abs() < 1e-6);
+            let angle = s * std::f32::consts::FRAC_PI_2;
+            assert!((axis - Vec3::new(angle.sin(), 0.0, angle.cos())).length() < 1e-5, "{s}: {axis}");
+        }
+        let t = Warp::Taper { slope: 0.2, axis: Vec3::new(0.0, 1.0, 1.0) };
+        let Some(Warp::Taper { slope, axis }) = t.lerp(&Warp::Taper { slope: 0.6, axis: Vec3::new(0.0, 1.0, 1.0) }, 0.5)
+        else {
+            panic!()
+        };
+        assert!((slope - 0.4).abs() < 1e-6);
+        assert_eq!(axis, Vec3::new(0.0, 1.0, 1.0));
+        let Some(Warp::Twist { axis, .. }) = a.lerp(&Warp::Twist { rate: 1.0, axis: -Vec3::Z }, 0.5) else { panic!() };
+        assert!((axis.length() - 1.0).abs() < 1e-5 && axis.z.abs() < 1e-5, "{axis}");
+        let b0 = Warp::bend(0.5, 0.0, -1.0, 1.0);
+        let b1 = Warp::Bend { rate: 0.3, centre: 0.2, min: -0.5, max: 0.5, axis: Vec3::X, along: Vec3::Z };
+        let Some(Warp::Bend { rate, centre, axis, along, .. }) = b0.lerp(&b1, 0.5) else { panic!() };
+        assert!((rate - 0.4).abs() < 1e-6 && (centre - 0.1).abs() < 1e-6);
+        assert!((axis.length() - 1.0).abs() < 1e-5 && (along.length() - 1.0).abs() < 1e-5);
+        assert!(axis.dot(along).abs() < 1e-5, "{axis} {along}");
+        // Half way between the frames (z, y) and (x, z): a third of a turn
+        // about (1, 1, 1) takes one to the other; half of it is 60°.
+        let q = Quat::from_axis_angle(Vec3::ONE.normalize(), std::f32::consts::FRAC_PI_3);
+        assert!((axis - q * Vec3::Z).length() < 1e-5 && (along - q * Vec3::Y).length() < 1e-5, "{axis} {along}");
+        assert_eq!(b0.lerp(&Warp::bend(0.1, 0.0, -1.0, 1.0), 0.3).map(|w| w.rotation()), Some(None));
+    }
+
     #[test]
     fn bad_parameters_are_rejected() {
         assert!(Warp::twist(f32::NAN).validate().is_err());
