@@ -1829,7 +1829,10 @@ mod tests {
             let json = BlobTree::from_json(&frame.to_json().unwrap()).unwrap();
             for p in testutil::points() {
                 let v = frame.value(p);
-                assert!((ron.value(p) - v).abs() <= 1e-6 && (json.value(p) - v).abs() <= 1e-6, "t = {t} at {p}");
+                assert!(
+                    (ron.value(p) - v).abs() <= 1e-6 && (json.value(p) - v).abs() <= 1e-6,
+                    "t = {t} at {p}"
+                );
             }
         }
     }

@@ -654,7 +654,10 @@ fn read_node(
         }
         NodeSpec::Bend { rate, centre, min, max, axis, along, children: kids } => {
             let (axis, along) = (direction(axis, DEFAULT_AXIS), direction(along, DEFAULT_ALONG));
-            warped(Warp::Bend { rate, centre: centre.unwrap_or(0.0), min, max, axis, along }, unary(kids, "bend")?)
+            warped(
+                Warp::Bend { rate, centre: centre.unwrap_or(0.0), min, max, axis, along },
+                unary(kids, "bend")?,
+            )
         }
         NodeSpec::Affine { frame, children: kids } => {
             let map = transform(&frame).map_err(err)?;
@@ -945,10 +948,25 @@ mod tests {
     fn a_warp_about_an_axis_is_the_turned_warp_about_z() {
         // (fields of the warp, the same warp's default fields, rotation axis and degrees of Q)
         let cases = [
-            (r#"kind: "twist", rate: 1.5, axis: (1, 0, 0)"#, r#"kind: "twist", rate: 1.5"#, "(0, 1, 0)", 90.0),
+            (
+                r#"kind: "twist", rate: 1.5, axis: (1, 0, 0)"#,
+                r#"kind: "twist", rate: 1.5"#,
+                "(0, 1, 0)",
+                90.0,
+            ),
             (r#"kind: "twist", rate: -2, axis: (0, 3, 0)"#, r#"kind: "twist", rate: -2"#, "(1, 0, 0)", -90.0),
-            (r#"kind: "taper", slope: -0.5, axis: (1, 0, 0)"#, r#"kind: "taper", slope: -0.5"#, "(0, 1, 0)", 90.0),
-            (r#"kind: "taper", slope: 0.4, axis: (0, 0, -1)"#, r#"kind: "taper", slope: 0.4"#, "(1, 0, 0)", 180.0),
+            (
+                r#"kind: "taper", slope: -0.5, axis: (1, 0, 0)"#,
+                r#"kind: "taper", slope: -0.5"#,
+                "(0, 1, 0)",
+                90.0,
+            ),
+            (
+                r#"kind: "taper", slope: 0.4, axis: (0, 0, -1)"#,
+                r#"kind: "taper", slope: 0.4"#,
+                "(1, 0, 0)",
+                180.0,
+            ),
             (
                 r#"kind: "bend", rate: 0.8, centre: 0.1, min: -0.6, max: 0.7, axis: (1, 0, 0), along: (0, 1, 0)"#,
                 r#"kind: "bend", rate: 0.8, centre: 0.1, min: -0.6, max: 0.7"#,
@@ -992,9 +1010,11 @@ mod tests {
         }
         // The same axis written otherwise (default z written out, scaled) is the same warp.
         let z = ron(&format!(r#"(root: (kind: "twist", rate: 1.5, children: [{SHAPE}]))"#));
-        let written = ron(&format!(r#"(root: (kind: "twist", rate: 1.5, axis: (0, 0, 1), children: [{SHAPE}]))"#));
+        let written =
+            ron(&format!(r#"(root: (kind: "twist", rate: 1.5, axis: (0, 0, 1), children: [{SHAPE}]))"#));
         assert_eq!(z.root(), written.root());
-        let scaled = ron(&format!(r#"(root: (kind: "twist", rate: 1.5, axis: (0, 0, 7), children: [{SHAPE}]))"#));
+        let scaled =
+            ron(&format!(r#"(root: (kind: "twist", rate: 1.5, axis: (0, 0, 7), children: [{SHAPE}]))"#));
         for p in spread_points() {
             assert!((z.value(p) - scaled.value(p)).abs() <= 1e-6, "{p}");
         }
@@ -1006,20 +1026,29 @@ mod tests {
     /// axis that is not three numbers.
     #[test]
     fn bad_axes_are_typed_errors() {
-        let (p, e) = problem(&format!(r#"(root: (kind: "union", children: [(kind: "twist", rate: 1, axis: (0, 0, 0), children: [{SHAPE}])]))"#));
+        let (p, e) = problem(&format!(
+            r#"(root: (kind: "union", children: [(kind: "twist", rate: 1, axis: (0, 0, 0), children: [{SHAPE}])]))"#
+        ));
         assert_eq!(p, vec![0]);
         assert!(matches!(e, NodeProblem::OutOfRange { field: "axis", .. }), "{e:?}");
-        let (_, e) = problem(&format!(r#"(root: (kind: "taper", slope: 1, axis: (1e-7, 0, 0), children: [{SHAPE}]))"#));
+        let (_, e) = problem(&format!(
+            r#"(root: (kind: "taper", slope: 1, axis: (1e-7, 0, 0), children: [{SHAPE}]))"#
+        ));
         assert!(matches!(e, NodeProblem::OutOfRange { field: "axis", .. }), "{e:?}");
-        let (_, e) = problem(&format!(r#"(root: (kind: "taper", slope: 1, axis: (1e7, 0, 0), children: [{SHAPE}]))"#));
+        let (_, e) =
+            problem(&format!(r#"(root: (kind: "taper", slope: 1, axis: (1e7, 0, 0), children: [{SHAPE}]))"#));
         assert!(matches!(e, NodeProblem::OutOfRange { field: "axis", .. }), "{e:?}");
         let (_, e) = problem(&format!(
             r#"(root: (kind: "bend", rate: 1, min: -1, max: 1, axis: (1, 0, 0), along: (-2, 0.001, 0), children: [{SHAPE}]))"#
         ));
         assert_eq!(e, NodeProblem::Warp("bend `along` is (nearly) parallel to its `axis`"));
-        let (_, e) = problem(&format!(r#"(root: (kind: "bend", rate: 1, min: -1, max: 1, along: (0, 0, 0), children: [{SHAPE}]))"#));
+        let (_, e) = problem(&format!(
+            r#"(root: (kind: "bend", rate: 1, min: -1, max: 1, along: (0, 0, 0), children: [{SHAPE}]))"#
+        ));
         assert!(matches!(e, NodeProblem::OutOfRange { field: "along", .. }), "{e:?}");
-        let short = BlobTree::from_ron(&format!(r#"(root: (kind: "twist", rate: 1, axis: (0, 1), children: [{SHAPE}]))"#));
+        let short = BlobTree::from_ron(&format!(
+            r#"(root: (kind: "twist", rate: 1, axis: (0, 1), children: [{SHAPE}]))"#
+        ));
         assert!(matches!(short, Err(BlobError::Parse { .. })), "{short:?}");
         let leaf = ron(&format!("(root: {SHAPE})")).root().clone();
         for (warp, field) in [
@@ -1058,7 +1087,12 @@ mod tests {
         );
         let tree = ron(&text);
         let written = tree.to_ron().unwrap();
-        for field in ["axis: (0.6, 0.0, 0.8)", "axis: (0.0, 1.0, 0.1)", "axis: (0.2, 1.0, 0.0)", "along: (1.0, 0.0, 0.3)"] {
+        for field in [
+            "axis: (0.6, 0.0, 0.8)",
+            "axis: (0.0, 1.0, 0.1)",
+            "axis: (0.2, 1.0, 0.0)",
+            "along: (1.0, 0.0, 0.3)",
+        ] {
             assert!(written.contains(field), "{field} in\n{written}");
         }
         assert_eq!(written.matches("axis").count(), 3, "{written}");

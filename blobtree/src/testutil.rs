@@ -44,10 +44,7 @@ pub fn primitive() -> impl Strategy<Value = Primitive> {
 /// A warp axis: the default z half of the time, else a random direction
 /// (not normalized: scene axes need not be).
 fn axis() -> impl Strategy<Value = Vec3> {
-    prop_oneof![
-        Just(Vec3::Z),
-        v3().prop_filter("a direction", |v| v.length() > 0.05),
-    ]
+    prop_oneof![Just(Vec3::Z), v3().prop_filter("a direction", |v| v.length() > 0.05),]
 }
 
 /// A bend's `(axis, along)`: the defaults half of the time, else random

@@ -330,7 +330,8 @@ impl Warp {
             }
             Warp::Bend { .. } => {
                 let h = 1e-4;
-                let col = |e: Vec3| (self.inverse_local(p + e * h) - self.inverse_local(p - e * h)) / (2.0 * h);
+                let col =
+                    |e: Vec3| (self.inverse_local(p + e * h) - self.inverse_local(p - e * h)) / (2.0 * h);
                 let j = Mat3::from_cols(col(Vec3::X), col(Vec3::Y), col(Vec3::Z));
                 (self.inverse_local(p), j.transpose())
             }
@@ -673,13 +674,16 @@ mod tests {
             assert!((axis - Vec3::new(angle.sin(), 0.0, angle.cos())).length() < 1e-5, "{s}: {axis}");
         }
         let t = Warp::Taper { slope: 0.2, axis: Vec3::new(0.0, 1.0, 1.0) };
-        let Some(Warp::Taper { slope, axis }) = t.lerp(&Warp::Taper { slope: 0.6, axis: Vec3::new(0.0, 1.0, 1.0) }, 0.5)
+        let Some(Warp::Taper { slope, axis }) =
+            t.lerp(&Warp::Taper { slope: 0.6, axis: Vec3::new(0.0, 1.0, 1.0) }, 0.5)
         else {
             panic!()
         };
         assert!((slope - 0.4).abs() < 1e-6);
         assert_eq!(axis, Vec3::new(0.0, 1.0, 1.0));
-        let Some(Warp::Twist { axis, .. }) = a.lerp(&Warp::Twist { rate: 1.0, axis: -Vec3::Z }, 0.5) else { panic!() };
+        let Some(Warp::Twist { axis, .. }) = a.lerp(&Warp::Twist { rate: 1.0, axis: -Vec3::Z }, 0.5) else {
+            panic!()
+        };
         assert!((axis.length() - 1.0).abs() < 1e-5 && axis.z.abs() < 1e-5, "{axis}");
         let b0 = Warp::bend(0.5, 0.0, -1.0, 1.0);
         let b1 = Warp::Bend { rate: 0.3, centre: 0.2, min: -0.5, max: 0.5, axis: Vec3::X, along: Vec3::Z };
@@ -690,7 +694,10 @@ mod tests {
         // Half way between the frames (z, y) and (x, z): a third of a turn
         // about (1, 1, 1) takes one to the other; half of it is 60°.
         let q = Quat::from_axis_angle(Vec3::ONE.normalize(), std::f32::consts::FRAC_PI_3);
-        assert!((axis - q * Vec3::Z).length() < 1e-5 && (along - q * Vec3::Y).length() < 1e-5, "{axis} {along}");
+        assert!(
+            (axis - q * Vec3::Z).length() < 1e-5 && (along - q * Vec3::Y).length() < 1e-5,
+            "{axis} {along}"
+        );
         assert_eq!(b0.lerp(&Warp::bend(0.1, 0.0, -1.0, 1.0), 0.3).map(|w| w.rotation()), Some(None));
     }
 
