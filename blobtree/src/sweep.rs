@@ -753,6 +753,74 @@ mod tests {
         }
     }
 
+    /// Ranges of twists, tapers and bends about interpolated axes hold the
+    /// warped child box's samples for every warp they stand for: blends of
+    /// two exact warps over sub-intervals of `s`, and blends of two such
+    /// blends (ranges with spreads, as de Casteljau levels make), for
+    /// axes a quarter turn, nearly opposite and exactly opposite apart.
+    #[test]
+    fn axis_ranges_hold_every_blended_warp() {
+        let child = Aabb::new(Vec3::new(-0.5, -0.7, -0.4), Vec3::new(0.6, 0.8, 0.5));
+        let corners = |w: &Warp| {
+            let mut v = Vec::new();
+            for i in 0..=4 {
+                for j in 0..=4 {
+                    for k in 0..=4 {
+                        let f = Vec3::new(i as f32, j as f32, k as f32) / 4.0;
+                        v.push(w.forward(child.min + (child.max - child.min) * f));
+                    }
+                }
+            }
+            v
+        };
+        let bend = |rate: f32, axis: Vec3, along: Vec3| Warp::Bend {
+            rate,
+            centre: 0.1,
+            min: -0.8,
+            max: 0.8,
+            axis,
+            along,
+        };
+        let triples = [
+            (
+                Warp::Twist { rate: 1.5, axis: Vec3::Z },
+                Warp::Twist { rate: -1.0, axis: Vec3::X },
+                Warp::Twist { rate: 0.5, axis: Vec3::new(0.0, 1.0, 0.2) },
+            ),
+            (
+                Warp::Taper { slope: 0.4, axis: Vec3::new(0.0, 0.1, -1.0) },
+                Warp::Taper { slope: -0.5, axis: Vec3::new(0.0, 0.0, 1.0) },
+                Warp::Taper { slope: 0.2, axis: -Vec3::Z },
+            ),
+            (
+                bend(0.8, Vec3::Z, Vec3::Y),
+                bend(-0.5, Vec3::X, Vec3::Z),
+                bend(0.3, Vec3::Y, Vec3::new(1.0, 0.0, 1.0)),
+            ),
+        ];
+        for (wa, wb, wc) in triples {
+            let exact = |w: &Warp| WarpRange::exact(w).unwrap();
+            for k in 0..4 {
+                let s = Interval { lo: k as f32 / 4.0, hi: (k + 1) as f32 / 4.0 };
+                let ab = WarpRange::lerp(&exact(&wa), &exact(&wb), s).unwrap();
+                let bc = WarpRange::lerp(&exact(&wb), &exact(&wc), s).unwrap();
+                let abc = WarpRange::lerp(&ab, &bc, s).unwrap();
+                let (b1, b2) = (ab.image(&child).expanded(1e-5), abc.image(&child).expanded(1e-5));
+                for i in 0..=6 {
+                    let t = s.lo + s.width() * i as f32 / 6.0;
+                    let w1 = wa.lerp(&wb, t).unwrap();
+                    let w2 = w1.lerp(&wb.lerp(&wc, t).unwrap(), t).unwrap();
+                    for p in corners(&w1) {
+                        assert!(b1.contains(p), "{w1:?}: {p} outside {b1:?}");
+                    }
+                    for p in corners(&w2) {
+                        assert!(b2.contains(p), "{w2:?}: {p} outside {b2:?}");
+                    }
+                }
+            }
+        }
+    }
+
     /// Slerped frames over an interval, and blends of two such ranges, hold
     /// the images of box corners under the maps they stand for.
     #[test]
