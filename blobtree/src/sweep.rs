@@ -256,7 +256,7 @@ impl FrameRange {
         }
     }
 
-    /// For a range of rotations ([`FrameRange::rotations`], or blends of
+    /// For a range of rotations (`FrameRange::rotations`, or blends of
     /// such ranges): the range of their inverses (`R⁻¹` is as far from
     /// `R_c⁻¹` as `R` from `R_c`).
     fn inverse_rotations(&self) -> FrameRange {
@@ -472,7 +472,7 @@ impl WarpRange {
         widened(&axes.apply(&self.image_local(&local)))
     }
 
-    /// [`WarpRange::image`] of a non-empty box for the warps about the
+    /// `WarpRange::image` of a non-empty box for the warps about the
     /// default axes.
     fn image_local(&self, child: &Aabb) -> Aabb {
         match self {

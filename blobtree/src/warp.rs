@@ -195,18 +195,30 @@ impl Warp {
         }
     }
 
+    /// The turn of the warp's own frame as a matrix (see
+    /// `turned_inverse`), `None` for the default axes.
+    pub(crate) fn turn(&self) -> Option<Mat3> {
+        self.rotation().map(Mat3::from_quat)
+    }
+
     /// The forward map `w(p)`.
     pub fn forward(&self, p: Vec3) -> Vec3 {
-        match self.rotation() {
-            Some(r) => r * self.forward_local(r.inverse() * p),
+        match self.turn() {
+            Some(m) => m * self.forward_local(m.transpose() * p),
             None => self.forward_local(p),
         }
     }
 
     /// The inverse map `w⁻¹(p)`.
     pub fn inverse(&self, p: Vec3) -> Vec3 {
-        match self.rotation() {
-            Some(r) => r * self.inverse_local(r.inverse() * p),
+        self.turned_inverse(self.turn(), p)
+    }
+
+    /// The inverse map with the frame's turn `turn` (`turn`)
+    /// computed once by the caller (the compiled tree keeps it).
+    pub(crate) fn turned_inverse(&self, turn: Option<Mat3>, p: Vec3) -> Vec3 {
+        match turn {
+            Some(m) => m * self.inverse_local(m.transpose() * p),
             None => self.inverse_local(p),
         }
     }
@@ -214,13 +226,18 @@ impl Warp {
     /// The inverse point and the transposed Jacobian of `w⁻¹` at `p`
     /// (maps a child gradient to the warped field's gradient). Analytic for
     /// twist, taper and affine; central differences (step 1e-4) for the bend.
-    /// With a rotated frame `R`: `Jᵀ = R·J_zᵀ·Rᵀ`.
+    /// With a turned frame `R`: `Jᵀ = R·J_zᵀ·Rᵀ`.
     pub fn inverse_with_jacobian_t(&self, p: Vec3) -> (Vec3, Mat3) {
-        match self.rotation() {
-            Some(r) => {
-                let (q, jt) = self.inverse_jacobian_local(r.inverse() * p);
-                let m = Mat3::from_quat(r);
-                (r * q, m * jt * m.transpose())
+        self.turned_inverse_with_jacobian_t(self.turn(), p)
+    }
+
+    /// `inverse_with_jacobian_t` with the frame's turn computed by the caller.
+    pub(crate) fn turned_inverse_with_jacobian_t(&self, turn: Option<Mat3>, p: Vec3) -> (Vec3, Mat3) {
+        match turn {
+            Some(m) => {
+                let mt = m.transpose();
+                let (q, jt) = self.inverse_jacobian_local(mt * p);
+                (m * q, m * jt * mt)
             }
             None => self.inverse_jacobian_local(p),
         }
@@ -484,7 +501,7 @@ fn check_axis(field: &'static str, v: Vec3) -> Result<(), crate::NodeProblem> {
 }
 
 /// A box holding the image of `b` under the rotation `r` (the box of its
-/// rotated corners), [`widened`].
+/// rotated corners), `widened`.
 fn rotated(b: &Aabb, r: Quat) -> Aabb {
     if b.is_empty() {
         return *b;

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{assert_ok, morph, scratch, stderr};
+use common::{assert_ok, isomorph, morph, scratch, stderr};
 use std::path::{Path, PathBuf};
 
 /// The error output of `isomorph morph --method METHOD` from `source` to
@@ -165,7 +165,8 @@ fn frames_reload(frames: &Path, expected: &isomorph_blobtree::BlobMorph, count: 
 /// bend about its own axes (`bent_rods.ron`) and the speeds of the two
 /// halves of the twist ↔ bend pair (`propeller_bent_rods.links.ron`).
 /// Saved frames keep the bend's axes (written only where they are not the
-/// defaults) and load back into the morph's field.
+/// defaults) and load back into the morph's field; `--dump` writes the
+/// scene with its axes.
 #[test]
 fn warp_axes_and_warp_halves_from_the_command_line() {
     use isomorph_blobtree::{BlobMorph, MorphSpec, scenes};
@@ -195,5 +196,16 @@ fn warp_axes_and_warp_halves_from_the_command_line() {
         assert_eq!(text.matches("axis").count(), 1, "the twist's default axis is not written: {text}");
     }
     assert!(texts[1].contains("rate: 1.1"), "{}", texts[1]);
+    // `--dump` writes the example with its axes, as RON and JSON, back to the same tree.
+    for (format, read) in [
+        ("ron", isomorph_blobtree::BlobTree::from_ron as fn(&str) -> _),
+        ("json", isomorph_blobtree::BlobTree::from_json),
+    ] {
+        let o = isomorph(&["blob", "--dump", bent.to_str().unwrap(), "--format", format]);
+        assert_ok(&o);
+        let text = String::from_utf8(o.stdout).unwrap();
+        assert!(text.contains("along"), "{text}");
+        assert_eq!(read(&text).unwrap(), target, "{format}");
+    }
     let _ = std::fs::remove_dir_all(&out);
 }
