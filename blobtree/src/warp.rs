@@ -14,9 +14,9 @@ pub const DEFAULT_AXIS: Vec3 = Vec3::Z;
 /// The default direction of a bend's band: the local y axis.
 pub const DEFAULT_ALONG: Vec3 = Vec3::Y;
 
-/// Smallest accepted length of a warp's `axis` or of a bend's `along`
-/// (after removing its component along the axis): shorter vectors have no
-/// direction that `f32` resolves.
+/// Smallest accepted length (scene units) of a warp's `axis` or of a
+/// bend's `along`: shorter vectors have no direction that `f32` resolves
+/// (their normalization would overflow or lose most digits).
 pub const MIN_AXIS_LENGTH: f32 = 1e-6;
 
 /// Smallest sine of the angle between a bend's `along` and its `axis`:
