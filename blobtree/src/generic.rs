@@ -1732,7 +1732,7 @@ mod tests {
             ))
         };
         let a = BlobTree::new(ball(0.0), 0.5).unwrap();
-        let bend = Warp::Bend { rate: 0.49, centre: 0.0, min: -0.8, max: 0.8 };
+        let bend = Warp::bend(0.49, 0.0, -0.8, 0.8);
         let b = BlobTree::new(Node::warp(bend, ball(0.2)), 0.5).unwrap();
         let m = BlobMorph::from_trees(&a, &b, &MorphSpec::default()).unwrap();
         let reach = |b: &Aabb| b.min.abs().max(b.max.abs()).max_element();
@@ -1782,6 +1782,59 @@ mod tests {
         let m = BlobMorph::bezier(&trees[0], &keys).unwrap();
         assert_eq!(m.levels.len(), 2);
         frames_are_held(&m, &[0.0, 0.3, 0.71, 1.0]).unwrap();
+    }
+
+    /// Matched twists, tapers and bends about different axes (§4.4): the
+    /// generic warps turn their axes (the root twist's half way at
+    /// `t = ½`, its rate linear), the swept bounds hold every frame of the
+    /// two-shape morph and of a Bézier-like morph through a third shape
+    /// with other axes (de Casteljau levels blend ranges of axes), and
+    /// saved frames reload to the same field through RON and JSON.
+    #[test]
+    fn warps_about_different_axes_morph_within_their_bounds() {
+        let shape = |twist: &str, taper: &str, bend: &str| {
+            BlobTree::from_ron(&format!(
+                r#"(root: (kind: "twist", {twist}, children: [(kind: "blend", children: [
+                    (kind: "taper", {taper}, children: [
+                        (kind: "segment", vertices: [(0.3, 0, -0.6), (0.3, 0, 0.6)], radius: 0.4)]),
+                    (kind: "bend", min: -0.7, max: 0.7, {bend}, children: [
+                        (kind: "segment", vertices: [(-0.3, -0.6, 0), (-0.3, 0.6, 0.1)], radius: 0.4)]),
+                ])]))"#
+            ))
+            .unwrap()
+        };
+        let a = shape("rate: 2", "slope: -0.4", "rate: 0.8");
+        let b = shape(
+            "rate: -1, axis: (2, 0, 0)",
+            "slope: 0.5, axis: (0, 1, 1)",
+            "rate: -0.6, axis: (1, 0, 0), along: (0, 0, 1)",
+        );
+        let c = shape(
+            "rate: 1, axis: (0, 1, 0)",
+            "slope: 0.3, axis: (1, 1, 0)",
+            "rate: 0.5, axis: (0, 1, 0), along: (1, 0, 0)",
+        );
+        let g = GenericTree::new(&a, &b, &MorphSpec::default()).unwrap();
+        let Node::Warp { warp: Warp::Twist { rate, axis }, .. } = g.node_at(0.5) else { panic!() };
+        assert!((rate - 0.5).abs() < 1e-6, "{rate}");
+        assert!((axis - Vec3::new(1.0, 0.0, 1.0).normalize()).length() < 1e-5, "{axis}");
+        let m = BlobMorph::from_trees(&a, &b, &MorphSpec::default()).unwrap();
+        frames_are_held(&m, &[0.0, 0.1, 0.37, 0.5, 0.81, 1.0]).unwrap();
+        let keys = [c, b].map(|shape| KeyShape { shape, spec: MorphSpec::default() });
+        let bezier = BlobMorph::bezier(&a, &keys).unwrap();
+        frames_are_held(&bezier, &[0.0, 0.3, 0.71, 1.0]).unwrap();
+        for t in [0.2, 0.5, 0.77] {
+            let frame = g.at(t).unwrap();
+            let ron = BlobTree::from_ron(&frame.to_ron().unwrap()).unwrap();
+            let json = BlobTree::from_json(&frame.to_json().unwrap()).unwrap();
+            for p in testutil::points() {
+                let v = frame.value(p);
+                assert!(
+                    (ron.value(p) - v).abs() <= 1e-6 && (json.value(p) - v).abs() <= 1e-6,
+                    "t = {t} at {p}"
+                );
+            }
+        }
     }
 
     /// `outer` holds `inner` (an empty box is held by any).
@@ -2592,7 +2645,7 @@ mod tests {
         .unwrap();
         let g = GenericTree::new(&a, &b, &MorphSpec::default()).unwrap();
         let n = g.node_at(0.5);
-        let Node::Warp { warp: Warp::Twist { rate }, child } = &n else { panic!("{n:?}") };
+        let Node::Warp { warp: Warp::Twist { rate, .. }, child } = &n else { panic!("{n:?}") };
         assert!((rate - 1.0).abs() < 1e-6);
         assert!(
             matches!(**child, Node::Warp { warp: Warp::Bend { rate, .. }, .. } if (rate - 0.4).abs() < 1e-6)
@@ -2610,7 +2663,7 @@ mod tests {
         let g = GenericTree::new(&a, &b, &spec).unwrap();
         let rates = |t: f32| {
             let n = g.node_at(t);
-            let Node::Warp { warp: Warp::Twist { rate: twist }, child } = &n else { panic!("{n:?}") };
+            let Node::Warp { warp: Warp::Twist { rate: twist, .. }, child } = &n else { panic!("{n:?}") };
             let Node::Warp { warp: Warp::Bend { rate: bend, .. }, .. } = **child else { panic!("{child:?}") };
             (*twist, bend)
         };
@@ -2620,7 +2673,7 @@ mod tests {
         }
         let both = MorphSpec::from_ron("(speeds: [(a: [], b: [], speed: (end: 0.5))])").unwrap();
         let n = GenericTree::new(&a, &b, &both).unwrap().node_at(0.25);
-        let Node::Warp { warp: Warp::Twist { rate }, child } = &n else { panic!("{n:?}") };
+        let Node::Warp { warp: Warp::Twist { rate, .. }, child } = &n else { panic!("{n:?}") };
         assert!((rate - 1.0).abs() < 1e-6);
         assert!(
             matches!(**child, Node::Warp { warp: Warp::Bend { rate, .. }, .. } if (rate - 0.4).abs() < 1e-6)

@@ -36,7 +36,10 @@
 //! `bear.ron`, `bird.ron`, `sphere.ron`, `torus.ron`, the rook → queen
 //! links `rook_queen.links.ron`, the cube → pierced sphere phantom of
 //! Fig. 17 `cube_sphere.links.ron`, and `bear_bird.every_feature.links.ron`,
-//! which uses every control); a test keeps them equal to the built-ins.
+//! which uses every control), and a hand-written pair: `bent_rods.ron`
+//! (a bend about its own axes) with `propeller_bent_rods.links.ron` (the
+//! speeds of the two halves of a twist ↔ bend pair, `warp: source |
+//! target`); a test keeps them equal to the built-ins and checks the examples.
 //! `isomorph blob --dump NAME [--format ron|json]` prints any built-in
 //! scene or built-in morph's links spec.
 //!
@@ -57,9 +60,9 @@
 //! | `union`, `intersection` | `children` (≥ 1): their maximum, minimum |
 //! | `superblend` | `n` (≥ 1): `(Σ f_i^n)^(1/n)` (`n = 1` blend, large `n` → union); `children` (≥ 1) |
 //! | `difference` | `children` (2: left minus right); `level` (the scene's threshold): the reference level `c` (see [`Node::Difference`]) |
-//! | `twist` | `rate`: radians per unit of local z, about the z axis; `children` (1) |
-//! | `taper` | `slope`: scale change per unit of z (the scale is clamped at 0.05); `children` (1) |
-//! | `bend` | `rate`: curvature (1 / units) in the y–z plane; `centre` (0), `min`, `max`: the bent range of y; `children` (1) |
+//! | `twist` | `rate`: radians per unit length along the axis (a point at height `h = p·axis` turns by `rate·h` about the axis, counter-clockwise seen from its tip); `axis` (`(0, 0, 1)`): the twist axis through the local origin, a direction (any length ≥ 1e-6, normalized; not written when z); `children` (1) |
+//! | `taper` | `slope`: scale change per unit length along `axis` (the components across the axis scale by `max(1 + slope·h, 0.05)`); `axis` (`(0, 0, 1)`), as for `twist`; `children` (1) |
+//! | `bend` | `rate`: curvature (1 / units), positive towards `axis`, negative away; `centre` (0), `min`, `max`: the undeformed line and the bent band, coordinates along `along`; `axis` (`(0, 0, 1)`): the direction the bend curves towards; `along` (`(0, 1, 0)`): the band's direction (only its part across `axis` counts; it must not be within 1e-3 (sine) of parallel to it). The bend is in the plane of `along` and `axis` (default y–z), about lines parallel to `along × axis` (x); the bend angle `rate·(max − min)` is at most π in magnitude; `children` (1) |
 //! | `affine` | `frame`: the map applied to the child (`()` or `{}`: identity); `children` (1) |
 //! | `mix` | a generic tree's time-varying node at one instant (§4.4), as saved in-betweens contain: `from`, `to`: operators (`"blend"`, `"union"`, `"intersection"`, or a number `n ≥ 1`, a super-elliptic blend's order); `s` in `[0, 1]`: the field is `(1 − s)·from(children) + s·to(children)`; `children` (≥ 1) |
 //!
@@ -102,7 +105,7 @@
 //!         (kind: "segment", vertices: [(0.5, 0, 0), (1, 0, 0)], radius: 0.8, p: "inf"),
 //!     ]),
 //!     (kind: "difference", level: 0.5, children: [                  // root/1
-//!         (kind: "twist", rate: 0.5, children: [
+//!         (kind: "twist", rate: 0.5, axis: (0, 1, 0), children: [      // about local y
 //!             (kind: "box", half: (0.2, 0.2, 0.5), radius: 0.4, intensity: 1.2, stiffness: 0.8,
 //!              frame: (translate: (0, 1, 0), rotate: (axis: (1, 0, 0), degrees: 30)))]),
 //!         (kind: "affine", frame: (scale: (1, 2, 1)), children: [
@@ -158,8 +161,9 @@
 //!   (`handles`), or keys positions (a C¹ cubic spline with Catmull–Rom
 //!   tangents through the keys) and orientations (slerp from key to key),
 //!   for leaves and affine nodes alike. Twists, tapers and bends act about
-//!   their local axes, so the affine node above one is its frame and
-//!   carries its trajectory (the paper's warps of internal nodes); a
+//!   their own axes in the node's local frame, so the affine node above
+//!   one places that frame and carries its trajectory (the paper's warps
+//!   of internal nodes); a
 //!   trajectory on a frameless node (an operator, a difference, a twist,
 //!   taper or bend) is refused ([`BlobMorphError::FramelessTrajectory`]). Keys are at the node's local time
 //!   `s`, after its speed curve.
@@ -188,9 +192,18 @@
 //!   generic trees end to end at evenly spaced times instead, so the morph
 //!   passes through every key shape (continuous, with a change of speed at
 //!   the keys).
-//! - **Warps**: Barr twist and taper about the local z axis, bend in the y–z
-//!   plane (put them under an affine node for other axes); the taper scale is
-//!   clamped at 0.05 to stay invertible.
+//! - **Warps**: Barr twist, taper and bend, each with its own axis (§4.4
+//!   names "an axis and a rotation angle for the twist"): a warp about
+//!   `axis` is the warp about z in a frame turned to it (`w = Q ∘ w_z ∘
+//!   Q⁻¹`, `Q` taking z to the axis; for the bend also y to `along`), so
+//!   its bounds are the z warp's bounds turned (the box of a turned box's
+//!   corners). Defaults (z; the bend in the y–z plane) are evaluated
+//!   without turning, exactly as before axes existed. Matched warps of one
+//!   kind interpolate the rate linearly and the axis along the great
+//!   circle at constant angular speed (a bend's frame by quaternion
+//!   slerp); warps of different kinds go through the identity (Fig. 16),
+//!   each keeping its axis. The taper scale is clamped at 0.05 to stay
+//!   invertible.
 //!
 //! # Guarantees
 //!
@@ -278,7 +291,7 @@ pub use node::{MAX_MAGNITUDE, MAX_SUPPORT, NaryOp, Node, Primitive};
 pub use scene::{MAX_DEPTH, MAX_FILE_BYTES};
 pub use skeleton::{MAX_VERTICES, Polytope, Skeleton, lp_norm};
 pub use tree::BlobTree;
-pub use warp::{TAPER_MIN_SCALE, Warp};
+pub use warp::{DEFAULT_ALONG, DEFAULT_AXIS, MIN_ALONG_SINE, MIN_AXIS_LENGTH, TAPER_MIN_SCALE, Warp};
 
 #[cfg(test)]
 mod testutil;

@@ -172,7 +172,7 @@ fn propeller_sphere() -> BlobTree {
 /// Two rounded rods blended and twisted about their common axis (a helix).
 pub fn propeller() -> BlobTree {
     let rod = |x: f32| seg(Vec3::new(x, 0.0, -0.7), Vec3::new(x, 0.0, 0.7), 0.36);
-    tree(Node::warp(Warp::Twist { rate: 2.2 }, Node::blend(vec![rod(-0.2), rod(0.2)])))
+    tree(Node::warp(Warp::twist(2.2), Node::blend(vec![rod(-0.2), rod(0.2)])))
 }
 
 /// A rook: base and body blended, under a top cut by two crossing slots.
@@ -189,10 +189,7 @@ pub fn rook() -> BlobTree {
 /// small spheres around its rim.
 pub fn queen() -> BlobTree {
     let base = disc(0.4, 8, -0.75, 0.3);
-    let body = Node::warp(
-        Warp::Taper { slope: -0.35 },
-        seg(Vec3::new(0.0, 0.0, -0.7), Vec3::new(0.0, 0.0, 0.5), 0.46),
-    );
+    let body = Node::warp(Warp::taper(-0.35), seg(Vec3::new(0.0, 0.0, -0.7), Vec3::new(0.0, 0.0, 0.5), 0.46));
     let crown = ball(Vec3::new(0.0, 0.0, 0.75), 0.9);
     let carvings = (0..8)
         .map(|i| {
@@ -474,6 +471,13 @@ mod tests {
     /// for the Bézier-like rook → queen → bear).
     const LEVELS: &str = "rook_queen_bear.levels.links.ron";
 
+    /// The shipped example scene with a bend about its own axes
+    /// (hand-written: the propeller's rods bent), and the links spec of
+    /// the propeller → bent rods morph, which gives each of the two
+    /// generic warps of a twist ↔ bend pair its own speed (`warp:`).
+    const BENT_RODS: &str = "bent_rods.ron";
+    const WARP_HALVES: &str = "propeller_bent_rods.links.ron";
+
     /// The folder of shipped example files (`blobtree/scenes/`).
     fn shipped() -> std::path::PathBuf {
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
@@ -498,10 +502,10 @@ mod tests {
     /// Every built-in scene and built-in links spec ships as a RON file in
     /// `blobtree/scenes/` that is exactly what `to_ron` writes for it and
     /// loads back into the same tree; the folder holds nothing else but the
-    /// hand-written example spec.
+    /// hand-written examples.
     #[test]
     fn shipped_files_equal_the_built_ins() {
-        let mut expected = vec![EVERY_FEATURE.to_string(), LEVELS.to_string()];
+        let mut expected = [EVERY_FEATURE, LEVELS, BENT_RODS, WARP_HALVES].map(String::from).to_vec();
         for name in NAMES {
             let tree = load(name).unwrap();
             let file = format!("{name}.ron");
@@ -527,7 +531,7 @@ mod tests {
             .collect();
         present.sort();
         expected.sort();
-        assert_eq!(present, expected, "blobtree/scenes/ holds exactly the built-ins and the example spec");
+        assert_eq!(present, expected, "blobtree/scenes/ holds exactly the built-ins and the examples");
     }
 
     /// The shipped example spec sets every field of [`MorphSpec`] and
@@ -548,6 +552,12 @@ mod tests {
             "{spec:?}"
         );
         assert!(speeds.iter().any(|c| c.speed.smooth) && speeds.iter().any(|c| !c.speed.points.is_empty()));
+        // Phantom skeleton scaling (on a segment, where it shows) and a
+        // node split by two links.
+        assert!(
+            phantoms.iter().any(|p| p.scale.is_some_and(|f| f != 1.0) && p.source == Some(NodePath(vec![8])))
+        );
+        assert!(links.iter().filter(|l| l.a.0 == [7]).count() == 2);
         assert!(trajectories.iter().any(|t| t.handles.is_some()));
         assert!(
             trajectories.iter().any(|t| t.keys.iter().any(|k| k.position.is_some() && k.rotate.is_some()))
@@ -563,6 +573,64 @@ mod tests {
         }
         for k in 0..=8 {
             assert_eq!(components(&m, k as f32 / 8.0, 40), 1, "t = {}", k as f32 / 8.0);
+        }
+    }
+
+    /// The shipped propeller → bent rods example (the speed curves of the
+    /// two halves of a twist ↔ bend pair, `warp: source | target`, Fig. 16;
+    /// a bend about its own axes): the morph reproduces both ends; over
+    /// the first half only the twist unwinds, over the second only the
+    /// bend (about x, in the x–z plane) sets in, the rods straight at
+    /// `t = ½`; every frame is one piece and saved frames reload to the
+    /// same field. The same spec without `warp:` drives both warps at once.
+    #[test]
+    fn the_warp_halves_spec_unwinds_then_bends() {
+        let spec = MorphSpec::load(&shipped().join(WARP_HALVES)).unwrap();
+        assert_eq!(spec.speeds.len(), 2);
+        assert!(spec.speeds.iter().all(|c| c.warp.is_some()));
+        let (a, b) = (propeller(), load(shipped().join(BENT_RODS).to_str().unwrap()).unwrap());
+        let Node::Warp { warp: Warp::Bend { axis, along, .. }, .. } = b.root() else {
+            panic!("{:?}", b.root())
+        };
+        assert_eq!((*axis, *along), (Vec3::X, Vec3::Z));
+        let g = crate::GenericTree::new(&a, &b, &spec).unwrap();
+        let rates = |t: f32| {
+            let n = g.node_at(t);
+            let Node::Warp { warp: Warp::Twist { rate: twist, .. }, child } = &n else { panic!("{n:?}") };
+            let Node::Warp { warp: Warp::Bend { rate: bend, axis, .. }, .. } = **child else {
+                panic!("{child:?}")
+            };
+            assert_eq!(axis, Vec3::X);
+            (*twist, bend)
+        };
+        let near = |(x, y): (f32, f32), (u, v): (f32, f32)| (x - u).abs() < 1e-5 && (y - v).abs() < 1e-5;
+        assert!(near(rates(0.25), (1.1, 0.0)), "{:?}", rates(0.25));
+        assert!(near(rates(0.5), (0.0, 0.0)), "{:?}", rates(0.5));
+        assert!(near(rates(0.75), (0.0, 0.45)), "{:?}", rates(0.75));
+        let both = MorphSpec::from_ron("(speeds: [(a: [], b: [], speed: (end: 0.5))])").unwrap();
+        let (twist, bend) = match crate::GenericTree::new(&a, &b, &both).unwrap().node_at(0.25) {
+            Node::Warp { warp: Warp::Twist { rate, .. }, child } => match *child {
+                Node::Warp { warp: Warp::Bend { rate: bend, .. }, .. } => (rate, bend),
+                other => panic!("{other:?}"),
+            },
+            other => panic!("{other:?}"),
+        };
+        assert!(near((twist, bend), (1.1, 0.45)), "{twist} {bend}");
+        let m = BlobMorph::from_trees(&a, &b, &spec).unwrap();
+        for i in 0..300 {
+            let p = Vec3::new((i as f32 * 0.37).sin(), (i as f32 * 0.61).cos(), (i as f32 * 0.23).sin());
+            assert!((m.frame(0.0).unwrap().field.value(p) - a.value(p)).abs() < 1e-5, "C(0) at {p}");
+            assert!((m.frame(1.0).unwrap().field.value(p) - b.value(p)).abs() < 1e-5, "C(1) at {p}");
+        }
+        for k in 0..=8 {
+            let t = k as f32 / 8.0;
+            assert_eq!(components(&m, t, 40), 1, "t = {t}");
+            let frame = g.at(t).unwrap();
+            let again = BlobTree::from_ron(&frame.to_ron().unwrap()).unwrap();
+            for i in 0..300 {
+                let p = Vec3::new((i as f32 * 0.37).sin(), (i as f32 * 0.61).cos(), (i as f32 * 0.23).sin());
+                assert!((again.value(p) - frame.value(p)).abs() <= 1e-6, "t = {t} at {p}");
+            }
         }
     }
 

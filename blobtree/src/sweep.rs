@@ -12,7 +12,7 @@
 //! support of every instance in the interval.
 
 use crate::node::Primitive;
-use crate::warp::Warp;
+use crate::warp::{Warp, slerp_axis, widened};
 use glam::{Affine3A, Mat3, Quat, Vec3};
 use isomorph_common::{Aabb, AffineParts, TransformError};
 use std::f32::consts::PI;
@@ -244,6 +244,30 @@ impl FrameRange {
         self
     }
 
+    /// The rotations within `spread` radians of `rotation` (`≥ π`: any
+    /// rotation), without translation or stretch.
+    pub fn rotations(rotation: Quat, spread: f32) -> FrameRange {
+        FrameRange {
+            translation: Aabb::new(Vec3::ZERO, Vec3::ZERO),
+            rotation,
+            spread,
+            stretch_lo: Mat3::IDENTITY,
+            stretch_hi: Mat3::IDENTITY,
+        }
+    }
+
+    /// For a range of rotations (`FrameRange::rotations`, or blends of
+    /// such ranges): the range of their inverses (`R⁻¹` is as far from
+    /// `R_c⁻¹` as `R` from `R_c`).
+    fn inverse_rotations(&self) -> FrameRange {
+        FrameRange::rotations(self.rotation.conjugate(), self.spread)
+    }
+
+    /// Whether the range is the identity alone.
+    fn is_identity(&self) -> bool {
+        *self == FrameRange::rotations(Quat::IDENTITY, 0.0)
+    }
+
     /// This range with translations in `translation`.
     pub fn with_translation(mut self, translation: Aabb) -> FrameRange {
         self.translation = translation;
@@ -342,13 +366,24 @@ impl PrimRange {
     }
 }
 
-/// The ranges of a warp's parameters.
+/// The ranges of a warp's parameters. `axes` is a range of rotations of
+/// the warps' own frames ([`Warp`]): every warp of the range is
+/// `R·w(Rᵀ·p)` for some `R` in it and `w` the warp about the default axes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum WarpRange {
     /// Twists (their image boxes do not depend on the rate).
-    Twist,
-    /// Tapers with slopes in the range.
-    Taper(Interval),
+    Twist {
+        /// Their frames (for twist and taper, which commute with turns
+        /// about their axis: the rotations taking z to their axes).
+        axes: FrameRange,
+    },
+    /// Tapers.
+    Taper {
+        /// Slope.
+        slope: Interval,
+        /// Their frames, as for twists.
+        axes: FrameRange,
+    },
     /// Bends.
     Bend {
         /// Curvature.
@@ -359,6 +394,8 @@ pub(crate) enum WarpRange {
         min: Interval,
         /// Upper end of the band.
         max: Interval,
+        /// Their frames (z to the axis, y to the band's direction).
+        axes: FrameRange,
     },
     /// Affine maps.
     Affine(FrameRange),
@@ -371,11 +408,12 @@ impl WarpRange {
     /// When an affine map is singular or a reflection.
     pub fn exact(w: &Warp) -> Result<Self, TransformError> {
         let p = Interval::point;
+        let axes = FrameRange::rotations(w.rotation().unwrap_or(Quat::IDENTITY), 0.0);
         Ok(match *w {
-            Warp::Twist { .. } => WarpRange::Twist,
-            Warp::Taper { slope } => WarpRange::Taper(p(slope)),
-            Warp::Bend { rate, centre, min, max } => {
-                WarpRange::Bend { rate: p(rate), centre: p(centre), min: p(min), max: p(max) }
+            Warp::Twist { .. } => WarpRange::Twist { axes },
+            Warp::Taper { slope, .. } => WarpRange::Taper { slope: p(slope), axes },
+            Warp::Bend { rate, centre, min, max, .. } => {
+                WarpRange::Bend { rate: p(rate), centre: p(centre), min: p(min), max: p(max), axes }
             }
             Warp::Affine(m) => WarpRange::Affine(FrameRange::exact(&AffineParts::from_affine(&m)?)),
         })
@@ -384,8 +422,8 @@ impl WarpRange {
     /// The warp kind's name, as [`Warp::kind`].
     pub fn kind(&self) -> &'static str {
         match self {
-            WarpRange::Twist => "twist",
-            WarpRange::Taper(_) => "taper",
+            WarpRange::Twist { .. } => "twist",
+            WarpRange::Taper { .. } => "taper",
             WarpRange::Bend { .. } => "bend",
             WarpRange::Affine(_) => "affine",
         }
@@ -395,30 +433,51 @@ impl WarpRange {
     /// `None` for different kinds.
     pub fn lerp(a: &WarpRange, b: &WarpRange, s: Interval) -> Option<WarpRange> {
         Some(match (a, b) {
-            (WarpRange::Twist, WarpRange::Twist) => WarpRange::Twist,
-            (WarpRange::Taper(x), WarpRange::Taper(y)) => WarpRange::Taper(x.lerp(*y, s)),
+            (WarpRange::Twist { axes: x }, WarpRange::Twist { axes: y }) => {
+                WarpRange::Twist { axes: lerp_axes(x, y, s) }
+            }
+            (WarpRange::Taper { slope: x, axes: ax }, WarpRange::Taper { slope: y, axes: ay }) => {
+                WarpRange::Taper { slope: x.lerp(*y, s), axes: lerp_axes(ax, ay, s) }
+            }
             (
-                WarpRange::Bend { rate: r0, centre: c0, min: m0, max: x0 },
-                WarpRange::Bend { rate: r1, centre: c1, min: m1, max: x1 },
+                WarpRange::Bend { rate: r0, centre: c0, min: m0, max: x0, axes: a0 },
+                WarpRange::Bend { rate: r1, centre: c1, min: m1, max: x1, axes: a1 },
             ) => WarpRange::Bend {
                 rate: r0.lerp(*r1, s),
                 centre: c0.lerp(*c1, s),
                 min: m0.lerp(*m1, s),
                 max: x0.lerp(*x1, s),
+                axes: if a0 == a1 { *a0 } else { FrameRange::lerp(a0, a1, s) },
             },
             (WarpRange::Affine(x), WarpRange::Affine(y)) => WarpRange::Affine(FrameRange::lerp(x, y, s)),
             _ => return None,
         })
     }
 
-    /// A box holding the image of `child` under every warp of the range.
+    /// A box holding the image of `child` under every warp of the range:
+    /// for rotated frames, the child's box taken into the frames (every
+    /// inverse rotation of the range), bounded there, and taken back.
     pub fn image(&self, child: &Aabb) -> Aabb {
         if child.is_empty() {
             return *child;
         }
+        let axes = match self {
+            WarpRange::Twist { axes } | WarpRange::Taper { axes, .. } | WarpRange::Bend { axes, .. } => axes,
+            WarpRange::Affine(frame) => return frame.apply(child),
+        };
+        if axes.is_identity() {
+            return self.image_local(child);
+        }
+        let local = widened(&axes.inverse_rotations().apply(child));
+        widened(&axes.apply(&self.image_local(&local)))
+    }
+
+    /// `WarpRange::image` of a non-empty box for the warps about the
+    /// default axes.
+    fn image_local(&self, child: &Aabb) -> Aabb {
         match self {
-            WarpRange::Twist => Warp::Twist { rate: 0.0 }.image_bounds(child),
-            WarpRange::Taper(slope) => {
+            WarpRange::Twist { .. } => Warp::twist(0.0).image_bounds_local(child),
+            WarpRange::Taper { slope, .. } => {
                 let z = Interval { lo: child.min.z, hi: child.max.z };
                 let one = Interval::point(1.0);
                 let r = one.add(slope.mul(z));
@@ -428,10 +487,45 @@ impl WarpRange {
                 let y = r.mul(Interval { lo: child.min.y, hi: child.max.y });
                 Aabb::new(Vec3::new(x.lo, y.lo, z.lo), Vec3::new(x.hi, y.hi, z.hi))
             }
-            WarpRange::Bend { rate, centre, min, max } => bend_image(*rate, *centre, *min, *max, child),
+            WarpRange::Bend { rate, centre, min, max, .. } => bend_image(*rate, *centre, *min, *max, child),
             WarpRange::Affine(frame) => frame.apply(child),
         }
     }
+}
+
+/// The frames of twists or tapers whose axes are `slerp_axis(u, v, s')`
+/// ([`Warp::lerp`]) for axes `u` of `a`, `v` of `b` and `s'` in `s`, as a
+/// cone of axes turned into rotations (an axis within `φ` of the cone's
+/// axis `c` is reached by a rotation within `φ` of the shortest one taking
+/// z to `c`). Exact ends: the great-circle arc from `u` to `v` over `s` lies
+/// within `θ·|s|/2` of its middle. Otherwise every point of a shortest arc
+/// between the two cones lies in the smallest cone holding both (convex
+/// while its radius is below π/2; any axis beyond). Nearly opposite
+/// exact ends (where the arc's plane is a matter of rounding) give any axis.
+fn lerp_axes(a: &FrameRange, b: &FrameRange, s: Interval) -> FrameRange {
+    if a == b {
+        return *a;
+    }
+    let any = FrameRange::rotations(Quat::IDENTITY, PI);
+    let (na, nb) = (a.rotation * Vec3::Z, b.rotation * Vec3::Z);
+    let theta = na.angle_between(nb);
+    let (centre, radius) = if a.spread == 0.0 && b.spread == 0.0 {
+        if theta > PI - 1e-2 {
+            return any;
+        }
+        (slerp_axis(na, nb, s.mid()), 0.5 * theta * s.width())
+    } else if theta + b.spread <= a.spread {
+        (na, a.spread)
+    } else if theta + a.spread <= b.spread {
+        (nb, b.spread)
+    } else {
+        let r = 0.5 * (theta + a.spread + b.spread);
+        if r >= 0.5 * PI {
+            return any;
+        }
+        (slerp_axis(na, nb, (r - a.spread) / theta), r)
+    };
+    FrameRange::rotations(Quat::from_rotation_arc(Vec3::Z, centre.normalize()), radius + ROTATION_SLACK)
 }
 
 /// `sin x / x`.
@@ -636,12 +730,12 @@ mod tests {
             let image = bend_image(k, y0, lo, hi, &child).expanded(1e-5);
             for n in 0..6 {
                 let u = n as f32 / 5.0;
-                let w = Warp::Bend {
-                    rate: k.lo + (k.hi - k.lo) * u,
-                    centre: y0.lo + (y0.hi - y0.lo) * (1.0 - u),
-                    min: lo.lo + (lo.hi - lo.lo) * u,
-                    max: hi.lo + (hi.hi - hi.lo) * (1.0 - u),
-                };
+                let w = Warp::bend(
+                    k.lo + (k.hi - k.lo) * u,
+                    y0.lo + (y0.hi - y0.lo) * (1.0 - u),
+                    lo.lo + (lo.hi - lo.lo) * u,
+                    hi.lo + (hi.hi - hi.lo) * (1.0 - u),
+                );
                 for i in 0..=8 {
                     for j in 0..=8 {
                         for l in 0..=8 {
@@ -653,6 +747,74 @@ mod tests {
                                 w.forward(p)
                             );
                         }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Ranges of twists, tapers and bends about interpolated axes hold the
+    /// warped child box's samples for every warp they stand for: blends of
+    /// two exact warps over sub-intervals of `s`, and blends of two such
+    /// blends (ranges with spreads, as de Casteljau levels make), for
+    /// axes a quarter turn, nearly opposite and exactly opposite apart.
+    #[test]
+    fn axis_ranges_hold_every_blended_warp() {
+        let child = Aabb::new(Vec3::new(-0.5, -0.7, -0.4), Vec3::new(0.6, 0.8, 0.5));
+        let corners = |w: &Warp| {
+            let mut v = Vec::new();
+            for i in 0..=4 {
+                for j in 0..=4 {
+                    for k in 0..=4 {
+                        let f = Vec3::new(i as f32, j as f32, k as f32) / 4.0;
+                        v.push(w.forward(child.min + (child.max - child.min) * f));
+                    }
+                }
+            }
+            v
+        };
+        let bend = |rate: f32, axis: Vec3, along: Vec3| Warp::Bend {
+            rate,
+            centre: 0.1,
+            min: -0.8,
+            max: 0.8,
+            axis,
+            along,
+        };
+        let triples = [
+            (
+                Warp::Twist { rate: 1.5, axis: Vec3::Z },
+                Warp::Twist { rate: -1.0, axis: Vec3::X },
+                Warp::Twist { rate: 0.5, axis: Vec3::new(0.0, 1.0, 0.2) },
+            ),
+            (
+                Warp::Taper { slope: 0.4, axis: Vec3::new(0.0, 0.1, -1.0) },
+                Warp::Taper { slope: -0.5, axis: Vec3::new(0.0, 0.0, 1.0) },
+                Warp::Taper { slope: 0.2, axis: -Vec3::Z },
+            ),
+            (
+                bend(0.8, Vec3::Z, Vec3::Y),
+                bend(-0.5, Vec3::X, Vec3::Z),
+                bend(0.3, Vec3::Y, Vec3::new(1.0, 0.0, 1.0)),
+            ),
+        ];
+        for (wa, wb, wc) in triples {
+            let exact = |w: &Warp| WarpRange::exact(w).unwrap();
+            for k in 0..4 {
+                let s = Interval { lo: k as f32 / 4.0, hi: (k + 1) as f32 / 4.0 };
+                let ab = WarpRange::lerp(&exact(&wa), &exact(&wb), s).unwrap();
+                let bc = WarpRange::lerp(&exact(&wb), &exact(&wc), s).unwrap();
+                let abc = WarpRange::lerp(&ab, &bc, s).unwrap();
+                let (b1, b2) = (ab.image(&child).expanded(1e-5), abc.image(&child).expanded(1e-5));
+                for i in 0..=6 {
+                    let t = s.lo + s.width() * i as f32 / 6.0;
+                    let w1 = wa.lerp(&wb, t).unwrap();
+                    let w2 = w1.lerp(&wb.lerp(&wc, t).unwrap(), t).unwrap();
+                    for p in corners(&w1) {
+                        assert!(b1.contains(p), "{w1:?}: {p} outside {b1:?}");
+                    }
+                    for p in corners(&w2) {
+                        assert!(b2.contains(p), "{w2:?}: {p} outside {b2:?}");
                     }
                 }
             }

@@ -41,11 +41,35 @@ pub fn primitive() -> impl Strategy<Value = Primitive> {
         })
 }
 
+/// A warp axis: the default z half of the time, else a random direction
+/// (not normalized: scene axes need not be).
+fn axis() -> impl Strategy<Value = Vec3> {
+    prop_oneof![Just(Vec3::Z), v3().prop_filter("a direction", |v| v.length() > 0.05),]
+}
+
+/// A bend's `(axis, along)`: the defaults half of the time, else random
+/// directions at least 0.3 rad from parallel.
+fn bend_axes() -> impl Strategy<Value = (Vec3, Vec3)> {
+    prop_oneof![
+        Just((Vec3::Z, Vec3::Y)),
+        (v3(), v3()).prop_filter("two directions across each other", |(a, b)| {
+            a.length() > 0.05 && b.length() > 0.05 && a.normalize().cross(b.normalize()).length() > 0.3
+        }),
+    ]
+}
+
 fn warp() -> impl Strategy<Value = Warp> {
     prop_oneof![
-        (-2.0f32..2.0).prop_map(|rate| Warp::Twist { rate }),
-        (-0.5f32..0.5).prop_map(|slope| Warp::Taper { slope }),
-        (0.1f32..0.8).prop_map(|rate| Warp::Bend { rate, centre: 0.0, min: -0.8, max: 0.8 }),
+        (-2.0f32..2.0, axis()).prop_map(|(rate, axis)| Warp::Twist { rate, axis }),
+        (-0.5f32..0.5, axis()).prop_map(|(slope, axis)| Warp::Taper { slope, axis }),
+        (0.1f32..0.8, bend_axes()).prop_map(|(rate, (axis, along))| Warp::Bend {
+            rate,
+            centre: 0.0,
+            min: -0.8,
+            max: 0.8,
+            axis,
+            along
+        }),
         (v3(), -1.0f32..1.0, 0.6f32..1.4).prop_map(|(t, a, s)| Warp::Affine(
             Affine3A::from_scale_rotation_translation(Vec3::splat(s), Quat::from_rotation_x(a), t)
         )),

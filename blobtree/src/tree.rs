@@ -29,7 +29,8 @@ enum Op {
     Nary(NaryOp),
     Mix(NaryOp, NaryOp, f32),
     Difference(f32),
-    Warp(Warp),
+    /// A warp and the turn of its own frame (`Warp::turn`), computed once.
+    Warp(Warp, Option<Mat3>),
 }
 
 #[derive(Debug, Clone)]
@@ -174,7 +175,7 @@ impl BlobTree {
                 }
                 [lo, l1.max(0.0)]
             }
-            Op::Warp(w) => {
+            Op::Warp(w, _) => {
                 let pre = region.and_then(|r| w.preimage_bounds(r));
                 self.potential_range(&node.children[0], pre.as_ref())
             }
@@ -217,13 +218,13 @@ impl BlobTree {
                 let (fr, gr) = self.eval::<G>(&node.children[1], p);
                 difference::<G>(fl, gl, fr, gr, *c)
             }
-            Op::Warp(w) => {
+            Op::Warp(w, turn) => {
                 if G {
-                    let (q, jt) = w.inverse_with_jacobian_t(p);
+                    let (q, jt) = w.turned_inverse_with_jacobian_t(*turn, p);
                     let (v, g) = self.eval::<G>(&node.children[0], q);
                     (v, jt * g)
                 } else {
-                    self.eval::<G>(&node.children[0], w.inverse(p))
+                    self.eval::<G>(&node.children[0], w.turned_inverse(*turn, p))
                 }
             }
         }
@@ -343,7 +344,11 @@ fn compile(node: &Node, path: &NodePath) -> Result<Compiled, BlobError> {
         }
         Node::Warp { warp, child } => {
             let c = compile(child, &path.child(0))?;
-            Compiled { bounds: warp.image_bounds(&c.bounds), op: Op::Warp(*warp), children: vec![c] }
+            Compiled {
+                bounds: warp.image_bounds(&c.bounds),
+                op: Op::Warp(*warp, warp.turn()),
+                children: vec![c],
+            }
         }
     };
     let b = compiled.bounds;
@@ -479,7 +484,7 @@ mod tests {
         // A phantom right child is neutral.
         assert_eq!(eval(Node::difference(a.clone(), b.phantom(), 0.5)), fa);
         // Twist about z of a point on the axis changes nothing there.
-        let w = Node::warp(Warp::Twist { rate: 2.0 }, a.clone());
+        let w = Node::warp(Warp::twist(2.0), a.clone());
         assert_eq!(eval(w), fa);
         // Consecutive affine maps are concatenated into one node.
         let m1 = Affine3A::from_translation(Vec3::X);

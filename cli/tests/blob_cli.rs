@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{assert_ok, morph, scratch, stderr};
+use common::{assert_ok, isomorph, morph, scratch, stderr};
 use std::path::{Path, PathBuf};
 
 /// The error output of `isomorph morph --method METHOD` from `source` to
@@ -118,8 +118,7 @@ fn via_links_give_each_pair_its_spec() {
 /// (the shipped rook file into the queen, automatic correspondence).
 #[test]
 fn scenes_save_each_frame_as_a_blobtree() {
-    use isomorph_blobtree::{BlobMorph, BlobTree, scenes};
-    use isomorph_common::{Field3, Morph};
+    use isomorph_blobtree::{BlobMorph, scenes};
     let (out, rook_file) = setup("blob_scenes", "rook.ron");
     let frames = out.join("frames");
     let args =
@@ -127,21 +126,86 @@ fn scenes_save_each_frame_as_a_blobtree() {
     assert_ok(&morph("blobtree", rook_file.to_str().unwrap(), "queen", &args));
     let (rook, queen) = (scenes::rook(), scenes::queen());
     let expected = BlobMorph::from_trees(&rook, &queen, &Default::default()).unwrap();
-    let support = expected.frame(0.5).unwrap().field.support();
-    for (i, t) in [0.0f32, 0.5, 1.0].into_iter().enumerate() {
-        let text = std::fs::read_to_string(frames.join(format!("frame_{i:03}.ron"))).unwrap();
-        let saved = BlobTree::from_ron(&text).unwrap();
-        let field = expected.frame(t).unwrap().field;
-        // An 8³ lattice over the support box of the middle frame.
-        for k in 0..512u16 {
-            let cell =
-                isomorph_common::glam::UVec3::new(u32::from(k % 8), u32::from(k / 8 % 8), u32::from(k / 64));
-            let p = support.min + (support.max - support.min) * cell.as_vec3() / 7.0;
-            assert!((saved.value(p) - field.value(p)).abs() <= 1e-6, "t = {t} at {p}");
-        }
-    }
+    frames_reload(&frames, &expected, 3);
     // The scenes are the BlobTree method's: other methods refuse the option.
     let err = refused("level-set", "sphere", "torus", &["--scenes", "--out", frames.to_str().unwrap()]);
     assert!(err.contains("--scenes"), "{err}");
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// Checks that the `count` scene files `--scenes` wrote in `frames` (at
+/// evenly spaced `t`) load back into `expected`'s field at their `t`, to
+/// 1e-6 on an 8³ lattice over the support box of the middle frame; returns
+/// their texts.
+fn frames_reload(frames: &Path, expected: &isomorph_blobtree::BlobMorph, count: usize) -> Vec<String> {
+    use isomorph_blobtree::BlobTree;
+    use isomorph_common::{Field3, Morph};
+    let support = expected.frame(0.5).unwrap().field.support();
+    (0..count)
+        .map(|i| {
+            let t = i as f32 / (count - 1) as f32;
+            let text = std::fs::read_to_string(frames.join(format!("frame_{i:03}.ron"))).unwrap();
+            let saved = BlobTree::from_ron(&text).unwrap();
+            let field = expected.frame(t).unwrap().field;
+            for k in 0..512u16 {
+                let cell = isomorph_common::glam::UVec3::new(
+                    u32::from(k % 8),
+                    u32::from(k / 8 % 8),
+                    u32::from(k / 64),
+                );
+                let p = support.min + (support.max - support.min) * cell.as_vec3() / 7.0;
+                assert!((saved.value(p) - field.value(p)).abs() <= 1e-6, "t = {t} at {p}");
+            }
+            text
+        })
+        .collect()
+}
+
+/// The shipped propeller → bent rods example from the command line: the
+/// bend about its own axes (`bent_rods.ron`) and the speeds of the two
+/// halves of the twist ↔ bend pair (`propeller_bent_rods.links.ron`).
+/// Saved frames keep the bend's axes (written only where they are not the
+/// defaults) and load back into the morph's field; `--dump` writes the
+/// scene with its axes.
+#[test]
+fn warp_axes_and_warp_halves_from_the_command_line() {
+    use isomorph_blobtree::{BlobMorph, MorphSpec, scenes};
+    let (out, bent) = setup("blob_warp_axes", "bent_rods.ron");
+    let spec_file = bent.with_file_name("propeller_bent_rods.links.ron");
+    let frames = out.join("frames");
+    let args = [
+        "--links",
+        spec_file.to_str().unwrap(),
+        "--res",
+        "16",
+        "--frames",
+        "5",
+        "--no-preview",
+        "--scenes",
+        "--out",
+        frames.to_str().unwrap(),
+    ];
+    assert_ok(&morph("blobtree", "propeller", bent.to_str().unwrap(), &args));
+    let spec = MorphSpec::load(&spec_file).unwrap();
+    let target = scenes::load(bent.to_str().unwrap()).unwrap();
+    let expected = BlobMorph::from_trees(&scenes::propeller(), &target, &spec).unwrap();
+    let texts = frames_reload(&frames, &expected, 5);
+    // t = 0.25: the twist half undone, the bend (about x) not started; t = 0.75: the twist gone.
+    for text in &texts[1..] {
+        assert!(text.contains("axis: (1.0, 0.0, 0.0)") && text.contains("along: (0.0, 0.0, 1.0)"), "{text}");
+        assert_eq!(text.matches("axis").count(), 1, "the twist's default axis is not written: {text}");
+    }
+    assert!(texts[1].contains("rate: 1.1"), "{}", texts[1]);
+    // `--dump` writes the example with its axes, as RON and JSON, back to the same tree.
+    for (format, read) in [
+        ("ron", isomorph_blobtree::BlobTree::from_ron as fn(&str) -> _),
+        ("json", isomorph_blobtree::BlobTree::from_json),
+    ] {
+        let o = isomorph(&["blob", "--dump", bent.to_str().unwrap(), "--format", format]);
+        assert_ok(&o);
+        let text = String::from_utf8(o.stdout).unwrap();
+        assert!(text.contains("along"), "{text}");
+        assert_eq!(read(&text).unwrap(), target, "{format}");
+    }
     let _ = std::fs::remove_dir_all(&out);
 }
