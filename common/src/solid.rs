@@ -311,6 +311,34 @@ impl Solid {
         }
     }
 
+    /// The point of the surface nearest to `p`, where the solid knows its
+    /// exact distance ([`Solid::exact_distance`]): the closest point of a
+    /// mesh; for an analytic shape, Newton steps along the distance's
+    /// gradient (exact for points near the surface, e.g. the vertices of a
+    /// polygonization, to within rounding). `None` for the other kinds and
+    /// for a non-finite `p`.
+    pub fn nearest_surface_point(&self, p: Vec3) -> Option<Vec3> {
+        if !p.is_finite() {
+            return None;
+        }
+        match &*self.0 {
+            Repr::Mesh { sdf, .. } => sdf.closest(p).map(|c| c.point),
+            Repr::Shape(shape) if shape.is_exact_distance() => {
+                let mut q = p;
+                for _ in 0..NEWTON_STEPS {
+                    let (f, g) = (shape.distance(q), shape.gradient(q));
+                    let g2 = g.length_squared();
+                    if f == 0.0 || !(g2 > 0.0) {
+                        break;
+                    }
+                    q -= g * (f / g2);
+                }
+                q.is_finite().then_some(q)
+            }
+            _ => None,
+        }
+    }
+
     /// The exact signed distance (positive inside, world units) as a field
     /// evaluated point by point, for the solids that know it without a
     /// volume (as [`Solid::exact_distance`]): it changes by at most the
@@ -444,11 +472,38 @@ pub fn validate_inputs(source: &Solid, target: &Solid, control: &Control) -> Res
     Ok(warnings)
 }
 
+/// Newton steps of [`Solid::nearest_surface_point`] on analytic shapes:
+/// from a point `ε` off a surface of curvature `κ`, a step leaves an error
+/// of order `κ ε²`, so two reach rounding from a polygonization's vertices.
+const NEWTON_STEPS: usize = 2;
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::mesh::primitives::uv_sphere;
     use crate::models;
+
+    #[test]
+    fn nearest_surface_points_lie_on_the_surface() {
+        let control = Control::new();
+        let torus = Solid::shape(Shape::torus(0.3, 0.12).translated(Vec3::new(0.1, -0.05, 0.2)));
+        let mesh = torus.surface(48, &control).unwrap().into_owned();
+        let mut worst_before = 0.0f32;
+        for &p in &mesh.positions {
+            let q = torus.nearest_surface_point(p).unwrap();
+            worst_before = worst_before.max(torus.exact_distance(p).unwrap());
+            assert!(torus.exact_distance(q).unwrap() < 2e-6, "{p} -> {q}");
+            // The nearest point: no farther than the polygonization's error.
+            assert!(p.distance(q) <= torus.exact_distance(p).unwrap() + 2e-6, "{p} -> {q}");
+        }
+        assert!(worst_before > 1e-4, "the vertices start off the surface ({worst_before})");
+        let sphere = Solid::mesh(uv_sphere(Vec3::ZERO, 0.3, 12, 24)).unwrap();
+        let q = sphere.nearest_surface_point(Vec3::new(0.0, 0.0, 0.5)).unwrap();
+        assert!((q.z - 0.3).abs() < 1e-6 && q.x.abs() < 1e-6, "{q}");
+        let csg = Solid::shape(models::c_shape());
+        assert_eq!(csg.nearest_surface_point(Vec3::ZERO), None);
+        assert_eq!(torus.nearest_surface_point(Vec3::NAN), None);
+    }
 
     #[test]
     fn exact_distances_are_unsigned_and_only_where_known() {

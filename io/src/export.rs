@@ -27,7 +27,9 @@
 //! and samples of the reference mesh (the input's surface) measured against
 //! the frame; with [`ExportSettings::source_solid`] (`target_solid`) the
 //! first side uses the input's exact distance where it has one (meshes,
-//! analytic shapes) rather than the distance to the reference mesh. `step_from_previous` is the
+//! analytic shapes) rather than the distance to the reference mesh, and the
+//! samples of a polygonized analytic shape are moved onto its true surface
+//! ([`Solid::nearest_surface_point`]). `step_from_previous` is the
 //! Hausdorff distance from the frame before (how far the surface jumped);
 //! `largest_step` the largest of them. `morph` is the method's
 //! [`MorphReport`].
@@ -481,7 +483,11 @@ fn export_on_pool<M: Morph + ?Sized>(
         let samples = settings.distance_samples;
         let d = match solid.as_ref().filter(|s| s.has_exact_distance()) {
             Some(solid) => {
-                let points = surface_samples(reference, samples)?;
+                let mut points = surface_samples(reference, samples)?;
+                if solid.as_mesh().is_none() {
+                    // A polygonized shape: its points moved onto the true surface.
+                    points.par_iter_mut().for_each(|p| *p = solid.nearest_surface_point(*p).unwrap_or(*p));
+                }
                 frame.distance_to_reference(samples, &points, |p| solid.exact_distance(p).unwrap_or(f32::NAN))
             }
             None => frame.distance_to(&IndexedSurface::new(reference, &distance_box).ok()?, samples),
@@ -609,9 +615,10 @@ fn extra_pieces_warning(
 }
 
 /// The inputs' surfaces to measure the end frames against
-/// ([`ExportSettings::source_reference`], `target_reference`): polygonized
-/// at twice the frames' `resolution` (at most 256; a mesh input is itself),
-/// both at once.
+/// ([`ExportSettings::source_reference`], `target_reference`), both at
+/// once: a mesh input is itself; an analytic shape with an exact distance is
+/// polygonized at the frames' `resolution` (the endpoint distances move its
+/// points onto the true surface); the others at twice that (at most 256).
 ///
 /// # Errors
 /// The solids' surface errors, [`MorphError::Cancelled`].
@@ -621,8 +628,14 @@ pub fn reference_surfaces(
     resolution: u32,
     control: &Control,
 ) -> Result<(TriMesh, TriMesh), MorphError> {
-    let res = resolution.saturating_mul(2).min(256);
-    let surface = |solid: &Solid| solid.surface(res, control).map(std::borrow::Cow::into_owned);
+    let surface = |solid: &Solid| {
+        // An exact shape's reference points are moved onto its surface
+        // (`Solid::nearest_surface_point`), so its polygonization only
+        // needs to be as fine as the frames'; the others' are twice as fine.
+        let exact = solid.as_mesh().is_none() && solid.has_exact_distance();
+        let res = if exact { resolution } else { resolution.saturating_mul(2).min(256) };
+        solid.surface(res, control).map(std::borrow::Cow::into_owned)
+    };
     let (a, b) = rayon::join(|| surface(source), || surface(target));
     Ok((a?, b?))
 }
