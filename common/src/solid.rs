@@ -328,7 +328,7 @@ impl Solid {
                 for _ in 0..NEWTON_STEPS {
                     let (f, g) = (shape.distance(q), shape.gradient(q));
                     let g2 = g.length_squared();
-                    if f == 0.0 || !(g2 > 0.0) {
+                    if f == 0.0 || g2.is_nan() || g2 <= f32::MIN_POSITIVE {
                         break;
                     }
                     q -= g * (f / g2);
