@@ -566,13 +566,18 @@ mod tests {
         assert!(text.contains("heuristic:"));
         let (a, b) = (bear(), bird());
         let m = BlobMorph::from_trees(&a, &b, &spec).unwrap();
+        assert_reproduces_ends(&m, &a, &b);
+        for k in 0..=8 {
+            assert_eq!(components(&m, k as f32 / 8.0, 40), 1, "t = {}", k as f32 / 8.0);
+        }
+    }
+
+    /// `C(0)` is `a` and `C(1)` is `b` to 1e-5 at 300 points of the unit box.
+    fn assert_reproduces_ends(m: &BlobMorph, a: &BlobTree, b: &BlobTree) {
         for i in 0..300 {
             let p = Vec3::new((i as f32 * 0.37).sin(), (i as f32 * 0.61).cos(), (i as f32 * 0.23).sin());
             assert!((m.frame(0.0).unwrap().field.value(p) - a.value(p)).abs() < 1e-5, "C(0) at {p}");
             assert!((m.frame(1.0).unwrap().field.value(p) - b.value(p)).abs() < 1e-5, "C(1) at {p}");
-        }
-        for k in 0..=8 {
-            assert_eq!(components(&m, k as f32 / 8.0, 40), 1, "t = {}", k as f32 / 8.0);
         }
     }
 
@@ -617,11 +622,7 @@ mod tests {
         };
         assert!(near((twist, bend), (1.1, 0.45)), "{twist} {bend}");
         let m = BlobMorph::from_trees(&a, &b, &spec).unwrap();
-        for i in 0..300 {
-            let p = Vec3::new((i as f32 * 0.37).sin(), (i as f32 * 0.61).cos(), (i as f32 * 0.23).sin());
-            assert!((m.frame(0.0).unwrap().field.value(p) - a.value(p)).abs() < 1e-5, "C(0) at {p}");
-            assert!((m.frame(1.0).unwrap().field.value(p) - b.value(p)).abs() < 1e-5, "C(1) at {p}");
-        }
+        assert_reproduces_ends(&m, &a, &b);
         for k in 0..=8 {
             let t = k as f32 / 8.0;
             assert_eq!(components(&m, t, 40), 1, "t = {t}");
