@@ -785,29 +785,21 @@ fn eikonal_update(mut axes: [(f32, f32); 3]) -> f32 {
         }
     }
     let (a0, c0) = axes[0];
-    let one = a0 + 1.0 / c0;
-    // The roots with the two and the three nearest axes, both computed
-    // before either is chosen: independent square roots and divisions
-    // overlap in the processor instead of waiting on each other (an axis
-    // without a neighbour, `a = ∞`, makes an unused root NaN).
+    let mut v = a0 + 1.0 / c0;
     let (mut sum_w, mut sum_wa, mut sum_waa) = (c0 * c0, c0 * c0 * a0, c0 * c0 * a0 * a0);
-    let mut roots = [0.0; 2];
-    for (root, &(a, c)) in roots.iter_mut().zip(&axes[1..]) {
+    for &(a, c) in &axes[1..] {
+        if v <= a {
+            break;
+        }
         let w = c * c;
         sum_w += w;
         sum_wa += w * a;
         sum_waa += w * a * a;
         // Root of sum_w v² − 2 sum_wa v + sum_waa − 1 = 0.
         let disc = sum_wa * sum_wa - sum_w * (sum_waa - 1.0);
-        *root = (sum_wa + disc.max(0.0).sqrt()) / sum_w;
+        v = (sum_wa + disc.max(0.0).sqrt()) / sum_w;
     }
-    if one <= axes[1].0 {
-        one
-    } else if roots[0] <= axes[2].0 {
-        roots[0]
-    } else {
-        roots[1]
-    }
+    v
 }
 
 /// The sorted union of two sorted lists, without duplicates.
