@@ -30,11 +30,13 @@ use crate::control::Control;
 use crate::fast_marching::{FastMarchingSettings, redistance};
 use crate::grid::lattice_for_box;
 use crate::marching_cubes::marching_cubes;
+use crate::mesh::bvh::Lattice;
 use crate::morph::{MorphError, Side};
 use crate::scan_conversion::scan_convert;
 use crate::sdf::MeshSdf;
 use crate::{Aabb, Field3, Grid3, Shape, TriMesh};
-use glam::Vec3;
+use glam::{Affine3A, Vec3};
+use rayon::prelude::*;
 use std::any::Any;
 use std::borrow::Cow;
 use std::fmt;
@@ -96,6 +98,28 @@ impl Field3 for DistanceField<'_> {
         match self {
             DistanceField::Exact(sdf) => sdf.bounds(),
             DistanceField::Volume(grid) => Some(grid.bounds()),
+        }
+    }
+}
+
+impl DistanceField<'_> {
+    /// The distance (world units, positive inside) at the image under `map`
+    /// of every node of `lattice` (x fastest): the values of
+    /// [`Field3::value`] there, for a mesh by [`MeshSdf::sample_mapped`]
+    /// (one batch query, signs found once per region).
+    pub fn sample_mapped(&self, lattice: &Lattice, map: &Affine3A) -> Vec<f32> {
+        match self {
+            DistanceField::Exact(sdf) => sdf.sample_mapped(lattice, map),
+            DistanceField::Volume(grid) => {
+                let (nx, ny) = (lattice.dims.x as usize, lattice.dims.y as usize);
+                (0..lattice.len())
+                    .into_par_iter()
+                    .map(|n| {
+                        let node = [n % nx, (n / nx) % ny, n / (nx * ny)].map(|c| c as u32);
+                        extrapolated(grid, map.transform_point3(lattice.position(node[0], node[1], node[2])))
+                    })
+                    .collect()
+            }
         }
     }
 }

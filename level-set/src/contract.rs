@@ -8,8 +8,9 @@ use crate::{
 use crate::{SolverKind, SparseFieldSolver, SparseInputs, SpeedGrid, SpeedSampler, evolve, evolve_sparse};
 use isomorph_common::alignment::{AlignMode, align};
 use isomorph_common::glam::{Affine3A, Vec3};
+use isomorph_common::mesh::bvh::Lattice;
 use isomorph_common::{
-    Aabb, AffinePath, Bricks, Control, Morph, MorphError, Solid, Stages, check, lattice_for_box,
+    Aabb, AffinePath, Bricks, Control, Grid3, Morph, MorphError, Solid, Stages, check, lattice_for_box,
     validate_inputs,
 };
 use std::fmt;
@@ -239,11 +240,11 @@ impl LevelSetMorph {
         let speed = if map == Affine3A::IDENTITY {
             SpeedGrid::from_grid(&target.distance_volume(&bounds, res, control)?, Response::Identity)?
         } else {
-            let (dims, ..) = lattice_for_box(&bounds, res)?;
+            let (dims, origin, spacing) = (embedding.dims(), embedding.origin(), embedding.spacing());
             let field = target.distance_field(dims.max_element(), control)?;
-            control.install(|| {
-                SpeedGrid::sample(&embedding, &field, |x| map.transform_point3(x), Response::Identity)
-            })?
+            let lattice = Lattice { dims, origin, step: Vec3::splat(spacing) };
+            let distances = control.install(|| field.sample_mapped(&lattice, &map));
+            SpeedGrid::from_grid(&Grid3::from_vec(dims, origin, spacing, distances)?, Response::Identity)?
         };
         stages.lap("distance volumes");
         let mut morph = evolve(&embedding, &speed, placement, &evolve_settings(settings, &bounds), control)?;
