@@ -450,12 +450,10 @@ impl MeshSdf {
     /// distance apart per axis, `|A eₐ|` times the step), so the winding
     /// number is evaluated once per region instead of at every node.
     pub fn sample_mapped(&self, lattice: &Lattice, map: &Affine3A) -> Vec<f32> {
-        let (nx, ny) = (lattice.dims.x as usize, lattice.dims.y as usize);
-        let world = |n: usize| {
-            let node = UVec3::new((n % nx) as u32, ((n / nx) % ny) as u32, (n / (nx * ny)) as u32);
-            map.transform_point3(lattice.position(node.x, node.y, node.z))
-        };
-        let points: Vec<Vec3> = (0..lattice.len()).into_par_iter().map(world).collect();
+        let points: Vec<Vec3> = (0..lattice.len())
+            .into_par_iter()
+            .map(|n| map.transform_point3(lattice.position_of(n)))
+            .collect();
         if let (Sign::Winding(wn), true, Some(_)) = (&self.sign, self.closed, points.first()) {
             // Points beyond the normalized frame's reach become NaN there (no hit).
             let local: Vec<Vec3> = points.par_iter().map(|&p| self.local(p).unwrap_or(Vec3::NAN)).collect();

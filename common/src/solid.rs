@@ -110,16 +110,10 @@ impl DistanceField<'_> {
     pub fn sample_mapped(&self, lattice: &Lattice, map: &Affine3A) -> Vec<f32> {
         match self {
             DistanceField::Exact(sdf) => sdf.sample_mapped(lattice, map),
-            DistanceField::Volume(grid) => {
-                let (nx, ny) = (lattice.dims.x as usize, lattice.dims.y as usize);
-                (0..lattice.len())
-                    .into_par_iter()
-                    .map(|n| {
-                        let node = [n % nx, (n / nx) % ny, n / (nx * ny)].map(|c| c as u32);
-                        extrapolated(grid, map.transform_point3(lattice.position(node[0], node[1], node[2])))
-                    })
-                    .collect()
-            }
+            DistanceField::Volume(grid) => (0..lattice.len())
+                .into_par_iter()
+                .map(|n| extrapolated(grid, map.transform_point3(lattice.position_of(n))))
+                .collect(),
         }
     }
 }

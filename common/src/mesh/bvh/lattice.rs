@@ -236,6 +236,13 @@ impl Lattice {
     pub fn position(&self, i: u32, j: u32, k: u32) -> Vec3 {
         self.origin + self.step * Vec3::new(i as f32, j as f32, k as f32)
     }
+
+    /// Position of node `n` in x-fastest order.
+    #[inline]
+    pub fn position_of(&self, n: usize) -> Vec3 {
+        let (nx, ny) = (self.dims.x as usize, self.dims.y as usize);
+        self.position((n % nx) as u32, ((n / nx) % ny) as u32, (n / (nx * ny)) as u32)
+    }
 }
 
 /// The nearest triangle of one lattice node.
