@@ -143,11 +143,15 @@ impl<T: Copy + PartialEq> Bricks<T> {
         c.x as usize + self.dims.x as usize * (c.y as usize + self.dims.y as usize * c.z as usize)
     }
 
+    /// The index of the brick at brick coordinates `b` (x fastest).
+    #[inline]
+    fn brick_index(&self, b: UVec3) -> usize {
+        b.x as usize + self.bricks.x as usize * (b.y as usize + self.bricks.y as usize * b.z as usize)
+    }
+
     /// The brick holding node `c` and the node's offset inside it.
     fn locate(&self, c: UVec3) -> (usize, usize) {
-        let b = c >> SHIFT;
-        let brick =
-            b.x as usize + self.bricks.x as usize * (b.y as usize + self.bricks.y as usize * b.z as usize);
+        let brick = self.brick_index(c >> SHIFT);
         let l = c & UVec3::splat(BRICK - 1);
         (brick, (l.x | (l.y << SHIFT) | (l.z << (2 * SHIFT))) as usize)
     }
@@ -256,6 +260,43 @@ impl<T: Copy + PartialEq> Bricks<T> {
             let s = self.table[brick] as usize;
             &self.data[s * BRICK_NODES..(s + 1) * BRICK_NODES]
         })
+    }
+
+    /// Copies the values of the `N³` nodes `first + (i, j, k)`, `i, j, k <
+    /// N`, into `out` (x fastest), one brick lookup per brick they span
+    /// rather than per node: `true` when all their bricks are allocated,
+    /// `false` (and `out` partly written) when one is not.
+    ///
+    /// # Panics
+    /// If the box reaches past the grid's dims, or `out` does not hold `N³`
+    /// values.
+    pub fn stored_cube<const N: usize>(&self, first: UVec3, out: &mut [T]) -> bool {
+        assert_eq!(out.len(), N * N * N, "stored_cube: one value per node");
+        let last = first + UVec3::splat(N as u32 - 1);
+        assert!(last.cmplt(self.dims).all(), "stored_cube: {first} + {N}³ reaches past {}", self.dims);
+        let (lo, hi) = (first >> SHIFT, last >> SHIFT);
+        for bz in lo.z..=hi.z {
+            for by in lo.y..=hi.y {
+                for bx in lo.x..=hi.x {
+                    let brick = UVec3::new(bx, by, bz);
+                    let Some(values) = self.brick_values(self.brick_index(brick)) else { return false };
+                    // The box's nodes in this brick.
+                    let from = first.max(brick << SHIFT);
+                    let to = last.min((brick << SHIFT) + UVec3::splat(BRICK - 1));
+                    for z in from.z..=to.z {
+                        for y in from.y..=to.y {
+                            let row =
+                                ((y & (BRICK - 1)) << SHIFT | (z & (BRICK - 1)) << (2 * SHIFT)) as usize;
+                            let at = ((y - first.y) as usize + N * (z - first.z) as usize) * N;
+                            for x in from.x..=to.x {
+                                out[at + (x - first.x) as usize] = values[row + (x & (BRICK - 1)) as usize];
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        true
     }
 
     /// Allocates `brick` if needed and sets its values (nodes x-fastest
@@ -620,6 +661,33 @@ mod tests {
         assert_eq!(grid.stored(set), Some(0.25));
         assert_eq!(grid.stored(same_brick), Some(-1.0));
         assert_eq!((grid.stored(other), grid.get(other)), (None, 1.0));
+    }
+
+    /// A 4³ box of nodes copied brick by brick is every node's own value,
+    /// wherever the box sits across brick faces; a box touching a
+    /// background brick reports it.
+    #[test]
+    fn stored_cubes_are_the_nodes_values() {
+        let dims = UVec3::new(21, 19, 18);
+        let mut grid = Bricks::new(dims, -1.0f32, 1.0).unwrap();
+        let value = |c: UVec3| (c.x + 100 * c.y + 10_000 * c.z) as f32;
+        for z in 0..dims.z {
+            for y in 0..dims.y {
+                for x in 0..dims.x.min(16) {
+                    grid.set(UVec3::new(x, y, z), value(UVec3::new(x, y, z)));
+                }
+            }
+        }
+        let mut out = [0.0f32; 64];
+        for first in [UVec3::ZERO, UVec3::new(5, 6, 7), UVec3::new(6, 13, 14), UVec3::new(12, 2, 5)] {
+            assert!(grid.stored_cube::<4>(first, &mut out), "{first}");
+            for (n, &v) in out.iter().enumerate() {
+                let c = first + UVec3::new(n as u32 % 4, (n as u32 / 4) % 4, n as u32 / 16);
+                assert_eq!(v, value(c), "{first} + {c}");
+            }
+        }
+        // Nodes x = 16.. lie in bricks never written.
+        assert!(!grid.stored_cube::<4>(UVec3::new(14, 0, 0), &mut out));
     }
 
     /// Random writes into a bricked and a dense grid of odd dims (edge

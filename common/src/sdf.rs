@@ -442,17 +442,36 @@ impl MeshSdf {
     }
 
     /// The exact signed distance (world units) at the image under `map` of
-    /// every node of `lattice` (x fastest): bitwise [`Field3::values`] at
-    /// those points, for the level set's speed through an alignment map.
+    /// every node of `lattice` (x fastest), for the level set's speed
+    /// through an alignment map: [`Field3::values`] at those points, to the
+    /// last bit but for a point nearly equidistant from two triangles (a
+    /// search in another order may settle on the other, a rounding apart).
     /// The nearest points come from one coherent batch query; on a closed
     /// mesh with the winding-number sign the signs are propagated as in
     /// [`MeshSdf::sample_lattice`] (an affine map keeps neighbours a fixed
     /// distance apart per axis, `|A eₐ|` times the step), so the winding
     /// number is evaluated once per region instead of at every node.
     pub fn sample_mapped(&self, lattice: &Lattice, map: &Affine3A) -> Vec<f32> {
-        let points: Vec<Vec3> = (0..lattice.len())
+        self.sample_mapped_nodes(lattice, UVec3::ZERO, lattice.dims, map)
+    }
+
+    /// [`MeshSdf::sample_mapped`] at the nodes `first + (i, j, k)`,
+    /// `(i, j, k) < dims` (x fastest), of `lattice`, placed as the whole
+    /// lattice places them (bitwise): a brick of a larger lattice.
+    pub fn sample_mapped_nodes(
+        &self,
+        lattice: &Lattice,
+        first: UVec3,
+        dims: UVec3,
+        map: &Affine3A,
+    ) -> Vec<f32> {
+        let block = Lattice { dims, ..*lattice };
+        let points: Vec<Vec3> = (0..block.len())
             .into_par_iter()
-            .map(|n| map.transform_point3(lattice.position_of(n)))
+            .map(|n| {
+                let c = first + block.coords_of(n);
+                map.transform_point3(lattice.position(c.x, c.y, c.z))
+            })
             .collect();
         if let (Sign::Winding(wn), true, Some(_)) = (&self.sign, self.closed, points.first()) {
             // Points beyond the normalized frame's reach become NaN there (no hit).
@@ -468,7 +487,7 @@ impl MeshSdf {
                     * lattice.step.abs()
                     * self.scale;
                 let reach = local.par_iter().map(|p| p.abs().max_element()).reduce(|| 0.0, f32::max);
-                propagate_signs_by(wn, lattice.dims, spacing, reach, |n| local[n], &mut d);
+                propagate_signs_by(wn, dims, spacing, reach, |n| local[n], &mut d);
                 d.par_iter_mut().for_each(|v| *v *= self.unit());
                 return d;
             }

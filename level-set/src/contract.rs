@@ -5,9 +5,11 @@
 use crate::{
     Curvature, EvolveSettings, FrameSchedule, LevelSetError, LevelSetMorph, Placement, Response, Warp,
 };
-use crate::{SolverKind, SparseFieldSolver, SparseInputs, SpeedGrid, SpeedSampler, evolve, evolve_sparse};
+use crate::{
+    SolverKind, SparseFieldSolver, SparseInputs, SpeedGrid, SpeedSampler, TargetSpeed, evolve, evolve_sparse,
+};
 use isomorph_common::alignment::{AlignMode, align};
-use isomorph_common::glam::{Affine3A, Vec3};
+use isomorph_common::glam::{Affine3A, UVec3, Vec3};
 use isomorph_common::mesh::bvh::Lattice;
 use isomorph_common::{
     Aabb, AffinePath, Bricks, Control, Grid3, Morph, MorphError, Solid, Stages, check, lattice_for_box,
@@ -219,15 +221,8 @@ impl LevelSetMorph {
             let (dims, origin, spacing) = lattice_for_box(&bounds, res)?;
             let band = SparseFieldSolver::band_width(spacing);
             let band = control.install(|| Bricks::sample_band(field, dims, origin, spacing, band))?;
-            let target = target.clone();
-            let inv_h = 1.0 / spacing;
-            let sampler: SpeedSampler = if map == Affine3A::IDENTITY {
-                Arc::new(move |x| target.exact_field().map_or(f32::NAN, |f| f.value(x)) * inv_h)
-            } else {
-                Arc::new(move |x| {
-                    target.exact_field().map_or(f32::NAN, |f| f.value(map.transform_point3(x))) * inv_h
-                })
-            };
+            let sampler: SpeedSampler =
+                Arc::new(ExactSpeed { target: target.clone(), map, inv_h: 1.0 / spacing });
             let inputs =
                 SparseInputs { source: band, origin, spacing, target: sampler, lipschitz: norm_bound(&map) };
             stages.lap("distance volumes");
@@ -277,6 +272,34 @@ impl LevelSetMorph {
         let mut morph = evolve(&embedding, &speed, placement, &evolve_settings(settings, &bounds), control)?;
         finish_report(&mut morph, settings, stages, warnings, "dense");
         Ok(morph)
+    }
+}
+
+/// The sparse path's speed `D_B(T(x)) / h` from a target with an exact
+/// distance; a brick at a time from one batch query
+/// ([`Solid::exact_mapped_nodes`]).
+struct ExactSpeed {
+    /// The target (an exact distance: [`Solid::exact_field`]).
+    target: Solid,
+    /// Breen's `T`, from the evolving space into the target's.
+    map: Affine3A,
+    /// Voxels per world unit.
+    inv_h: f32,
+}
+
+impl TargetSpeed for ExactSpeed {
+    fn at(&self, x: Vec3) -> f32 {
+        let x = if self.map == Affine3A::IDENTITY { x } else { self.map.transform_point3(x) };
+        self.target.exact_field().map_or(f32::NAN, |f| f.value(x)) * self.inv_h
+    }
+
+    fn on_nodes(&self, (origin, spacing): (Vec3, f32), first: UVec3, dims: UVec3, out: &mut [f32]) {
+        let lattice = Lattice { dims: first + dims, origin, step: Vec3::splat(spacing) };
+        let distances = self.target.exact_mapped_nodes(&lattice, first, dims, &self.map);
+        match distances {
+            Some(d) => out.iter_mut().zip(d).for_each(|(o, d)| *o = d * self.inv_h),
+            None => out.fill(f32::NAN),
+        }
     }
 }
 

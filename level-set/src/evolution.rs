@@ -309,7 +309,7 @@ pub fn evolve_sparse(
         // A bound on the speed from the lattice's centre (only the dense solver reads it).
         let dims = source.dims();
         let half = 0.5 * (dims - UVec3::ONE).as_vec3();
-        let bound = target(*origin + *spacing * half).abs() + lipschitz * half.length();
+        let bound = target.at(*origin + *spacing * half).abs() + lipschitz * half.length();
         let speed = SpeedGrid::lazy_unchecked(dims, *origin, *spacing, Arc::clone(target), bound)?;
         let start = Start {
             solver,

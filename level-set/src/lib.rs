@@ -114,7 +114,7 @@ pub use overlap::{Overlap, check_overlap, check_overlap_sparse};
 pub use placement::{Placement, Warp};
 pub use solver::{Curvature, FRONT_STEP, Solver, StepParams, StepStats};
 pub use sparse_field::SparseFieldSolver;
-pub use speed::{Response, SpeedGrid, SpeedSampler};
+pub use speed::{Response, SpeedGrid, SpeedSampler, TargetSpeed};
 
 use isomorph_common::{Grid3, GridError};
 use stencil::Lattice;

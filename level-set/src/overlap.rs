@@ -166,7 +166,6 @@ pub fn check_overlap_sparse(
     let last = dims - UVec3::ONE;
     let side = BRICK as usize;
     let brick_nodes = side * side * side;
-    let at = |c: UVec3| target(origin + c.as_vec3() * spacing);
     let extent = |brick: usize| {
         let first = source.brick_origin(brick);
         (first, (first + UVec3::splat(BRICK - 1)).min(last))
@@ -177,7 +176,7 @@ pub fn check_overlap_sparse(
         .map(|brick| {
             let (first, end) = extent(brick);
             let centre = origin + spacing * 0.5 * (first + end).as_vec3();
-            let v = target(centre);
+            let v = target.at(centre);
             // A margin over the bound for the rounding of the node positions and values.
             let reach = lipschitz * 0.5 * (end - first).as_vec3().length() * 1.001 + 1e-3;
             if v - reach > 0.0 {
@@ -202,10 +201,10 @@ pub fn check_overlap_sparse(
     let mut values = vec![f32::MIN; near.len() * brick_nodes];
     values.par_chunks_mut(brick_nodes).zip(&near).for_each(|(out, &brick)| {
         let first = source.brick_origin(brick);
+        target.on_nodes((origin, spacing), first, UVec3::splat(BRICK), out);
         for (l, v) in out.iter_mut().enumerate() {
-            let c = first + local(l);
-            if c.cmple(last).all() {
-                *v = at(c);
+            if !(first + local(l)).cmple(last).all() {
+                *v = f32::MIN;
             }
         }
     });

@@ -47,8 +47,57 @@ pub struct SpeedGrid {
     max_abs: f32,
 }
 
-/// A target speed at a world point (voxel units), for [`SpeedGrid::lazy`].
-pub type SpeedSampler = Arc<dyn Fn(Vec3) -> f32 + Send + Sync>;
+/// The target speed (voxel units) at world points, for [`SpeedGrid::lazy`]:
+/// at one point, and at a box of the evolution lattice's nodes (a brick),
+/// for targets that share work over many points (a mesh's nearest-point
+/// search and inside test). Any `Fn(Vec3) -> f32 + Send + Sync` closure is
+/// one, evaluated a point at a time.
+///
+/// ```
+/// use isomorph_common::{Field3, Shape};
+/// use isomorph_levelset::{SpeedSampler, TargetSpeed};
+/// use isomorph_common::glam::{UVec3, Vec3};
+/// use std::sync::Arc;
+///
+/// let sphere = Shape::sphere(0.3);
+/// let inv_h = 64.0; // voxels per world unit
+/// let speed: SpeedSampler = Arc::new(move |x: Vec3| sphere.value(x) * inv_h);
+/// // The 2 × 2 × 2 nodes from node (8, 0, 0) of a lattice at the origin.
+/// let mut nodes = vec![0.0; 8];
+/// speed.on_nodes((Vec3::ZERO, 1.0 / inv_h), UVec3::new(8, 0, 0), UVec3::splat(2), &mut nodes);
+/// assert_eq!(nodes[1], speed.at(Vec3::new(9.0, 0.0, 0.0) / inv_h));
+/// ```
+pub trait TargetSpeed: Send + Sync {
+    /// The speed at world point `x` (voxel units, positive where the
+    /// target is inside).
+    fn at(&self, x: Vec3) -> f32;
+
+    /// The speed at the nodes `first + (i, j, k)`, `(i, j, k) < dims`, of
+    /// the lattice whose node `c` lies at `origin + c·spacing` (world
+    /// units), into `out`, `i` fastest: [`TargetSpeed::at`] there (to the
+    /// last bit, or a rounding apart where a batch query resolves a near-tie
+    /// differently). The default calls it node by node.
+    ///
+    /// # Panics
+    /// If `out` does not hold one value per node.
+    fn on_nodes(&self, (origin, spacing): (Vec3, f32), first: UVec3, dims: UVec3, out: &mut [f32]) {
+        assert_eq!(out.len(), (dims.x * dims.y * dims.z) as usize, "on_nodes: one value per node");
+        let (nx, ny) = (dims.x as usize, dims.y as usize);
+        for (n, o) in out.iter_mut().enumerate() {
+            let c = first + UVec3::new((n % nx) as u32, ((n / nx) % ny) as u32, (n / (nx * ny)) as u32);
+            *o = self.at(origin + c.as_vec3() * spacing);
+        }
+    }
+}
+
+impl<F: Fn(Vec3) -> f32 + Send + Sync> TargetSpeed for F {
+    fn at(&self, x: Vec3) -> f32 {
+        self(x)
+    }
+}
+
+/// A shared [`TargetSpeed`], for [`SpeedGrid::lazy`].
+pub type SpeedSampler = Arc<dyn TargetSpeed>;
 
 /// Where a [`SpeedGrid`] keeps its node speeds.
 enum Speeds {
@@ -164,7 +213,7 @@ impl SpeedGrid {
         let lat = Lattice::new(dims);
         let at = |n: usize| {
             let [i, j, k] = lat.coords(n);
-            sampler(origin + Vec3::new(i as f32, j as f32, k as f32) * spacing)
+            sampler.at(origin + Vec3::new(i as f32, j as f32, k as f32) * spacing)
         };
         // One pass: the first non-finite node, whether any node is inside, the largest magnitude.
         let (bad, any_inside, max_abs) = (0..lat.len())
@@ -248,21 +297,13 @@ impl SpeedGrid {
             return;
         }
         let side = BRICK as usize;
+        // Whole bricks, past the lattice too at its far edges (never read there).
         let filled: Vec<Vec<f32>> = missing
             .par_iter()
             .map(|&(_, first)| {
-                (0..side * side * side)
-                    .map(|l| {
-                        let local = UVec3::new(
-                            (l % side) as u32,
-                            ((l / side) % side) as u32,
-                            (l / (side * side)) as u32,
-                        );
-                        // Nodes past the lattice (edge bricks) are never read.
-                        let c = (first + local).min(*dims - UVec3::ONE);
-                        sampler(*origin + c.as_vec3() * *spacing)
-                    })
-                    .collect()
+                let mut values = vec![0.0; side * side * side];
+                sampler.on_nodes((*origin, *spacing), first, UVec3::splat(BRICK), &mut values);
+                values
             })
             .collect();
         let Ok(mut write) = bricks.write() else { return };
@@ -364,10 +405,7 @@ impl SpeedReader<'_> {
     pub(crate) fn node(&self, n: usize) -> f32 {
         match self {
             SpeedReader::Dense(grid) => grid.data()[n],
-            SpeedReader::Lazy { origin, spacing, bricks, sampler, .. } => {
-                let c = bricks.coords(n);
-                bricks.stored(c).unwrap_or_else(|| sampler(*origin + c.as_vec3() * *spacing))
-            }
+            SpeedReader::Lazy { bricks, .. } => self.node_at(bricks.coords(n)),
         }
     }
 
@@ -400,7 +438,33 @@ impl SpeedReader<'_> {
                 let data = grid.data();
                 corrected_trilinear(grid.dims(), g, |n| data[n])
             }
-            SpeedReader::Lazy { dims, .. } => corrected_trilinear(*dims, g, |n| self.node(n)),
+            SpeedReader::Lazy { dims, bricks, .. } => {
+                // The 4³ nodes around the cell: a brick lookup per brick they
+                // span inside the lattice, node by node at its faces.
+                let (b, t) = cell_of(*dims, g);
+                let last = *dims - UVec3::ONE;
+                let mut around = [0.0f32; AROUND];
+                let inside = b.cmpge(UVec3::ONE).all() && (b + UVec3::splat(2)).cmple(last).all();
+                if !(inside && bricks.stored_cube::<4>(b - UVec3::ONE, &mut around)) {
+                    for (n, v) in around.iter_mut().enumerate() {
+                        let step = UVec3::new(n as u32 & 3, (n as u32 >> 2) & 3, n as u32 >> 4);
+                        *v = self.node_at((b + step).saturating_sub(UVec3::ONE).min(last));
+                    }
+                }
+                corrected_blend(*dims, (b, t), 1 + 4 + 16, [1, 4, 16], |n| around[n])
+            }
+        }
+    }
+
+    /// The speed at node `c` (voxel units) of a lazy speed: stored, or
+    /// computed for an unfilled node.
+    #[inline]
+    fn node_at(&self, c: UVec3) -> f32 {
+        match self {
+            SpeedReader::Dense(grid) => grid.data()[grid.index(c.x, c.y, c.z)],
+            SpeedReader::Lazy { origin, spacing, bricks, sampler, .. } => {
+                bricks.stored(c).unwrap_or_else(|| sampler.at(*origin + c.as_vec3() * *spacing))
+            }
         }
     }
 }
@@ -409,12 +473,37 @@ impl SpeedReader<'_> {
 /// node index) on a lattice of `dims` nodes (at least 3 per axis).
 fn corrected_trilinear(dims: UVec3, g: Vec3, v: impl Fn(usize) -> f32) -> f32 {
     let strides = [1usize, dims.x as usize, (dims.x * dims.y) as usize];
+    let (b, t) = cell_of(dims, g);
+    let corner = b.x as usize + b.y as usize * strides[1] + b.z as usize * strides[2];
+    corrected_blend(dims, (b, t), corner, strides, v)
+}
+
+/// The cell `at_voxel` reads for voxel coordinates `g` (clamped to the
+/// lattice of `dims` nodes): its first node and `g`'s place in it, `[0, 1]³`.
+#[inline]
+fn cell_of(dims: UVec3, g: Vec3) -> (UVec3, Vec3) {
     let g = g.clamp(Vec3::ZERO, (dims - UVec3::ONE).as_vec3());
     // Solver lattices have at least 3 nodes per axis.
     let base = g.floor().min((dims - UVec3::splat(2)).as_vec3());
-    let t = g - base;
-    let b = base.as_uvec3();
-    let corner = b.x as usize + b.y as usize * strides[1] + b.z as usize * strides[2];
+    (base.as_uvec3(), g - base)
+}
+
+/// The nodes [`SpeedReader::at_voxel`] reads around cell `b`: the 4³ from
+/// `b − 1` to `b + 2` (x fastest), clamped to the lattice of `dims` nodes
+/// (a clamped node is one the correction skips).
+const AROUND: usize = 64;
+
+/// [`corrected_trilinear`] in the cell `(b, t)` ([`cell_of`]) of the
+/// lattice of `dims` nodes, node `b` at index `corner` of `v` and the next
+/// node along axis `a` `strides[a]` further.
+#[inline]
+fn corrected_blend(
+    dims: UVec3,
+    (b, t): (UVec3, Vec3),
+    corner: usize,
+    strides: [usize; 3],
+    v: impl Fn(usize) -> f32,
+) -> f32 {
     let trilinear = trilinear_blend(|i, j, k| v(corner + i + j * strides[1] + k * strides[2]), t);
     let mut correction = 0.0;
     for axis in 0..3 {

@@ -240,8 +240,15 @@ impl Lattice {
     /// Position of node `n` in x-fastest order.
     #[inline]
     pub fn position_of(&self, n: usize) -> Vec3 {
+        let c = self.coords_of(n);
+        self.position(c.x, c.y, c.z)
+    }
+
+    /// Node coordinates `(i, j, k)` of node `n` in x-fastest order.
+    #[inline]
+    pub fn coords_of(&self, n: usize) -> UVec3 {
         let (nx, ny) = (self.dims.x as usize, self.dims.y as usize);
-        self.position((n % nx) as u32, ((n / nx) % ny) as u32, (n / (nx * ny)) as u32)
+        UVec3::new((n % nx) as u32, ((n / nx) % ny) as u32, (n / (nx * ny)) as u32)
     }
 }
 
