@@ -458,6 +458,10 @@ impl MeshSdf {
     /// [`MeshSdf::sample_mapped`] at the nodes `first + (i, j, k)`,
     /// `(i, j, k) < dims` (x fastest), of `lattice`, placed as the whole
     /// lattice places them (bitwise): a brick of a larger lattice.
+    ///
+    /// Works through slabs of z-layers in parallel (the sign propagation's
+    /// own work items), so its memory is the slabs in flight, not the
+    /// whole lattice's points and hits.
     pub fn sample_mapped_nodes(
         &self,
         lattice: &Lattice,
@@ -465,6 +469,18 @@ impl MeshSdf {
         dims: UVec3,
         map: &Affine3A,
     ) -> Vec<f32> {
+        let slab = (dims.x as usize * dims.y as usize * SIGN_SLABS).max(1);
+        let mut out = vec![0.0; Lattice { dims, ..*lattice }.len()];
+        out.par_chunks_mut(slab).enumerate().for_each(|(s, out)| {
+            let z = (s * SIGN_SLABS) as u32;
+            let layers = UVec3::new(dims.x, dims.y, (dims.z - z).min(SIGN_SLABS as u32));
+            out.copy_from_slice(&self.mapped_slab(lattice, first + UVec3::Z * z, layers, map));
+        });
+        out
+    }
+
+    /// [`MeshSdf::sample_mapped_nodes`] of at most [`SIGN_SLABS`] z-layers.
+    fn mapped_slab(&self, lattice: &Lattice, first: UVec3, dims: UVec3, map: &Affine3A) -> Vec<f32> {
         let block = Lattice { dims, ..*lattice };
         let points: Vec<Vec3> = (0..block.len())
             .into_par_iter()

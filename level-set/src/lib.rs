@@ -17,7 +17,9 @@
 //!   or has been ([`isomorph_common::Bricks`]), the far side elsewhere;
 //!   [`SparseFieldSolver::from_field`] builds it from a narrow band of the
 //!   source's distance and [`SpeedGrid::lazy`] computes the target speed
-//!   per brick where the band goes, so no dense grid is needed at all.
+//!   per brick where the band goes (a brick at a time from a
+//!   [`TargetSpeed`]: for a mesh, one batch query with its signs found once
+//!   per region), so no dense grid is needed at all.
 //!
 //! [`evolve`] runs either to convergence and keeps frames in memory
 //! proportional to the surface ([`BandFrame`]), as many as its
