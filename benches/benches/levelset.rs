@@ -7,6 +7,8 @@
 //! `cargo bench -p isomorph-benches --bench levelset -- memory/sphere_torus/512` (one size per run:
 //! the peak resident set is the process's)
 //! `cargo bench -p isomorph-benches --bench levelset -- cli/sphere_torus/128`
+//! `cargo bench -p isomorph-benches --bench levelset -- real/bunny_teapot/128` (real meshes; set
+//! `ISOMORPH_BENCH_TARGET` to another mesh file for `real/bunny_<its name>/N`)
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use isomorph_cli::methods::{Method, Settings, build, load_input};
@@ -14,8 +16,8 @@ use isomorph_common::sdf::{MeshSdf, SdfSettings, VolumeMode};
 use isomorph_common::{Aabb, Bricks, Bytes, Control, Field3, Grid3, Morph, Shape, Solid, lattice_for_box};
 use isomorph_io::export::{ExportSettings, export_sequence};
 use isomorph_levelset::{
-    DenseSolver, EvolveSettings, FrameSchedule, LevelSetMorph, LevelSetSettings, Placement, Response, Solver,
-    SolverKind, SparseFieldSolver, SpeedGrid, StepParams, Storage, evolve,
+    Align, DenseSolver, EvolveSettings, FrameSchedule, LevelSetMorph, LevelSetSettings, Placement, Response,
+    Solver, SolverKind, SparseFieldSolver, SpeedGrid, StepParams, Storage, evolve,
 };
 use std::hint::black_box;
 use std::sync::Arc;
@@ -243,27 +245,65 @@ fn cli(c: &mut Criterion) {
     let mut group = c.benchmark_group("cli/sphere_torus");
     group.sample_size(10).measurement_time(Duration::from_secs(45));
     let res = 128;
-    let control = Control::new();
     let out = std::env::temp_dir().join(format!("isomorph-bench-cli-{}", std::process::id()));
     group.bench_function(BenchmarkId::from_parameter(res), |b| {
-        b.iter(|| {
-            let method = Method::LevelSet;
-            let source = load_input(method, "sphere", &Default::default()).expect("built-in");
-            let target = load_input(method, "torus", &Default::default()).expect("built-in");
-            let settings = Settings::default().with_resolution(res);
-            let morph = build(method, &source, &target, &settings, &control).expect("morphs");
-            let export = ExportSettings {
-                frames: 8,
-                resolution: res,
-                out_dir: out.clone(),
-                preview: false,
-                ..ExportSettings::default()
-            }
-            .with_inputs(&source, &target, &control)
-            .expect("reference surfaces");
-            black_box(export_sequence(&*morph, &export, &control).expect("exports").report.frames.len())
-        })
+        b.iter(|| black_box(command("sphere", "torus", res, Align::None, 8, &out)))
     });
+    group.finish();
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// `isomorph morph --method level-set --source SOURCE --target TARGET --res
+/// RES --align auto|none --frames FRAMES --no-preview --out OUT` through
+/// the library, as the command runs it: both inputs loaded (meshes fitted
+/// into the built-in shapes' box), the morph, and the frames polygonized,
+/// measured against the inputs and written with the contact sheet and
+/// report. Returns the frames written.
+fn command(
+    source: &str,
+    target: &str,
+    res: u32,
+    align: Align,
+    frames: usize,
+    out: &std::path::Path,
+) -> usize {
+    let (method, control) = (Method::LevelSet, Control::new());
+    let source = load_input(method, source, &Default::default()).expect("source");
+    let target = load_input(method, target, &Default::default()).expect("target");
+    let mut settings = Settings::default().with_resolution(res);
+    settings.level_set.align = align;
+    let morph = build(method, &source, &target, &settings, &control).expect("morphs");
+    let export = ExportSettings {
+        frames,
+        resolution: res,
+        out_dir: out.to_path_buf(),
+        preview: false,
+        ..ExportSettings::default()
+    }
+    .with_inputs(&source, &target, &control)
+    .expect("reference surfaces");
+    export_sequence(&*morph, &export, &control).expect("exports").report.frames.len()
+}
+
+/// Real meshes end to end: the bunny (`data/bunny.ply`) into the Utah
+/// teapot (`data/teapot.ply`, open and unwelded: its inside from the
+/// winding number), with automatic alignment and 9 frames, at 128³ (dense
+/// storage) and 256³ (sparse), through [`command`]. The target is the file
+/// named by `ISOMORPH_BENCH_TARGET` when set (e.g. the Stanford dragon of
+/// `../shared/data`, which must not be committed: `real/bunny_dragon_res3_closed/N`).
+fn real(c: &mut Criterion) {
+    let data = |name: &str| format!("{}/../data/{name}", env!("CARGO_MANIFEST_DIR"));
+    let target = std::env::var("ISOMORPH_BENCH_TARGET").unwrap_or_else(|_| data("teapot.ply"));
+    let name =
+        std::path::Path::new(&target).file_stem().map_or("mesh".into(), |s| s.to_string_lossy().into_owned());
+    let mut group = c.benchmark_group(format!("real/bunny_{name}"));
+    group.sample_size(10);
+    let out = std::env::temp_dir().join(format!("isomorph-bench-real-{}", std::process::id()));
+    for res in [128u32, 256] {
+        group.bench_function(BenchmarkId::from_parameter(res), |b| {
+            b.iter(|| black_box(command(&data("bunny.ply"), &target, res, Align::Auto, 9, &out)))
+        });
+    }
     group.finish();
     let _ = std::fs::remove_dir_all(&out);
 }
@@ -330,5 +370,5 @@ fn far_field(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, morph, step, memory, cli, far_field);
+criterion_group!(benches, morph, step, memory, cli, real, far_field);
 criterion_main!(benches);
