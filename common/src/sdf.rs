@@ -481,13 +481,9 @@ impl MeshSdf {
 
     /// [`MeshSdf::sample_mapped_nodes`] of at most [`SIGN_SLABS`] z-layers.
     fn mapped_slab(&self, lattice: &Lattice, first: UVec3, dims: UVec3, map: &Affine3A) -> Vec<f32> {
-        let block = Lattice { dims, ..*lattice };
-        let points: Vec<Vec3> = (0..block.len())
+        let points: Vec<Vec3> = (0..Lattice { dims, ..*lattice }.len())
             .into_par_iter()
-            .map(|n| {
-                let c = first + block.coords_of(n);
-                map.transform_point3(lattice.position(c.x, c.y, c.z))
-            })
+            .map(|n| map.transform_point3(lattice.position_in_box(first, dims, n)))
             .collect();
         if let (Sign::Winding(wn), true, Some(_)) = (&self.sign, self.closed, points.first()) {
             // Points beyond the normalized frame's reach become NaN there (no hit).

@@ -390,12 +390,8 @@ impl Solid {
             return Some(sdf.sample_mapped_nodes(lattice, first, dims, map));
         }
         let field = self.exact_field()?;
-        let block = Lattice { dims, ..*lattice };
-        let value = |n| {
-            let c = first + block.coords_of(n);
-            field.value(map.transform_point3(lattice.position(c.x, c.y, c.z)))
-        };
-        Some((0..block.len()).into_par_iter().map(value).collect())
+        let value = |n| field.value(map.transform_point3(lattice.position_in_box(first, dims, n)));
+        Some((0..Lattice { dims, ..*lattice }.len()).into_par_iter().map(value).collect())
     }
 
     /// True when [`Solid::exact_distance`] answers (for finite points).

@@ -6,6 +6,7 @@
 use crate::LevelSetError;
 use crate::stencil::Lattice;
 use isomorph_common::glam::{UVec3, Vec3};
+use isomorph_common::mesh::bvh::Lattice as NodeLattice;
 use isomorph_common::{BRICK, Bricks, Field3, Grid3, trilinear_blend};
 use rayon::prelude::*;
 use std::fmt;
@@ -82,10 +83,9 @@ pub trait TargetSpeed: Send + Sync {
     /// If `out` does not hold one value per node.
     fn on_nodes(&self, (origin, spacing): (Vec3, f32), first: UVec3, dims: UVec3, out: &mut [f32]) {
         assert_eq!(out.len(), (dims.x * dims.y * dims.z) as usize, "on_nodes: one value per node");
-        let (nx, ny) = (dims.x as usize, dims.y as usize);
+        let lattice = NodeLattice { dims, origin, step: Vec3::splat(spacing) };
         for (n, o) in out.iter_mut().enumerate() {
-            let c = first + UVec3::new((n % nx) as u32, ((n / nx) % ny) as u32, (n / (nx * ny)) as u32);
-            *o = self.at(origin + c.as_vec3() * spacing);
+            *o = self.at(lattice.position_in_box(first, dims, n));
         }
     }
 }
@@ -405,7 +405,9 @@ impl SpeedReader<'_> {
     pub(crate) fn node(&self, n: usize) -> f32 {
         match self {
             SpeedReader::Dense(grid) => grid.data()[n],
-            SpeedReader::Lazy { bricks, .. } => self.node_at(bricks.coords(n)),
+            SpeedReader::Lazy { origin, spacing, bricks, sampler, .. } => {
+                lazy_node(bricks, sampler, (*origin, *spacing), bricks.coords(n))
+            }
         }
     }
 
@@ -438,7 +440,7 @@ impl SpeedReader<'_> {
                 let data = grid.data();
                 corrected_trilinear(grid.dims(), g, |n| data[n])
             }
-            SpeedReader::Lazy { dims, bricks, .. } => {
+            SpeedReader::Lazy { dims, origin, spacing, bricks, sampler } => {
                 // The 4³ nodes around the cell: a brick lookup per brick they
                 // span inside the lattice, node by node at its faces.
                 let (b, t) = cell_of(*dims, g);
@@ -448,25 +450,22 @@ impl SpeedReader<'_> {
                 if !(inside && bricks.stored_cube::<4>(b - UVec3::ONE, &mut around)) {
                     for (n, v) in around.iter_mut().enumerate() {
                         let step = UVec3::new(n as u32 & 3, (n as u32 >> 2) & 3, n as u32 >> 4);
-                        *v = self.node_at((b + step).saturating_sub(UVec3::ONE).min(last));
+                        let c = (b + step).saturating_sub(UVec3::ONE).min(last);
+                        *v = lazy_node(bricks, sampler, (*origin, *spacing), c);
                     }
                 }
                 corrected_blend(*dims, (b, t), 1 + 4 + 16, [1, 4, 16], |n| around[n])
             }
         }
     }
+}
 
-    /// The speed at node `c` (voxel units) of a lazy speed: stored, or
-    /// computed for an unfilled node.
-    #[inline]
-    fn node_at(&self, c: UVec3) -> f32 {
-        match self {
-            SpeedReader::Dense(grid) => grid.data()[grid.index(c.x, c.y, c.z)],
-            SpeedReader::Lazy { origin, spacing, bricks, sampler, .. } => {
-                bricks.stored(c).unwrap_or_else(|| sampler.at(*origin + c.as_vec3() * *spacing))
-            }
-        }
-    }
+/// The speed (voxel units) at node `c` of a lazy speed on the lattice at
+/// `origin` with `spacing`: stored in `bricks`, or computed by `sampler`
+/// for an unfilled node.
+#[inline]
+fn lazy_node(bricks: &Bricks<f32>, sampler: &SpeedSampler, (origin, spacing): (Vec3, f32), c: UVec3) -> f32 {
+    bricks.stored(c).unwrap_or_else(|| sampler.at(origin + c.as_vec3() * spacing))
 }
 
 /// [`SpeedReader::at_voxel`] of the node speeds `v` (voxel units, by linear

@@ -240,15 +240,17 @@ impl Lattice {
     /// Position of node `n` in x-fastest order.
     #[inline]
     pub fn position_of(&self, n: usize) -> Vec3 {
-        let c = self.coords_of(n);
-        self.position(c.x, c.y, c.z)
+        self.position_in_box(UVec3::ZERO, self.dims, n)
     }
 
-    /// Node coordinates `(i, j, k)` of node `n` in x-fastest order.
+    /// Position of node `n`, in x-fastest order, of the box of `dims`
+    /// nodes from node `first` (placed as the whole lattice places it,
+    /// bitwise).
     #[inline]
-    pub fn coords_of(&self, n: usize) -> UVec3 {
-        let (nx, ny) = (self.dims.x as usize, self.dims.y as usize);
-        UVec3::new((n % nx) as u32, ((n / nx) % ny) as u32, (n / (nx * ny)) as u32)
+    pub fn position_in_box(&self, first: UVec3, dims: UVec3, n: usize) -> Vec3 {
+        let (nx, ny) = (dims.x as usize, dims.y as usize);
+        let c = first + UVec3::new((n % nx) as u32, ((n / nx) % ny) as u32, (n / (nx * ny)) as u32);
+        self.position(c.x, c.y, c.z)
     }
 }
 
