@@ -56,6 +56,7 @@ use crate::usd::{UsdSettings, write_usda};
 use isomorph_common::glam::Vec3;
 use isomorph_common::mesh::color::ColorLookup;
 use isomorph_common::mesh::distance::{IndexedSurface, SurfaceDistance, surface_samples};
+use isomorph_common::mesh::winding::WindingNumber;
 use isomorph_common::{Aabb, Control, Morph, MorphError, Solid, TriMesh};
 use isomorph_common::{BoxedError, MorphReport};
 use rayon::prelude::*;
@@ -65,7 +66,10 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 /// An endpoint frame farther than this (Hausdorff, voxels) from its input
-/// is reported in [`Report::warnings`].
+/// is reported in [`Report::warnings`], with the place where it misses the
+/// input most when that is farther than this too: outside the frame (a
+/// part the grid may be too coarse to form, and the finer resolution to
+/// try) or inside its solid (an open input's inner sheet).
 pub const ENDPOINT_WARNING_VOXELS: f32 = 3.0;
 
 /// The USD stage of the whole sequence ([`ExportSettings::usd`]).
@@ -538,13 +542,21 @@ fn export_on_pool<M: Morph + ?Sized>(
     }
     let largest_step = steps.iter().flatten().copied().reduce(f32::max);
     let endpoints = Endpoints { source, target };
-    for (which, end) in [("first", &endpoints.source), ("last", &endpoints.target)] {
+    let ends = [
+        ("first", "source", &endpoints.source, &settings.source_reference, 0),
+        ("last", "target", &endpoints.target, &settings.target_reference, total - 1),
+    ];
+    for (which, input, end, reference, i) in ends {
         if let Some(e) = end.filter(|e| e.hausdorff_voxels > ENDPOINT_WARNING_VOXELS) {
-            let input = if which == "first" { "source" } else { "target" };
-            warnings.push(format!(
+            let mut warning = format!(
                 "the {which} frame is {:.1} voxels (Hausdorff; mean {:.2}) off the {input}",
                 e.hausdorff_voxels, e.mean_voxels
-            ));
+            );
+            if let (Some(reference), Some(index)) = (reference, &indexes[i]) {
+                let end = End { input, reference, frame: &meshes[i], index };
+                warning += &end.farthest_miss(settings, voxel).unwrap_or_default();
+            }
+            warnings.push(warning);
         }
     }
     warnings.extend(pieces);
@@ -591,6 +603,53 @@ fn write_pictures(
         write_gif(&images, PREVIEW_DELAY, dir.join("preview.gif"))?;
     }
     Ok(())
+}
+
+/// An end frame beside its input, for saying where it misses the input.
+struct End<'a> {
+    /// "source" or "target".
+    input: &'a str,
+    /// The input's surface.
+    reference: &'a TriMesh,
+    /// The end frame's mesh and its index.
+    frame: &'a TriMesh,
+    index: &'a IndexedSurface,
+}
+
+impl End<'_> {
+    /// Where the frame misses its input by the most, when by more than
+    /// [`ENDPOINT_WARNING_VOXELS`], as the end of a warning: a part of the
+    /// input outside the frame, which the grid may be too coarse to form (a
+    /// finer resolution is the remedy: the level set does not grow into
+    /// parts about 3 voxels across), or one inside the frame's solid (an
+    /// inner sheet of an open or self-intersecting input, which no closed
+    /// frame surface follows, at any resolution). `None` when the frame
+    /// comes within that distance of all of the input (its Hausdorff
+    /// distance is then the frame's own stray parts).
+    fn farthest_miss(&self, settings: &ExportSettings, voxel: f32) -> Option<String> {
+        let points = surface_samples(self.reference, settings.distance_samples)?;
+        let (p, d) = self.index.farthest_of(&points)?;
+        let voxels = d / voxel;
+        if voxels <= ENDPOINT_WARNING_VOXELS {
+            return None;
+        }
+        let (input, at) = (self.input, format!("({:.3}, {:.3}, {:.3})", p.x, p.y, p.z));
+        let inside = WindingNumber::new(self.frame).winding_number(p) >= 0.5;
+        Some(if inside {
+            format!(
+                ": the {input}'s surface near {at} lies {voxels:.1} voxels inside the frame's solid \
+                 (an inner sheet of an open or self-intersecting {input}, which no closed surface follows)"
+            )
+        } else {
+            let finer = settings.resolution.saturating_mul(2);
+            format!(
+                ": it does not reach the {input} near {at}, {voxels:.1} voxels away, where the {input} may \
+                 be thinner than the {res}³ grid can form (about 3 voxels across); a finer resolution \
+                 (resolution {finer}: `--res {finer}`) resolves more of it",
+                res = settings.resolution
+            )
+        })
+    }
 }
 
 /// A warning when the end frame `frame` (`which`: "first" or "last") has

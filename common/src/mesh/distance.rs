@@ -157,6 +157,20 @@ impl IndexedSurface {
         )
     }
 
+    /// The point of `points` (world units) farthest from this surface, with
+    /// its distance (world units): where another surface, sampled at
+    /// `points`, strays farthest from this one. `None` without points.
+    pub fn farthest_of(&self, points: &[Vec3]) -> Option<(Vec3, f32)> {
+        let mut closest = vec![None; points.len()];
+        self.bvh.closest_many(&self.rescaled(points.to_vec(), 1.0), &mut closest);
+        let (i, d2) = closest
+            .iter()
+            .enumerate()
+            .map(|(i, c)| (i, c.map_or(0.0, |c| c.distance_squared.max(0.0))))
+            .max_by(|a, b| a.1.total_cmp(&b.1))?;
+        Some((points[i], d2.sqrt() / self.scale))
+    }
+
     /// `points` of another index's frame (scale `from`) in this one's.
     fn rescaled(&self, points: Vec<Vec3>, from: f32) -> Vec<Vec3> {
         if from == self.scale {
@@ -291,6 +305,21 @@ mod tests {
         let m = sphere(0.3, 32);
         let d = surface_distance(&m, &m, 1000).unwrap();
         assert!(d.hausdorff < 1e-6 && d.mean < 1e-7, "{d:?}");
+    }
+
+    #[test]
+    fn the_farthest_point_is_found_with_its_distance() {
+        let index = IndexedSurface::new(&sphere(0.3, 48), &Aabb::cube(0.5)).unwrap();
+        let mut points =
+            vec![Vec3::new(0.3, 0.0, 0.0), Vec3::new(0.0, 0.45, 0.0), Vec3::new(0.0, 0.0, -0.32)];
+        let (p, d) = index.farthest_of(&points).unwrap();
+        assert_eq!(p, Vec3::new(0.0, 0.45, 0.0));
+        assert!((d - 0.15).abs() < 2e-3, "{d}");
+        points.push(Vec3::ZERO); // the centre, a radius from every side
+        let (p, d) = index.farthest_of(&points).unwrap();
+        assert_eq!(p, Vec3::ZERO);
+        assert!((d - 0.3).abs() < 2e-3, "{d}");
+        assert_eq!(index.farthest_of(&[]), None);
     }
 
     #[test]
