@@ -396,7 +396,7 @@ fn export_on_pool<M: Morph + ?Sized>(
         .into_iter()
         .flatten()
         .fold(morph.world_bounds(), |b, r| b.union(&r.bounds()));
-    let results: Vec<(FrameReport, (TriMesh, Option<IndexedSurface>))> = (0..total)
+    let results: Vec<(FrameReport, TriMesh)> = (0..total)
         .into_par_iter()
         .map(|i| {
             control.check()?;
@@ -437,14 +437,10 @@ fn export_on_pool<M: Morph + ?Sized>(
             let finished = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
             control
                 .progress("frames", Some(finished as f32 / total as f32), || format!("{finished}/{total}"));
-            // The frame's tree, built once for its steps and its endpoint.
-            let index = IndexedSurface::new(&mesh, &distance_box).ok();
-            Ok((report, (mesh, index)))
+            Ok((report, mesh))
         })
         .collect::<Result<_, ExportError>>()?;
-    let (mut frames, indexed): (Vec<FrameReport>, Vec<(TriMesh, Option<IndexedSurface>)>) =
-        results.into_iter().unzip();
-    let (meshes, indexes): (Vec<TriMesh>, Vec<Option<IndexedSurface>>) = indexed.into_iter().unzip();
+    let (mut frames, meshes): (Vec<FrameReport>, Vec<TriMesh>) = results.into_iter().unzip();
 
     for (which, index, reference) in
         [("source", 0, &settings.source_reference), ("target", total - 1, &settings.target_reference)]
@@ -482,22 +478,6 @@ fn export_on_pool<M: Morph + ?Sized>(
     control.check()?;
     control.progress("metrics", None, String::new);
     let voxel = world_voxel(&morph.world_bounds(), settings.resolution);
-    let endpoint = |reference: &Option<TriMesh>, solid: &Option<Solid>, frame: &Option<IndexedSurface>| {
-        let (reference, frame) = (reference.as_ref()?, frame.as_ref()?);
-        let samples = settings.distance_samples;
-        let d = match solid.as_ref().filter(|s| s.has_exact_distance()) {
-            Some(solid) => {
-                let mut points = surface_samples(reference, samples)?;
-                if solid.as_mesh().is_none() {
-                    // A polygonized shape: its points moved onto the true surface.
-                    points.par_iter_mut().for_each(|p| *p = solid.nearest_surface_point(*p).unwrap_or(*p));
-                }
-                frame.distance_to_reference(samples, &points, |p| solid.exact_distance(p).unwrap_or(f32::NAN))
-            }
-            None => frame.distance_to(&IndexedSurface::new(reference, &distance_box).ok()?, samples),
-        };
-        Some(EndpointDistance::new(d.ok()?, voxel))
-    };
     // The end frames' pieces against their inputs' (an input's metrics are
     // serial work on the largest meshes).
     let piece_warnings = || -> Vec<String> {
@@ -511,54 +491,30 @@ fn export_on_pool<M: Morph + ?Sized>(
             })
             .collect()
     };
-    // The pictures, the steps, both endpoints and the pieces at once, so
-    // that every core stays busy (writing the pictures is serial, an
-    // endpoint's reference mesh is the largest of all).
-    let ((pictures, pieces), (steps, (source, target))) = rayon::join(
+    // The pictures, the pieces and the distances at once, so that every
+    // core stays busy (writing the pictures is serial, an endpoint's
+    // reference mesh is the largest of all).
+    let measure = Measure { settings, distance_box, voxel };
+    let ((pictures, pieces), (steps, source, target)) = rayon::join(
         || rayon::join(|| write_pictures(&frames, &meshes, settings, control), piece_warnings),
-        || {
-            rayon::join(
-                || {
-                    (1..total)
-                        .into_par_iter()
-                        .map(|i| {
-                            let (a, b) = (indexes[i - 1].as_ref()?, indexes[i].as_ref()?);
-                            a.hausdorff_to(b, settings.step_samples).ok()
-                        })
-                        .collect::<Vec<Option<f32>>>()
-                },
-                || {
-                    rayon::join(
-                        || endpoint(&settings.source_reference, &settings.source_solid, &indexes[0]),
-                        || endpoint(&settings.target_reference, &settings.target_solid, &indexes[total - 1]),
-                    )
-                },
-            )
-        },
+        || measure.frames(&meshes),
     );
     pictures?;
     for (frame, step) in frames.iter_mut().skip(1).zip(&steps) {
         frame.step_from_previous = *step;
     }
     let largest_step = steps.iter().flatten().copied().reduce(f32::max);
-    let endpoints = Endpoints { source, target };
-    let ends = [
-        ("first", "source", &endpoints.source, &settings.source_reference, 0),
-        ("last", "target", &endpoints.target, &settings.target_reference, total - 1),
-    ];
-    for (which, input, end, reference, i) in ends {
-        if let Some(e) = end.filter(|e| e.hausdorff_voxels > ENDPOINT_WARNING_VOXELS) {
-            let mut warning = format!(
-                "the {which} frame is {:.1} voxels (Hausdorff; mean {:.2}) off the {input}",
-                e.hausdorff_voxels, e.mean_voxels
-            );
-            if let (Some(reference), Some(index)) = (reference, &indexes[i]) {
-                let end = End { input, reference, frame: &meshes[i], index };
-                warning += &end.farthest_miss(settings, voxel).unwrap_or_default();
-            }
-            warnings.push(warning);
+    for (which, input, end) in [("first", "source", &source), ("last", "target", &target)] {
+        if let Some((e, miss)) = end.as_ref().filter(|(e, _)| e.hausdorff_voxels > ENDPOINT_WARNING_VOXELS) {
+            warnings.push(format!(
+                "the {which} frame is {:.1} voxels (Hausdorff; mean {:.2}) off the {input}{}",
+                e.hausdorff_voxels,
+                e.mean_voxels,
+                miss.as_deref().unwrap_or_default()
+            ));
         }
     }
+    let endpoints = Endpoints { source: source.map(|end| end.0), target: target.map(|end| end.0) };
     warnings.extend(pieces);
     let report = Report {
         method: morph.method().to_string(),
@@ -605,19 +561,99 @@ fn write_pictures(
     Ok(())
 }
 
-/// An end frame beside its input, for saying where it misses the input.
-struct End<'a> {
-    /// "source" or "target".
-    input: &'a str,
-    /// The input's surface.
-    reference: &'a TriMesh,
-    /// The end frame's mesh and its index.
-    frame: &'a TriMesh,
-    index: &'a IndexedSurface,
+/// An end frame's distance to its input, with where it misses the input
+/// most when that is farther than [`ENDPOINT_WARNING_VOXELS`] (the end of
+/// its warning, see [`Measure::farthest_miss`]).
+type EndMeasure = Option<(EndpointDistance, Option<String>)>;
+
+/// How the frames' distances are measured: in one frame scaled for
+/// `distance_box` (all frames and references), with voxels of `voxel`
+/// world units.
+struct Measure<'a> {
+    settings: &'a ExportSettings,
+    distance_box: Aabb,
+    voxel: f32,
 }
 
-impl End<'_> {
-    /// Where the frame misses its input by the most, when by more than
+impl Measure<'_> {
+    /// The distances between consecutive frames (`steps[i]` from frame `i`
+    /// to `i + 1`) and from the end frames to their inputs. The frames'
+    /// trees are built a chunk of frames at a time (as many as there are
+    /// threads) and dropped once their steps and endpoints are measured,
+    /// so that a chunk and one more tree are held, not one per frame (a
+    /// tree takes several times its mesh's memory: nine of them were about
+    /// 1 GB for bunny → dragon at 512³).
+    fn frames(&self, meshes: &[TriMesh]) -> (Vec<Option<f32>>, EndMeasure, EndMeasure) {
+        let last = meshes.len() - 1;
+        let ids: Vec<usize> = (0..meshes.len()).collect();
+        let (mut steps, mut source, mut target) = (Vec::with_capacity(last), None, None);
+        let mut previous: Option<IndexedSurface> = None;
+        for chunk in ids.chunks(rayon::current_num_threads().max(2)) {
+            let trees: Vec<Option<IndexedSurface>> =
+                chunk.par_iter().map(|&i| IndexedSurface::new(&meshes[i], &self.distance_box).ok()).collect();
+            let end = |input, i: usize, tree: Option<&Option<IndexedSurface>>| {
+                self.end(input, &meshes[i], tree?.as_ref()?)
+            };
+            let (chunk_steps, (first, final_)) = rayon::join(
+                || {
+                    chunk
+                        .par_iter()
+                        .enumerate()
+                        .filter(|&(_, &i)| i > 0)
+                        .map(|(j, _)| {
+                            let a = if j == 0 { previous.as_ref() } else { trees[j - 1].as_ref() };
+                            let (a, b) = (a?, trees[j].as_ref()?);
+                            a.hausdorff_to(b, self.settings.step_samples).ok()
+                        })
+                        .collect::<Vec<Option<f32>>>()
+                },
+                || {
+                    rayon::join(
+                        || if chunk[0] == 0 { end("source", 0, trees.first()) } else { None },
+                        || if chunk.last() == Some(&last) { end("target", last, trees.last()) } else { None },
+                    )
+                },
+            );
+            steps.extend(chunk_steps);
+            source = source.or(first);
+            target = target.or(final_);
+            previous = trees.into_iter().next_back().flatten();
+        }
+        (steps, source, target)
+    }
+
+    /// The end frame `frame` (with its tree) against its input (`input`:
+    /// "source" or "target"); `None` without a reference surface.
+    fn end(&self, input: &str, frame: &TriMesh, tree: &IndexedSurface) -> EndMeasure {
+        let settings = self.settings;
+        let (reference, solid) = if input == "source" {
+            (settings.source_reference.as_ref()?, &settings.source_solid)
+        } else {
+            (settings.target_reference.as_ref()?, &settings.target_solid)
+        };
+        let samples = settings.distance_samples;
+        let d = match solid.as_ref().filter(|s| s.has_exact_distance()) {
+            Some(solid) => {
+                let mut points = surface_samples(reference, samples)?;
+                if solid.as_mesh().is_none() {
+                    // A polygonized shape: its points moved onto the true surface.
+                    points.par_iter_mut().for_each(|p| *p = solid.nearest_surface_point(*p).unwrap_or(*p));
+                }
+                tree.distance_to_reference(samples, &points, |p| solid.exact_distance(p).unwrap_or(f32::NAN))
+            }
+            None => tree.distance_to(&IndexedSurface::new(reference, &self.distance_box).ok()?, samples),
+        };
+        let e = EndpointDistance::new(d.ok()?, self.voxel);
+        let miss = if e.hausdorff_voxels > ENDPOINT_WARNING_VOXELS {
+            self.farthest_miss(input, reference, frame, tree)
+        } else {
+            None
+        };
+        Some((e, miss))
+    }
+
+    /// Where the end frame `frame` (with its tree) misses its input's
+    /// surface `reference` by the most, when by more than
     /// [`ENDPOINT_WARNING_VOXELS`], as the end of a warning: a part of the
     /// input outside the frame, which the grid may be too coarse to form (a
     /// finer resolution is the remedy: the level set does not grow into
@@ -626,27 +662,32 @@ impl End<'_> {
     /// frame surface follows, at any resolution). `None` when the frame
     /// comes within that distance of all of the input (its Hausdorff
     /// distance is then the frame's own stray parts).
-    fn farthest_miss(&self, settings: &ExportSettings, voxel: f32) -> Option<String> {
-        let points = surface_samples(self.reference, settings.distance_samples)?;
-        let (p, d) = self.index.farthest_of(&points)?;
-        let voxels = d / voxel;
+    fn farthest_miss(
+        &self,
+        input: &str,
+        reference: &TriMesh,
+        frame: &TriMesh,
+        tree: &IndexedSurface,
+    ) -> Option<String> {
+        let points = surface_samples(reference, self.settings.distance_samples)?;
+        let (p, d) = tree.farthest_of(&points)?;
+        let voxels = d / self.voxel;
         if voxels <= ENDPOINT_WARNING_VOXELS {
             return None;
         }
-        let (input, at) = (self.input, format!("({:.3}, {:.3}, {:.3})", p.x, p.y, p.z));
-        let inside = WindingNumber::new(self.frame).winding_number(p) >= 0.5;
+        let at = format!("({:.3}, {:.3}, {:.3})", p.x, p.y, p.z);
+        let inside = WindingNumber::new(frame).winding_number(p) >= 0.5;
         Some(if inside {
             format!(
                 ": the {input}'s surface near {at} lies {voxels:.1} voxels inside the frame's solid \
                  (an inner sheet of an open or self-intersecting {input}, which no closed surface follows)"
             )
         } else {
-            let finer = settings.resolution.saturating_mul(2);
+            let (res, finer) = (self.settings.resolution, self.settings.resolution.saturating_mul(2));
             format!(
                 ": it does not reach the {input} near {at}, {voxels:.1} voxels away, where the {input} may \
                  be thinner than the {res}³ grid can form (about 3 voxels across); a finer resolution \
-                 (resolution {finer}: `--res {finer}`) resolves more of it",
-                res = settings.resolution
+                 (resolution {finer}: `--res {finer}`) resolves more of it"
             )
         })
     }
