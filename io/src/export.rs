@@ -632,20 +632,24 @@ impl Measure<'_> {
             (settings.target_reference.as_ref()?, &settings.target_solid)
         };
         let samples = settings.distance_samples;
+        let points = surface_samples(reference, samples)?;
         let d = match solid.as_ref().filter(|s| s.has_exact_distance()) {
             Some(solid) => {
-                let mut points = surface_samples(reference, samples)?;
-                if solid.as_mesh().is_none() {
+                let exact = |p| solid.exact_distance(p).unwrap_or(f32::NAN);
+                if solid.as_mesh().is_some() {
+                    tree.distance_to_reference(samples, &points, exact)
+                } else {
                     // A polygonized shape: its points moved onto the true surface.
-                    points.par_iter_mut().for_each(|p| *p = solid.nearest_surface_point(*p).unwrap_or(*p));
+                    let on_surface: Vec<Vec3> =
+                        points.par_iter().map(|&p| solid.nearest_surface_point(p).unwrap_or(p)).collect();
+                    tree.distance_to_reference(samples, &on_surface, exact)
                 }
-                tree.distance_to_reference(samples, &points, |p| solid.exact_distance(p).unwrap_or(f32::NAN))
             }
             None => tree.distance_to(&IndexedSurface::new(reference, &self.distance_box).ok()?, samples),
         };
         let e = EndpointDistance::new(d.ok()?, self.voxel);
         let miss = if e.hausdorff_voxels > ENDPOINT_WARNING_VOXELS {
-            self.farthest_miss(input, reference, frame, tree)
+            self.farthest_miss(input, &points, frame, tree)
         } else {
             None
         };
@@ -653,7 +657,7 @@ impl Measure<'_> {
     }
 
     /// Where the end frame `frame` (with its tree) misses its input's
-    /// surface `reference` by the most, when by more than
+    /// surface, sampled at `points`, by the most, when by more than
     /// [`ENDPOINT_WARNING_VOXELS`], as the end of a warning: a part of the
     /// input outside the frame, which the grid may be too coarse to form (a
     /// finer resolution is the remedy: the level set does not grow into
@@ -665,12 +669,11 @@ impl Measure<'_> {
     fn farthest_miss(
         &self,
         input: &str,
-        reference: &TriMesh,
+        points: &[Vec3],
         frame: &TriMesh,
         tree: &IndexedSurface,
     ) -> Option<String> {
-        let points = surface_samples(reference, self.settings.distance_samples)?;
-        let (p, d) = tree.farthest_of(&points)?;
+        let (p, d) = tree.farthest_of(points)?;
         let voxels = d / self.voxel;
         if voxels <= ENDPOINT_WARNING_VOXELS {
             return None;
