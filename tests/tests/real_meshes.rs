@@ -87,10 +87,13 @@ fn morph(source: &Solid, target: &Solid, res: Option<u32>, frames: usize, name: 
         .unwrap_or_else(|e| panic!("{name} at {res:?}: {e}"));
     println!("{name}: {:?}", morph.report());
     assert!(morph.report().converged, "{name}: {:?}", morph.report().outcome);
-    let out = std::env::temp_dir().join(format!("isomorph-real-{}-{name}", std::process::id()));
+    // One directory per input and resolution: the tests run in parallel,
+    // and each removes its own when done.
+    let res = settings.level_set.resolution;
+    let out = std::env::temp_dir().join(format!("isomorph-real-{}-{name}-{res}", std::process::id()));
     let export = ExportSettings {
         frames,
-        resolution: settings.level_set.resolution,
+        resolution: res,
         out_dir: out.clone(),
         frame_files: false,
         contact_sheet: false,
