@@ -66,10 +66,13 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 /// An endpoint frame farther than this (Hausdorff, voxels) from its input
-/// is reported in [`Report::warnings`], with the place where it misses the
-/// input most when that is farther than this too: outside the frame (a
-/// part the grid may be too coarse to form, and the finer resolution to
-/// try) or inside its solid (an open input's inner sheet).
+/// is reported in [`Report::warnings`], with the place where the two are
+/// farthest apart when that is farther than this too: a part of the input
+/// outside the frame (one the grid may be too coarse to form, and the finer
+/// resolution to try) or inside its solid (a hollow it fills, an open
+/// input's inner sheet),
+/// or frame surface outside the input (a bulge or a piece the input does
+/// not have) or inside it (a hollow or a dent).
 pub const ENDPOINT_WARNING_VOXELS: f32 = 3.0;
 
 /// The USD stage of the whole sequence ([`ExportSettings::usd`]).
@@ -632,67 +635,122 @@ impl Measure<'_> {
             (settings.target_reference.as_ref()?, &settings.target_solid)
         };
         let samples = settings.distance_samples;
-        let points = surface_samples(reference, samples)?;
-        let d = match solid.as_ref().filter(|s| s.has_exact_distance()) {
+        let mut points = surface_samples(reference, samples)?;
+        let (d, known) = match solid.as_ref().filter(|s| s.has_exact_distance()) {
             Some(solid) => {
-                let exact = |p| solid.exact_distance(p).unwrap_or(f32::NAN);
-                if solid.as_mesh().is_some() {
-                    tree.distance_to_reference(samples, &points, exact)
-                } else {
+                if solid.as_mesh().is_none() {
                     // A polygonized shape: its points moved onto the true surface.
-                    let on_surface: Vec<Vec3> =
+                    points =
                         points.par_iter().map(|&p| solid.nearest_surface_point(p).unwrap_or(p)).collect();
-                    tree.distance_to_reference(samples, &on_surface, exact)
                 }
+                let exact = |p| solid.exact_distance(p).unwrap_or(f32::NAN);
+                (tree.distance_to_reference(samples, &points, exact), Known::Solid(solid))
             }
-            None => tree.distance_to(&IndexedSurface::new(reference, &self.distance_box).ok()?, samples),
+            None => {
+                let indexed = IndexedSurface::new(reference, &self.distance_box).ok()?;
+                (tree.distance_to(&indexed, samples), Known::Mesh(reference, indexed))
+            }
         };
         let e = EndpointDistance::new(d.ok()?, self.voxel);
         let miss = if e.hausdorff_voxels > ENDPOINT_WARNING_VOXELS {
-            self.farthest_miss(input, &points, frame, tree)
+            self.farthest_miss(input, &points, frame, tree, &known)
         } else {
             None
         };
         Some((e, miss))
     }
 
-    /// Where the end frame `frame` (with its tree) misses its input's
-    /// surface, sampled at `points`, by the most, when by more than
-    /// [`ENDPOINT_WARNING_VOXELS`], as the end of a warning: a part of the
-    /// input outside the frame, which the grid may be too coarse to form (a
-    /// finer resolution is the remedy: the level set does not grow into
-    /// parts about 3 voxels across), or one inside the frame's solid (an
-    /// inner sheet of an open or self-intersecting input, which no closed
-    /// frame surface follows, at any resolution). `None` when the frame
-    /// comes within that distance of all of the input (its Hausdorff
-    /// distance is then the frame's own stray parts).
+    /// Where the end frame `frame` (with its tree) and its input's surface
+    /// (sampled at `points`, known by `known`) are farthest apart, when by
+    /// more than [`ENDPOINT_WARNING_VOXELS`], as the end of a warning. Four
+    /// cases, by which surface strays and to which side:
+    /// - a part of the input outside the frame, which the grid may be too
+    ///   coarse to form (a finer resolution is the remedy: the level set
+    ///   does not grow into parts about 3 voxels across);
+    /// - a part of the input inside the frame's solid: a hollow or a gap
+    ///   the frame fills, or an inner sheet of an open or self-intersecting
+    ///   input, which no closed frame surface follows, at any resolution;
+    /// - frame surface outside the input: a bulge or a piece the input does
+    ///   not have;
+    /// - frame surface inside the input's solid: a hollow or a dent.
+    ///
+    /// `None` when they come within that distance of each other everywhere
+    /// (the Hausdorff distance came from other samples).
     fn farthest_miss(
         &self,
         input: &str,
         points: &[Vec3],
         frame: &TriMesh,
         tree: &IndexedSurface,
+        known: &Known<'_>,
     ) -> Option<String> {
-        let (p, d) = tree.farthest_of(points)?;
+        let missed = tree.farthest_of(points).map(|(p, d)| (p, d, false));
+        let strayed = surface_samples(frame, self.settings.distance_samples)
+            .and_then(|here| known.farthest_of(&here))
+            .map(|(p, d)| (p, d, true));
+        let (p, d, frame_strays) =
+            [missed, strayed].into_iter().flatten().max_by(|a, b| a.1.total_cmp(&b.1))?;
         let voxels = d / self.voxel;
         if voxels <= ENDPOINT_WARNING_VOXELS {
             return None;
         }
         let at = format!("({:.3}, {:.3}, {:.3})", p.x, p.y, p.z);
-        let inside = WindingNumber::new(frame).winding_number(p) >= 0.5;
-        Some(if inside {
-            format!(
+        Some(match frame_strays {
+            true if known.contains(p) => format!(
+                ": the frame's surface near {at} lies {voxels:.1} voxels inside the {input} \
+                 (a hollow or a dent the {input} does not have)"
+            ),
+            true => format!(
+                ": the frame has surface near {at}, {voxels:.1} voxels outside the {input} \
+                 (a bulge or a piece the {input} does not have)"
+            ),
+            false if WindingNumber::new(frame).winding_number(p) >= 0.5 => format!(
                 ": the {input}'s surface near {at} lies {voxels:.1} voxels inside the frame's solid \
-                 (an inner sheet of an open or self-intersecting {input}, which no closed surface follows)"
-            )
-        } else {
-            let (res, finer) = (self.settings.resolution, self.settings.resolution.saturating_mul(2));
-            format!(
-                ": it does not reach the {input} near {at}, {voxels:.1} voxels away, where the {input} may \
-                 be thinner than the {res}³ grid can form (about 3 voxels across); a finer resolution \
-                 (resolution {finer}: `--res {finer}`) resolves more of it"
-            )
+                 (a hollow or a gap of the {input} that the frame fills, or an inner sheet of an open or \
+                 self-intersecting {input}, which no closed surface follows)"
+            ),
+            false => {
+                let (res, finer) = (self.settings.resolution, self.settings.resolution.saturating_mul(2));
+                format!(
+                    ": it does not reach the {input} near {at}, {voxels:.1} voxels away, where the {input} \
+                     may be thinner than the {res}³ grid can form (about 3 voxels across); a finer \
+                     resolution (resolution {finer}: `--res {finer}`) resolves more of it"
+                )
+            }
         })
+    }
+}
+
+/// An end frame's input as its distance is known: the solid's exact
+/// distance, or (without one) its reference mesh indexed in the distance
+/// box.
+enum Known<'a> {
+    /// A solid with [`Solid::has_exact_distance`].
+    Solid(&'a Solid),
+    /// The reference mesh and its index.
+    Mesh(&'a TriMesh, IndexedSurface),
+}
+
+impl Known<'_> {
+    /// The point of `points` (world units) farthest from the input's
+    /// surface, with its distance (world units).
+    fn farthest_of(&self, points: &[Vec3]) -> Option<(Vec3, f32)> {
+        match self {
+            Known::Solid(solid) => points
+                .par_iter()
+                .map(|&p| (p, solid.exact_distance(p).unwrap_or(0.0)))
+                .max_by(|a, b| a.1.total_cmp(&b.1)),
+            Known::Mesh(_, indexed) => indexed.farthest_of(points),
+        }
+    }
+
+    /// True when `p` is inside the input's solid (positive signed
+    /// distance; the winding number of a mesh known by its surface only).
+    fn contains(&self, p: Vec3) -> bool {
+        match self {
+            Known::Solid(solid) => solid.exact_field().is_some_and(|f| f.value(p) > 0.0),
+            Known::Mesh(mesh, _) => WindingNumber::new(mesh).winding_number(p) >= 0.5,
+        }
     }
 }
 
@@ -790,6 +848,70 @@ mod tests {
     /// dragon's last frame had 4 where the mesh has 1); as many, or fewer
     /// than an input of several pieces (an open patch soup), is not; voids
     /// are not shells.
+    /// The four ways an end frame and its input come apart, each named with
+    /// its place: frames of a ball with a speck beside it (source) and with
+    /// a hollow inside (target) measured against the plain ball, then the
+    /// plain ball's frames against the speckled and the hollow ones.
+    #[test]
+    fn end_frames_off_their_inputs_say_where_and_how() {
+        use isomorph_common::{BlendSettings, DistanceBlend, Shape};
+        let ball = Solid::shape(Shape::sphere(0.3));
+        let speck = Vec3::new(0.55, 0.0, 0.0);
+        let speckled = Solid::shape(Shape::sphere(0.3).union(Shape::sphere(0.07).translated(speck)));
+        let hollow = Solid::shape(Shape::sphere(0.3).subtract(Shape::sphere(0.12)));
+        let control = Control::new();
+        let warnings = |morph: (&Solid, &Solid), inputs: (&Solid, &Solid)| {
+            let settings = BlendSettings { resolution: 48, ..BlendSettings::default() };
+            let morph = DistanceBlend::new(morph.0, morph.1, &settings, &control).unwrap();
+            let out = std::env::temp_dir().join(format!(
+                "isomorph-export-miss-{}-{}",
+                std::process::id(),
+                inputs.0.bounds().max.x
+            ));
+            let export = ExportSettings {
+                frames: 2,
+                resolution: 48,
+                out_dir: out.clone(),
+                frame_files: false,
+                contact_sheet: false,
+                preview: false,
+                ..ExportSettings::default()
+            }
+            .with_inputs(inputs.0, inputs.1, &control)
+            .unwrap();
+            let report = export_sequence(&morph, &export, &control).unwrap().report;
+            std::fs::remove_dir_all(out).unwrap();
+            let end = |which: &str| {
+                let prefix = format!("the {which} frame is ");
+                report.warnings.iter().find(|w| w.starts_with(&prefix)).cloned().unwrap_or_default()
+            };
+            (end("first"), end("last"))
+        };
+        let place = |warning: &str, after: &str| {
+            let start =
+                warning.find(after).unwrap_or_else(|| panic!("no {after:?} in {warning:?}")) + after.len();
+            let end = start + warning[start..].find(')').unwrap();
+            let c: Vec<f32> = warning[start..end].split(", ").map(|c| c.parse().unwrap()).collect();
+            Vec3::new(c[0], c[1], c[2])
+        };
+        // The frames stray from the ball: the speck's far side, the hollow's wall.
+        let (first, last) = warnings((&speckled, &hollow), (&ball, &ball));
+        let p = place(&first, "the frame has surface near (");
+        assert!(first.contains("voxels outside the source (a bulge or a piece"), "{first}");
+        assert!(p.distance(speck) < 0.08 && p.x > 0.5, "{p}: not on the speck's far side");
+        let p = place(&last, "the frame's surface near (");
+        assert!(last.contains("voxels inside the target (a hollow or a dent"), "{last}");
+        assert!((p.length() - 0.12).abs() < 0.02, "{p}: not on the hollow's wall");
+        // The ball's frames miss the inputs' speck and hollow.
+        let (first, last) = warnings((&ball, &ball), (&speckled, &hollow));
+        let p = place(&first, "it does not reach the source near (");
+        assert!(first.contains("`--res 96`"), "{first}");
+        assert!(p.distance(speck) < 0.08 && p.x > 0.5, "{p}: not on the speck's far side");
+        let p = place(&last, "the target's surface near (");
+        assert!(last.contains("inside the frame's solid (a hollow or a gap of the target"), "{last}");
+        assert!((p.length() - 0.12).abs() < 0.02, "{p}: not on the hollow's wall");
+    }
+
     #[test]
     fn end_frames_with_more_pieces_than_their_input_are_reported() {
         let one = uv_sphere(Vec3::ZERO, 0.3, 12, 16);
