@@ -856,8 +856,8 @@ mod tests {
     fn end_frames_off_their_inputs_say_where_and_how() {
         use isomorph_common::{BlendSettings, DistanceBlend, Shape};
         let ball = Solid::shape(Shape::sphere(0.3));
-        let speck = Vec3::new(0.55, 0.0, 0.0);
-        let speckled = Solid::shape(Shape::sphere(0.3).union(Shape::sphere(0.07).translated(speck)));
+        const SPECK: Vec3 = Vec3::new(0.55, 0.0, 0.0);
+        let speckled = Solid::shape(Shape::sphere(0.3).union(Shape::sphere(0.07).translated(SPECK)));
         let hollow = Solid::shape(Shape::sphere(0.3).subtract(Shape::sphere(0.12)));
         let control = Control::new();
         let warnings = |morph: (&Solid, &Solid), inputs: (&Solid, &Solid)| {
@@ -894,22 +894,49 @@ mod tests {
             let c: Vec<f32> = warning[start..end].split(", ").map(|c| c.parse().unwrap()).collect();
             Vec3::new(c[0], c[1], c[2])
         };
-        // The frames stray from the ball: the speck's far side, the hollow's wall.
-        let (first, last) = warnings((&speckled, &hollow), (&ball, &ball));
-        let p = place(&first, "the frame has surface near (");
-        assert!(first.contains("voxels outside the source (a bulge or a piece"), "{first}");
-        assert!(p.distance(speck) < 0.08 && p.x > 0.5, "{p}: not on the speck's far side");
-        let p = place(&last, "the frame's surface near (");
-        assert!(last.contains("voxels inside the target (a hollow or a dent"), "{last}");
-        assert!((p.length() - 0.12).abs() < 0.02, "{p}: not on the hollow's wall");
-        // The ball's frames miss the inputs' speck and hollow.
-        let (first, last) = warnings((&ball, &ball), (&speckled, &hollow));
-        let p = place(&first, "it does not reach the source near (");
-        assert!(first.contains("`--res 96`"), "{first}");
-        assert!(p.distance(speck) < 0.08 && p.x > 0.5, "{p}: not on the speck's far side");
-        let p = place(&last, "the target's surface near (");
-        assert!(last.contains("inside the frame's solid (a hollow or a gap of the target"), "{last}");
-        assert!((p.length() - 0.12).abs() < 0.02, "{p}: not on the hollow's wall");
+        let on_the_speck: fn(Vec3) -> bool = |p| p.distance(SPECK) < 0.08 && p.x > 0.5;
+        let on_the_hollow: fn(Vec3) -> bool = |p| (p.length() - 0.12).abs() < 0.02;
+        // First the frames stray from the ball, then the ball's frames miss
+        // the speck and the hollow: per end, where the place follows, what
+        // the warning says, and where the place must be.
+        let cases = [
+            (
+                (&speckled, &hollow),
+                (&ball, &ball),
+                [
+                    (
+                        "the frame has surface near (",
+                        "voxels outside the source (a bulge or a piece",
+                        on_the_speck,
+                    ),
+                    (
+                        "the frame's surface near (",
+                        "voxels inside the target (a hollow or a dent",
+                        on_the_hollow,
+                    ),
+                ],
+            ),
+            (
+                (&ball, &ball),
+                (&speckled, &hollow),
+                [
+                    ("it does not reach the source near (", "`--res 96`", on_the_speck),
+                    (
+                        "the target's surface near (",
+                        "inside the frame's solid (a hollow or a gap",
+                        on_the_hollow,
+                    ),
+                ],
+            ),
+        ];
+        for (morph, inputs, ends) in cases {
+            let (first, last) = warnings(morph, inputs);
+            for (warning, (after, says, on)) in [first, last].iter().zip(ends) {
+                let p = place(warning, after);
+                assert!(warning.contains(says), "{warning}");
+                assert!(on(p), "{p} is not where {warning:?} should be");
+            }
+        }
     }
 
     #[test]
