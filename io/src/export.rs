@@ -70,9 +70,8 @@ use std::time::Instant;
 /// farthest apart when that is farther than this too: a part of the input
 /// outside the frame (one the grid may be too coarse to form, and the finer
 /// resolution to try) or inside its solid (a hollow it fills, an open
-/// input's inner sheet),
-/// or frame surface outside the input (a bulge or a piece the input does
-/// not have) or inside it (a hollow or a dent).
+/// input's inner sheet), or frame surface outside the input (a bulge or a
+/// piece the input does not have) or inside it (a hollow or a dent).
 pub const ENDPOINT_WARNING_VOXELS: f32 = 3.0;
 
 /// The USD stage of the whole sequence ([`ExportSettings::usd`]).
@@ -844,10 +843,6 @@ mod tests {
         }
     }
 
-    /// More outer shells than the input is reported (the 25,000-point RBF
-    /// dragon's last frame had 4 where the mesh has 1); as many, or fewer
-    /// than an input of several pieces (an open patch soup), is not; voids
-    /// are not shells.
     /// The four ways an end frame and its input come apart, each named with
     /// its place: frames of a ball with a speck beside it (source) and with
     /// a hollow inside (target) measured against the plain ball, then the
@@ -860,14 +855,11 @@ mod tests {
         let speckled = Solid::shape(Shape::sphere(0.3).union(Shape::sphere(0.07).translated(SPECK)));
         let hollow = Solid::shape(Shape::sphere(0.3).subtract(Shape::sphere(0.12)));
         let control = Control::new();
-        let warnings = |morph: (&Solid, &Solid), inputs: (&Solid, &Solid)| {
+        let warnings = |case: usize, morph: (&Solid, &Solid), inputs: (&Solid, &Solid)| {
             let settings = BlendSettings { resolution: 48, ..BlendSettings::default() };
             let morph = DistanceBlend::new(morph.0, morph.1, &settings, &control).unwrap();
-            let out = std::env::temp_dir().join(format!(
-                "isomorph-export-miss-{}-{}",
-                std::process::id(),
-                inputs.0.bounds().max.x
-            ));
+            let out =
+                std::env::temp_dir().join(format!("isomorph-export-miss-{}-{case}", std::process::id()));
             let export = ExportSettings {
                 frames: 2,
                 resolution: 48,
@@ -929,8 +921,8 @@ mod tests {
                 ],
             ),
         ];
-        for (morph, inputs, ends) in cases {
-            let (first, last) = warnings(morph, inputs);
+        for (case, (morph, inputs, ends)) in cases.into_iter().enumerate() {
+            let (first, last) = warnings(case, morph, inputs);
             for (warning, (after, says, on)) in [first, last].iter().zip(ends) {
                 let p = place(warning, after);
                 assert!(warning.contains(says), "{warning}");
@@ -939,6 +931,10 @@ mod tests {
         }
     }
 
+    /// More outer shells than the input is reported (the 25,000-point RBF
+    /// dragon's last frame had 4 where the mesh has 1); as many, or fewer
+    /// than an input of several pieces (an open patch soup), is not; voids
+    /// are not shells.
     #[test]
     fn end_frames_with_more_pieces_than_their_input_are_reported() {
         let one = uv_sphere(Vec3::ZERO, 0.3, 12, 16);
